@@ -1,0 +1,22 @@
+//! Schema-free parsing of VRML-style world files: Webots `.wbt`/`.proto` and VRML97 `.wrl`.
+//!
+//! This crate owns the syntax layer and nothing above it. [`parse`] never fails and never
+//! panics: it returns a lossless [`syntax::SourceFile`] (every node, field and value carries
+//! its byte [`Span`]) together with every [`Diagnostic`] it found, recovering at the next
+//! field or node after an error. It knows no field types: how many numbers a field takes is
+//! decided later by the schema crate.
+//!
+//! [`format`] prints a tree back in canonical form, keeping comments.
+
+pub mod diagnostic;
+pub mod format;
+mod lexer;
+mod parse;
+pub mod source;
+pub mod syntax;
+pub mod testgen;
+
+pub use diagnostic::{Diagnostic, Label, Severity};
+pub use parse::{parse, Parse};
+pub use source::{SourceError, SourceText};
+pub use syntax::Span;
