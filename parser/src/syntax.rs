@@ -303,6 +303,39 @@ pub struct Template {
     pub expression: bool,
 }
 
+/// Visits a node and every node inside it, depth first, in source order.
+pub fn walk_node<'a>(node: &'a Node, visit: &mut dyn FnMut(&'a Node)) {
+    walk_nodes_from(std::slice::from_ref(node), visit);
+}
+
+fn walk_nodes_from<'a>(nodes: &'a [Node], visit: &mut dyn FnMut(&'a Node)) {
+    for node in nodes {
+        visit(node);
+        if let NodeKind::Instance {
+            body: Some(body), ..
+        } = &node.kind
+        {
+            for item in &body.items {
+                if let BodyItem::Field(Field {
+                    value:
+                        FieldValue::Value(Value {
+                            items: Items::Atoms(atoms),
+                            ..
+                        }),
+                    ..
+                }) = item
+                {
+                    for atom in atoms {
+                        if let Atom::Node(child) = atom {
+                            walk_nodes_from(std::slice::from_ref(child), visit);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// Visits every node of a file, depth first, in source order (PROTO bodies included).
 pub fn walk_nodes<'a>(file: &'a SourceFile, visit: &mut dyn FnMut(&'a Node)) {
     fn walk_item<'a>(item: &'a Item, visit: &mut dyn FnMut(&'a Node)) {

@@ -1,0 +1,183 @@
+//! The node catalogue: every built-in node type with its fields, read from the TOML files in
+//! `schema/catalogue/` (embedded in the binary). Defaults are written in the world language
+//! and typed by the same code as user values, so a default can never disagree with its type.
+
+use std::collections::BTreeMap;
+use std::sync::OnceLock;
+
+use serde::{Deserialize, Serialize};
+
+use crate::value::{FieldType, Value};
+
+const CATALOGUE_FILES: &[(&str, &str)] = &[
+    ("vrml97.toml", include_str!("../catalogue/vrml97.toml")),
+    ("devices.toml", include_str!("../catalogue/devices.toml")),
+];
+
+/// One field of a node type, as the catalogue declares it.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FieldSpec {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub type_name: String,
+    /// The default, in world-language syntax.
+    pub default: String,
+    pub doc: String,
+    /// Smallest allowed number (inclusive), per component.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min: Option<f64>,
+    /// Largest allowed number (inclusive), per component.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max: Option<f64>,
+    /// Exclusive lower bound, per component ("must be positive").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub above: Option<f64>,
+    /// Allowed strings.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub values: Vec<String>,
+    /// Node classes accepted by an SFNode/MFNode field.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub nodes: Vec<String>,
+    /// Exact number of items of an MF field.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub count: Option<usize>,
+    /// The parsed type (filled when the catalogue loads).
+    #[serde(skip)]
+    pub field_type: Option<FieldType>,
+    /// The typed default (filled when the catalogue loads).
+    #[serde(skip)]
+    pub default_value: Option<Value>,
+}
+
+impl FieldSpec {
+    /// The field's type.
+    pub fn ty(&self) -> FieldType {
+        self.field_type
+            .expect("catalogue types are checked when it loads")
+    }
+
+    /// The typed default value.
+    pub fn default_value(&self) -> &Value {
+        self.default_value
+            .as_ref()
+            .expect("catalogue defaults are typed when it loads")
+    }
+}
+
+/// A node type of the catalogue.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct NodeSpec {
+    #[serde(skip_deserializing)]
+    pub name: String,
+    pub doc: String,
+    /// Where the node may stand (`child`, `geometry`, `device`…).
+    pub classes: Vec<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub aliases: Vec<String>,
+    pub fields: Vec<FieldSpec>,
+}
+
+impl NodeSpec {
+    /// Index of field `name`, if the type has it.
+    pub fn field_index(&self, name: &str) -> Option<usize> {
+        self.fields.iter().position(|f| f.name == name)
+    }
+
+    /// Whether the node may stand where one of `classes` is accepted.
+    pub fn fits(&self, classes: &[String]) -> bool {
+        classes.is_empty() || self.classes.iter().any(|c| classes.contains(c))
+    }
+}
+
+/// Handle of a node type in the catalogue.
+pub type SpecId = usize;
+
+/// All built-in node types.
+#[derive(Debug)]
+pub struct Catalogue {
+    pub nodes: Vec<NodeSpec>,
+    by_name: BTreeMap<String, SpecId>,
+}
+
+impl Catalogue {
+    /// The embedded catalogue, loaded and checked once.
+    pub fn get() -> &'static Catalogue {
+        static CATALOGUE: OnceLock<Catalogue> = OnceLock::new();
+        CATALOGUE.get_or_init(|| {
+            Catalogue::load()
+                .unwrap_or_else(|error| panic!("the embedded node catalogue is broken: {error}"))
+        })
+    }
+
+    fn load() -> Result<Catalogue, String> {
+        let mut nodes = Vec::new();
+        for (file, text) in CATALOGUE_FILES {
+            let table: BTreeMap<String, NodeSpec> =
+                toml::from_str(text).map_err(|e| format!("{file}: {e}"))?;
+            for (name, mut spec) in table {
+                spec.name = name;
+                nodes.push(spec);
+            }
+        }
+        nodes.sort_by(|a, b| a.name.cmp(&b.name));
+        let mut by_name = BTreeMap::new();
+        for (id, spec) in nodes.iter_mut().enumerate() {
+            for field in &mut spec.fields {
+                field.field_type = Some(FieldType::parse(&field.type_name).ok_or_else(|| {
+                    format!(
+                        "{}.{}: unknown type {}",
+                        spec.name, field.name, field.type_name
+                    )
+                })?);
+            }
+            by_name.insert(spec.name.clone(), id);
+            for alias in &spec.aliases {
+                by_name.insert(alias.clone(), id);
+            }
+        }
+        let mut catalogue = Catalogue { nodes, by_name };
+        // Type every default with the same code as user values.
+        for id in 0..catalogue.nodes.len() {
+            for index in 0..catalogue.nodes[id].fields.len() {
+                let value = crate::lower::type_default(&catalogue, id, index)?;
+                catalogue.nodes[id].fields[index].default_value = Some(value);
+            }
+        }
+        Ok(catalogue)
+    }
+
+    /// The node type called `name` (aliases included).
+    pub fn lookup(&self, name: &str) -> Option<SpecId> {
+        self.by_name.get(name).copied()
+    }
+
+    /// The spec of a node type.
+    pub fn spec(&self, id: SpecId) -> &NodeSpec {
+        &self.nodes[id]
+    }
+
+    /// Every name a node type can be written with, for "did you mean".
+    pub fn names(&self) -> impl Iterator<Item = &str> {
+        self.by_name.keys().map(String::as_str)
+    }
+}
+
+/// The closest candidate to `name`, if one is close enough to suggest.
+pub fn did_you_mean<'a>(
+    name: &str,
+    candidates: impl IntoIterator<Item = &'a str>,
+) -> Option<&'a str> {
+    candidates
+        .into_iter()
+        .map(|candidate| {
+            (
+                strsim::jaro_winkler(&name.to_lowercase(), &candidate.to_lowercase()),
+                candidate,
+            )
+        })
+        .filter(|(score, _)| *score > 0.8)
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, candidate)| candidate)
+}

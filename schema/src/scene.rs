@@ -1,0 +1,193 @@
+//! The typed scene: a value type owning its data, held in an arena with typed handles.
+//!
+//! Every node is an instance of a catalogue type with every field present (defaults filled),
+//! PROTOs expanded and USE resolved to the DEF'd node's handle, so the scene is a DAG. It is
+//! always y-up, in metres, radians and seconds: z-up files are turned by [`Scene::root_rotation`].
+
+use regatta_parser::Span;
+
+use crate::catalogue::{Catalogue, NodeSpec, SpecId};
+use crate::value::Value;
+
+/// Handle of a node in [`Scene::nodes`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct NodeId(pub u32);
+
+impl NodeId {
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// Handle of a source file in [`Scene::files`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub struct FileId(pub u32);
+
+/// Where a node came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Origin {
+    pub file: FileId,
+    pub span: Span,
+}
+
+/// One typed node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneNode {
+    pub spec: SpecId,
+    /// One value per catalogue field, in catalogue order.
+    pub fields: Vec<Value>,
+    /// Whether each field was written (or bound through IS) rather than defaulted.
+    pub written: Vec<bool>,
+    pub def_name: Option<String>,
+    /// The PROTO whose instance this node is the root of (innermost first when nested).
+    pub proto_names: Vec<String>,
+    pub origin: Origin,
+}
+
+/// The axis convention of the file the scene was read from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum UpAxis {
+    /// VRML97 and Webots before R2022a ("NUE").
+    Y,
+    /// Webots R2022a and later ("ENU").
+    Z,
+}
+
+/// A whole typed world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    pub nodes: Vec<SceneNode>,
+    pub roots: Vec<NodeId>,
+    /// The file names nodes refer to (the world first, then PROTO and Inline files).
+    pub files: Vec<String>,
+    pub up_axis: UpAxis,
+}
+
+impl Scene {
+    /// The node behind a handle.
+    pub fn node(&self, id: NodeId) -> &SceneNode {
+        &self.nodes[id.index()]
+    }
+
+    /// The catalogue type of a node.
+    pub fn spec(&self, id: NodeId) -> &'static NodeSpec {
+        Catalogue::get().spec(self.node(id).spec)
+    }
+
+    /// The type name of a node (the catalogue's, not an alias).
+    pub fn type_name(&self, id: NodeId) -> &'static str {
+        &self.spec(id).name
+    }
+
+    /// A field's value by name. Panics on a name the type does not have: that is a bug in the
+    /// caller, never a property of user input.
+    pub fn field(&self, id: NodeId, name: &str) -> &Value {
+        let spec = self.spec(id);
+        let index = spec
+            .field_index(name)
+            .unwrap_or_else(|| panic!("{} has no field {name}", spec.name));
+        &self.node(id).fields[index]
+    }
+
+    pub fn float(&self, id: NodeId, name: &str) -> f64 {
+        match self.field(id, name) {
+            Value::Float(x) => *x,
+            Value::Int(i) => *i as f64,
+            other => panic!("{name} is not a float: {other:?}"),
+        }
+    }
+
+    pub fn int(&self, id: NodeId, name: &str) -> i32 {
+        match self.field(id, name) {
+            Value::Int(i) => *i,
+            other => panic!("{name} is not an integer: {other:?}"),
+        }
+    }
+
+    pub fn bool(&self, id: NodeId, name: &str) -> bool {
+        match self.field(id, name) {
+            Value::Bool(b) => *b,
+            other => panic!("{name} is not a boolean: {other:?}"),
+        }
+    }
+
+    pub fn vec2(&self, id: NodeId, name: &str) -> [f64; 2] {
+        match self.field(id, name) {
+            Value::Vec2(v) => *v,
+            other => panic!("{name} is not an SFVec2f: {other:?}"),
+        }
+    }
+
+    pub fn vec3(&self, id: NodeId, name: &str) -> [f64; 3] {
+        match self.field(id, name) {
+            Value::Vec3(v) => *v,
+            other => panic!("{name} is not an SFVec3f: {other:?}"),
+        }
+    }
+
+    pub fn rotation(&self, id: NodeId, name: &str) -> [f64; 4] {
+        match self.field(id, name) {
+            Value::Rotation(v) => *v,
+            other => panic!("{name} is not an SFRotation: {other:?}"),
+        }
+    }
+
+    pub fn string(&self, id: NodeId, name: &str) -> &str {
+        match self.field(id, name) {
+            Value::String(s) => s,
+            other => panic!("{name} is not an SFString: {other:?}"),
+        }
+    }
+
+    pub fn strings(&self, id: NodeId, name: &str) -> &[String] {
+        match self.field(id, name) {
+            Value::Strings(s) => s,
+            other => panic!("{name} is not an MFString: {other:?}"),
+        }
+    }
+
+    pub fn child(&self, id: NodeId, name: &str) -> Option<NodeId> {
+        match self.field(id, name) {
+            Value::Node(node) => *node,
+            other => panic!("{name} is not an SFNode: {other:?}"),
+        }
+    }
+
+    pub fn children(&self, id: NodeId, name: &str) -> &[NodeId] {
+        self.field(id, name).nodes()
+    }
+
+    /// Every node reachable from the roots, depth first, each once, in a stable order.
+    pub fn walk(&self) -> Vec<NodeId> {
+        let mut seen = vec![false; self.nodes.len()];
+        let mut order = Vec::new();
+        let mut stack: Vec<NodeId> = self.roots.iter().rev().copied().collect();
+        while let Some(id) = stack.pop() {
+            if std::mem::replace(&mut seen[id.index()], true) {
+                continue;
+            }
+            order.push(id);
+            for value in self.node(id).fields.iter().rev() {
+                stack.extend(value.nodes().iter().rev());
+            }
+        }
+        order
+    }
+
+    /// Every node of type `name`, in walk order.
+    pub fn find(&self, name: &str) -> Vec<NodeId> {
+        self.walk()
+            .into_iter()
+            .filter(|&id| self.type_name(id) == name)
+            .collect()
+    }
+
+    /// The rotation (axis, angle) that brings the file's axes to regatta's y-up frame:
+    /// identity for y-up files; −90° about x for z-up files, mapping (x, y, z) to (x, z, −y).
+    pub fn root_rotation(&self) -> [f64; 4] {
+        match self.up_axis {
+            UpAxis::Y => [0.0, 1.0, 0.0, 0.0],
+            UpAxis::Z => [1.0, 0.0, 0.0, -std::f64::consts::FRAC_PI_2],
+        }
+    }
+}

@@ -1,0 +1,79 @@
+//! `regatta`: the command line. Each subcommand lives in its own module; this file only
+//! dispatches and maps results to exit codes (0 clean, 1 errors found, 2 usage errors).
+
+mod check;
+mod fmt;
+mod schema;
+
+use std::io::IsTerminal;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// regatta: VRML-style robot worlds — checked, simulated and logged reproducibly.
+#[derive(Parser)]
+#[command(name = "regatta", version, about, long_about = None, propagate_version = true)]
+struct Cli {
+    /// When to colour diagnostics.
+    #[arg(long, global = true, value_enum, default_value_t = Color::Auto)]
+    color: Color,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Color {
+    Auto,
+    Always,
+    Never,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Check world files and print their diagnostics (`-` reads standard input).
+    Check(check::Args),
+    /// Print the node catalogue: every field with its type, default and doc.
+    Schema(schema::Args),
+    /// Print a world file in canonical form (comments kept).
+    Fmt(fmt::Args),
+}
+
+/// What a subcommand reports back.
+pub enum Outcome {
+    Clean,
+    /// The input had errors; they were printed.
+    Errors,
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(error) => {
+            let _ = error.print();
+            return match error.kind() {
+                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion => {
+                    ExitCode::SUCCESS
+                }
+                _ => ExitCode::from(2),
+            };
+        }
+    };
+    let color = match cli.color {
+        Color::Always => true,
+        Color::Never => false,
+        Color::Auto => std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none(),
+    };
+    let result = match cli.command {
+        Command::Check(args) => check::run(args, color),
+        Command::Schema(args) => schema::run(args),
+        Command::Fmt(args) => fmt::run(args, color),
+    };
+    match result {
+        Ok(Outcome::Clean) => ExitCode::SUCCESS,
+        Ok(Outcome::Errors) => ExitCode::from(1),
+        Err(error) => {
+            eprintln!("error: {error:#}");
+            ExitCode::from(1)
+        }
+    }
+}
