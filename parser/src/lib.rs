@@ -17,6 +17,6 @@ pub mod syntax;
 pub mod testgen;
 
 pub use diagnostic::{Diagnostic, Label, Severity};
-pub use parse::{parse, Parse};
+pub use parse::{parse, Parse, MAX_DEPTH};
 pub use source::{SourceError, SourceText};
 pub use syntax::Span;

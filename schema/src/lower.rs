@@ -24,7 +24,7 @@ use crate::value::{BaseType, FieldType, Image, Value};
 /// Deepest nesting of PROTO instances and Inline files.
 pub const MAX_INSTANCE_DEPTH: usize = 32;
 /// Largest scene, in nodes, after PROTO expansion.
-pub const MAX_NODES: usize = 5_000_000;
+pub const MAX_NODES: usize = 1_000_000;
 
 /// How to check a world.
 #[derive(Clone, Debug)]
@@ -173,8 +173,9 @@ pub(crate) fn type_default(
 struct ProtoDef {
     file: FileId,
     proto: syntax::Proto,
-    /// PROTOs visible inside its body: those of its own file.
-    siblings: Rc<Vec<(String, Rc<ProtoDef>)>>,
+    /// PROTOs of the PROTO bodies it is nested in (empty at file level); its own file's
+    /// PROTOs are found through [`Lowerer::file_scopes`].
+    enclosing: Rc<Vec<(String, Rc<ProtoDef>)>>,
 }
 
 /// What names mean at some point of a file or PROTO body.
@@ -228,8 +229,13 @@ struct Lowerer<'c> {
     checked_protos: BTreeSet<(u32, u32)>,
     /// Files already loaded (EXTERNPROTO, Inline), by canonical path.
     loaded: HashMap<PathBuf, FileId>,
+    /// The PROTO table of each file, by file id.
+    file_scopes: HashMap<u32, Rc<Vec<(String, Rc<ProtoDef>)>>>,
     budget_reported: bool,
+    /// Too-deep instance nesting is reported once: one cause, one message.
+    depth_reported: bool,
     up_axis: UpAxis,
+    roots: Vec<NodeId>,
 }
 
 impl<'c> Lowerer<'c> {
@@ -247,8 +253,11 @@ impl<'c> Lowerer<'c> {
             instance_stack: Vec::new(),
             checked_protos: BTreeSet::new(),
             loaded: HashMap::new(),
+            file_scopes: HashMap::new(),
             budget_reported: false,
+            depth_reported: false,
             up_axis: UpAxis::Y,
+            roots: Vec::new(),
         }
     }
 
@@ -324,7 +333,7 @@ impl<'c> Lowerer<'c> {
         diagnostics.dedup();
         let scene = Scene {
             nodes: self.nodes,
-            roots: Vec::new(),
+            roots: self.roots,
             files: self.sources.iter().map(|s| s.name.clone()).collect(),
             up_axis: self.up_axis,
         };
@@ -350,13 +359,16 @@ impl<'c> Lowerer<'c> {
                         Rc::new(ProtoDef {
                             file,
                             proto: proto.clone(),
-                            siblings: Rc::new(Vec::new()),
+                            enclosing: Rc::new(Vec::new()),
                         }),
                     ));
                 }
             }
         }
         let builtins = Rc::new(list);
+        for (_, def) in builtins.iter() {
+            self.file_scopes.insert(def.file.0, builtins.clone());
+        }
         self.builtins = Some(builtins.clone());
         builtins
     }
@@ -369,7 +381,6 @@ impl<'c> Lowerer<'c> {
         depth: usize,
     ) -> Rc<Vec<(String, Rc<ProtoDef>)>> {
         let mut list: Vec<(String, Rc<ProtoDef>)> = self.builtins().iter().cloned().collect();
-        let builtin_count = list.len();
         for item in &parsed.items {
             if let Item::ExternProto(extern_proto) = item {
                 self.extern_proto(file, extern_proto, &mut list, depth);
@@ -386,14 +397,9 @@ impl<'c> Lowerer<'c> {
                 }
             })
             .collect();
-        // Siblings see each other, so they are built in two steps.
-        let placeholder: Rc<Vec<(String, Rc<ProtoDef>)>> = Rc::new(list.clone());
-        let mut defs = Vec::new();
-        for proto in &own {
-            if list[builtin_count..]
-                .iter()
-                .any(|(n, _)| *n == proto.name.text)
-            {
+        let mut seen: BTreeSet<&str> = BTreeSet::new();
+        for proto in own {
+            if !seen.insert(proto.name.text.as_str()) {
                 self.error(
                     file,
                     Diagnostic::warning(
@@ -406,31 +412,34 @@ impl<'c> Lowerer<'c> {
                     .with_code("proto-redefined"),
                 );
             }
-            defs.push((proto.name.text.clone(), (*proto).clone()));
-        }
-        let mut siblings: Vec<(String, Rc<ProtoDef>)> = list.clone();
-        for (name, proto) in &defs {
-            siblings.push((
-                name.clone(),
+            list.push((
+                proto.name.text.clone(),
                 Rc::new(ProtoDef {
                     file,
                     proto: proto.clone(),
-                    siblings: placeholder.clone(),
+                    enclosing: Rc::new(Vec::new()),
                 }),
             ));
         }
-        let siblings = Rc::new(siblings);
-        for (name, proto) in defs {
-            list.push((
-                name,
-                Rc::new(ProtoDef {
-                    file,
-                    proto,
-                    siblings: siblings.clone(),
-                }),
-            ));
+        let list = Rc::new(list);
+        // PROTOs of one file see each other: bodies look the file's table up when instantiated.
+        self.file_scopes.insert(file.0, list.clone());
+        list
+    }
+
+    /// What a PROTO's body sees: its file's PROTOs, then those of enclosing PROTO bodies.
+    fn visible_protos(&self, def: &ProtoDef) -> Rc<Vec<(String, Rc<ProtoDef>)>> {
+        let file_level = self
+            .file_scopes
+            .get(&def.file.0)
+            .cloned()
+            .unwrap_or_default();
+        if def.enclosing.is_empty() {
+            return file_level;
         }
-        Rc::new(list)
+        let mut all: Vec<(String, Rc<ProtoDef>)> = file_level.iter().cloned().collect();
+        all.extend(def.enclosing.iter().cloned());
+        Rc::new(all)
     }
 
     fn extern_proto(
@@ -474,7 +483,7 @@ impl<'c> Lowerer<'c> {
                     file,
                     Diagnostic::error(
                         url.span,
-                        format!("EXTERNPROTO file {} does not exist", path.display()),
+                        format!("EXTERNPROTO file '{path_part}' does not exist"),
                     )
                     .with_code("externproto"),
                 );
@@ -493,13 +502,13 @@ impl<'c> Lowerer<'c> {
             });
             match found {
                 Some(proto) => {
-                    let siblings = self.file_protos(loaded, &parsed, depth + 1);
+                    self.file_protos(loaded, &parsed, depth + 1);
                     list.push((
                         name,
                         Rc::new(ProtoDef {
                             file: loaded,
                             proto,
-                            siblings,
+                            enclosing: Rc::new(Vec::new()),
                         }),
                     ));
                     return;
@@ -509,7 +518,7 @@ impl<'c> Lowerer<'c> {
                         file,
                         Diagnostic::error(
                             url.span,
-                            format!("'{}' defines no PROTO named '{name}'", path.display()),
+                            format!("'{path_part}' defines no PROTO named '{name}'"),
                         )
                         .with_code("externproto"),
                     );
@@ -538,16 +547,26 @@ impl<'c> Lowerer<'c> {
                 Some(id)
             }
             Err(error) => {
+                // Name the file as written (relative), so messages do not depend on the checkout.
+                let reason = match &error {
+                    regatta_parser::SourceError::Io { source, .. } => source.to_string(),
+                    other => other.to_string(),
+                };
+                let shown = path
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default();
                 self.error(
                     from,
-                    Diagnostic::error(span, error.to_string()).with_code("io"),
+                    Diagnostic::error(span, format!("cannot read '{shown}': {reason}"))
+                        .with_code("io"),
                 );
                 None
             }
         }
     }
 
-    fn lower_world(&mut self, file: FileId) -> Vec<NodeId> {
+    fn lower_world(&mut self, file: FileId) {
         let parsed = self.parse(file);
         let header = parsed.header.clone();
         let protos = self.file_protos(file, &parsed, 0);
@@ -557,7 +576,7 @@ impl<'c> Lowerer<'c> {
         };
         let roots = self.lower_items(&parsed.items, &mut scope, true);
         self.up_axis = self.decide_up_axis(header.as_ref(), &roots);
-        roots
+        self.roots = roots;
     }
 
     fn lower_items(&mut self, items: &[Item], scope: &mut Scope, top_level: bool) -> Vec<NodeId> {
@@ -662,6 +681,10 @@ impl<'c> Lowerer<'c> {
         accepted: &[String],
         place: &str,
     ) -> Option<NodeId> {
+        if self.budget_reported {
+            // The scene is already too large: stop expanding anything.
+            return None;
+        }
         let id = match &node.kind {
             NodeKind::Use(name) => {
                 if name.text.is_empty() {
@@ -968,6 +991,9 @@ impl<'c> Lowerer<'c> {
             return None;
         }
         if self.instance_stack.len() >= MAX_INSTANCE_DEPTH {
+            if std::mem::replace(&mut self.depth_reported, true) {
+                return None;
+            }
             self.error(
                 scope.file,
                 Diagnostic::error(
@@ -1045,7 +1071,7 @@ impl<'c> Lowerer<'c> {
         }
         // Defaults, typed in the PROTO's own file.
         let mut default_scope = Scope {
-            protos: def.siblings.clone(),
+            protos: self.visible_protos(def),
             ..Scope::new(def.file)
         };
         for declaration in &proto.interface {
@@ -1082,11 +1108,12 @@ impl<'c> Lowerer<'c> {
         }
         // The body, in a scope of its own.
         self.instance_stack.push(name.clone());
-        let mut protos: Vec<(String, Rc<ProtoDef>)> = def.siblings.iter().cloned().collect();
+        let visible = self.visible_protos(def);
+        let mut nested_protos: Vec<(String, Rc<ProtoDef>)> = Vec::new();
         let mut body_scope = Scope {
             file: def.file,
             defs: HashMap::new(),
-            protos: Rc::new(Vec::new()),
+            protos: visible.clone(),
             interface: Some(Rc::new(bindings)),
             skipped_defs: BTreeSet::new(),
         };
@@ -1095,19 +1122,24 @@ impl<'c> Lowerer<'c> {
         for item in &proto.body {
             match item {
                 Item::Proto(nested) => {
-                    protos.push((
+                    // Rare: only bodies that define PROTOs pay for a scope of their own.
+                    let mut enclosing: Vec<(String, Rc<ProtoDef>)> =
+                        def.enclosing.iter().cloned().collect();
+                    enclosing.extend(nested_protos.iter().cloned());
+                    nested_protos.push((
                         nested.name.text.clone(),
                         Rc::new(ProtoDef {
                             file: def.file,
                             proto: nested.clone(),
-                            siblings: Rc::new(protos.clone()),
+                            enclosing: Rc::new(enclosing),
                         }),
                     ));
-                    body_scope.protos = Rc::new(protos.clone());
+                    let mut all: Vec<(String, Rc<ProtoDef>)> = visible.iter().cloned().collect();
+                    all.extend(nested_protos.iter().cloned());
+                    body_scope.protos = Rc::new(all);
                 }
                 Item::Node(body_node) if !found_root => {
                     found_root = true;
-                    body_scope.protos = Rc::new(protos.clone());
                     root = self.lower_node(
                         body_node,
                         &mut body_scope,

@@ -1,0 +1,227 @@
+//! Property tests: formatting is idempotent and keeps the tree on generated worlds, and no
+//! input (arbitrary bytes, deep nesting, PROTO explosions) makes parsing or typing panic.
+
+use proptest::prelude::*;
+use regatta_parser::format::{dump, format};
+use regatta_parser::{parse, SourceText};
+use regatta_schema::{check, Options};
+
+/// A number in one of the shapes real files use.
+fn number() -> impl Strategy<Value = String> {
+    prop_oneof![
+        (-1000i32..1000).prop_map(|i| i.to_string()),
+        (-1.0e3f64..1.0e3).prop_map(|x| format!("{x}")),
+        (0u32..1000).prop_map(|i| format!(".{i}")),
+        (-50i32..50).prop_map(|e| format!("1e{e}")),
+        (0u32..100).prop_map(|i| format!("{i}.")),
+        (0u32..0xffffff).prop_map(|i| format!("0x{i:X}")),
+    ]
+}
+
+fn string_literal() -> impl Strategy<Value = String> {
+    "[a-z #{}\\[\\],\\\\\"]{0,12}".prop_map(|s| {
+        let escaped: String = s
+            .chars()
+            .flat_map(|c| match c {
+                '"' => vec!['\\', '"'],
+                '\\' => vec!['\\', '\\'],
+                other => vec![other],
+            })
+            .collect();
+        format!("\"{escaped}\"")
+    })
+}
+
+fn ident() -> impl Strategy<Value = String> {
+    "[A-Za-z_][A-Za-z0-9_+-]{0,8}".prop_filter("not a keyword", |s| {
+        !matches!(
+            s.as_str(),
+            "DEF"
+                | "USE"
+                | "PROTO"
+                | "EXTERNPROTO"
+                | "IS"
+                | "TRUE"
+                | "FALSE"
+                | "NULL"
+                | "ROUTE"
+                | "TO"
+                | "IMPORTABLE"
+                | "hidden"
+                | "field"
+                | "vrmlField"
+                | "hiddenField"
+                | "deprecatedField"
+                | "unconnectedField"
+                | "exposedField"
+                | "eventIn"
+                | "eventOut"
+        )
+    })
+}
+
+/// Separators between tokens: blanks, commas, newlines and comments.
+fn separator() -> impl Strategy<Value = String> {
+    prop_oneof![
+        Just(" ".to_owned()),
+        Just("\n".to_owned()),
+        Just(", ".to_owned()),
+        Just("\n\n  ".to_owned()),
+        "[a-z ]{0,10}".prop_map(|c| format!(" # {c}\n")),
+    ]
+}
+
+fn node(depth: u32) -> BoxedStrategy<String> {
+    let leaf_value = prop_oneof![
+        prop::collection::vec(number(), 1..5).prop_map(|v| v.join(" ")),
+        prop::collection::vec(number(), 0..7).prop_map(|v| format!("[ {} ]", v.join(", "))),
+        string_literal(),
+        prop::collection::vec(string_literal(), 0..3).prop_map(|v| format!("[{}]", v.join(" "))),
+        Just("TRUE".to_owned()),
+        Just("FALSE".to_owned()),
+        Just("NULL".to_owned()),
+    ];
+    let value: BoxedStrategy<String> = if depth == 0 {
+        leaf_value.boxed()
+    } else {
+        prop_oneof![
+            3 => leaf_value,
+            1 => node(depth - 1),
+            1 => prop::collection::vec(node(depth - 1), 0..3).prop_map(|v| format!("[ {} ]", v.join(" "))),
+            1 => ident().prop_map(|d| format!("USE {d}")),
+        ]
+        .boxed()
+    };
+    let field =
+        (ident(), value, separator()).prop_map(|(name, value, sep)| format!("{name} {value}{sep}"));
+    (
+        prop::option::of(ident()),
+        ident(),
+        prop::collection::vec(field, 0..4),
+        separator(),
+    )
+        .prop_map(|(def, type_name, fields, sep)| {
+            let def = def.map(|d| format!("DEF {d} ")).unwrap_or_default();
+            format!("{def}{type_name} {{{sep}{}}}", fields.concat())
+        })
+        .boxed()
+}
+
+fn world() -> impl Strategy<Value = String> {
+    (
+        prop::collection::vec((node(3), separator()), 0..5),
+        any::<bool>(),
+    )
+        .prop_map(|(nodes, header)| {
+            let mut text = if header {
+                "#VRML_SIM R2023b utf8\n".to_owned()
+            } else {
+                String::new()
+            };
+            for (node, sep) in nodes {
+                text.push_str(&node);
+                text.push_str(&sep);
+            }
+            text
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    #[test]
+    fn generated_worlds_parse_cleanly(text in world()) {
+        let parsed = parse(&text);
+        prop_assert!(parsed.diagnostics.is_empty(), "{text}\n{:?}", parsed.diagnostics);
+    }
+
+    #[test]
+    fn fmt_is_idempotent(text in world()) {
+        let parsed = parse(&text);
+        let once = format(&parsed.file, &text);
+        let reparsed = parse(&once);
+        let twice = format(&reparsed.file, &once);
+        prop_assert_eq!(&once, &twice);
+    }
+
+    #[test]
+    fn parse_of_fmt_equals_parse(text in world()) {
+        let parsed = parse(&text);
+        let once = format(&parsed.file, &text);
+        let reparsed = parse(&once);
+        prop_assert!(reparsed.diagnostics.is_empty(), "{}", once);
+        prop_assert_eq!(dump(&parsed.file, &text, false), dump(&reparsed.file, &once, false));
+        prop_assert_eq!(parsed.file.comments.len(), reparsed.file.comments.len());
+    }
+
+    #[test]
+    fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..512)) {
+        let source = SourceText::from_bytes("fuzz".to_owned(), bytes);
+        let parsed = parse(&source.text);
+        let _ = format(&parsed.file, &source.text);
+        let _ = check(source, &Options::default());
+    }
+
+    #[test]
+    fn world_shaped_noise_never_panics(text in "[A-Za-z{}\\[\\]\"#%<>=,. 0-9\n-]{0,300}") {
+        let parsed = parse(&text);
+        let _ = format(&parsed.file, &text);
+        for diagnostic in &parsed.diagnostics {
+            let _ = diagnostic.render("noise", &text, false);
+        }
+        let _ = check(SourceText::from_bytes("noise".to_owned(), text.into_bytes()), &Options { strict: false, base_dir: None });
+    }
+}
+
+#[test]
+fn deep_nesting_is_reported_not_overflowed() {
+    let text = "Transform { children [ ".repeat(100_000);
+    let parsed = parse(&text);
+    assert!(parsed
+        .diagnostics
+        .iter()
+        .any(|d| d.message.contains("nested deeper")));
+    let _ = format(&parsed.file, &text);
+    let _ = check(
+        SourceText::from_bytes("deep.wbt".to_owned(), text.clone().into_bytes()),
+        &Options::default(),
+    );
+    // Just under the limit, closed properly: typed and formatted without trouble.
+    let depth = regatta_parser::MAX_DEPTH - 1;
+    let closed = format!(
+        "{}{}",
+        "Transform { children [ ".repeat(depth),
+        "] } ".repeat(depth)
+    );
+    let checked = check(
+        SourceText::from_bytes("deep.wbt".to_owned(), closed.into_bytes()),
+        &Options::default(),
+    );
+    assert!(!checked.has_errors(), "{:?}", checked.short());
+    let brackets = "[".repeat(200_000);
+    let parsed = parse(&format!("Group {{ children {brackets} }}"));
+    assert!(parsed.has_errors());
+}
+
+#[test]
+fn exponential_proto_expansion_is_bounded() {
+    // Each level instantiates the one below twice: 2^40 nodes if unbounded.
+    let mut text = String::from("#VRML_SIM R2023b utf8\nPROTO L0 [] { Group { } }\n");
+    for level in 1..=40 {
+        text.push_str(&format!(
+            "PROTO L{level} [] {{ Group {{ children [ L{} {{ }} L{} {{ }} ] }} }}\n",
+            level - 1,
+            level - 1
+        ));
+    }
+    text.push_str("L40 { }\n");
+    let checked = check(
+        SourceText::from_bytes("bomb.wbt".to_owned(), text.into_bytes()),
+        &Options::default(),
+    );
+    assert!(checked
+        .diagnostics
+        .iter()
+        .any(|d| d.diagnostic.code == "too-large" || d.diagnostic.code == "depth"));
+    assert!(checked.scene.nodes.len() <= regatta_schema::MAX_NODES);
+}

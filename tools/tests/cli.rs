@@ -1,0 +1,215 @@
+//! The command line end to end: exit codes, standard input, formatting in place, the schema.
+//! (These live beside the binary because Cargo only exposes a binary's path to its own
+//! package's tests; the rest of the integration tests are in `tests/`.)
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn regatta() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_regatta"))
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_owned()
+}
+
+fn run_with_stdin(args: &[&str], input: &[u8]) -> Output {
+    let mut child = regatta()
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("regatta runs");
+    child.stdin.take().unwrap().write_all(input).unwrap();
+    child.wait_with_output().unwrap()
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("regatta-cli-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn project_worlds_check_clean() {
+    let worlds =
+        ["regatta.wbt", "single_buoy.wbt", "k213.wbt"].map(|w| root().join("worlds").join(w));
+    let output = regatta().arg("check").args(&worlds).output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("checked 3 files: 0 errors, 0 warnings"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn errors_exit_1_with_file_line_col_caret_and_hint() {
+    let output = run_with_stdin(
+        &["check", "--color", "never", "-"],
+        b"WorldInfo { coordinateSystem \"NUE\" }\nTransform {\n  translaton 0 1 0\n}\n",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("error: Skipped unknown 'translaton' field in Transform node."),
+        "{stderr}"
+    );
+    assert!(stderr.contains("<stdin>:3:3"), "{stderr}");
+    assert!(stderr.contains("^^^^^^^^^^"), "{stderr}");
+    assert!(stderr.contains("did you mean 'translation'?"), "{stderr}");
+}
+
+#[test]
+fn lenient_mode_turns_unknown_nodes_into_warnings() {
+    let input = b"#VRML_SIM R2023b utf8\nRectangleArena { floorSize 1 1 }\n";
+    let strict = run_with_stdin(&["check", "-"], input);
+    assert_eq!(strict.status.code(), Some(1));
+    let lenient = run_with_stdin(&["check", "--lenient", "-"], input);
+    let stderr = String::from_utf8_lossy(&lenient.stderr);
+    assert_eq!(lenient.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("warning: Skipped unknown 'RectangleArena' node or PROTO."),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    assert_eq!(
+        regatta().arg("check").output().unwrap().status.code(),
+        Some(2)
+    );
+    assert_eq!(
+        regatta()
+            .arg("--no-such-flag")
+            .output()
+            .unwrap()
+            .status
+            .code(),
+        Some(2)
+    );
+    assert_eq!(
+        regatta().arg("frobnicate").output().unwrap().status.code(),
+        Some(2)
+    );
+}
+
+#[test]
+fn unreadable_file_is_an_error_not_a_panic() {
+    let output = regatta()
+        .args(["check", "/nonexistent/world.wbt"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(
+        stderr.contains("cannot read /nonexistent/world.wbt"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"));
+}
+
+#[test]
+fn fmt_prints_canonical_form_and_is_stable() {
+    let input = b"#VRML_SIM R2023b utf8\nTransform{translation 1,2,3 # where\nchildren[Shape{geometry Box{}}]}\n";
+    let once = run_with_stdin(&["fmt", "-"], input);
+    assert_eq!(once.status.code(), Some(0));
+    let text = String::from_utf8(once.stdout).unwrap();
+    assert_eq!(
+        text,
+        "#VRML_SIM R2023b utf8\nTransform {\n  translation 1 2 3 # where\n  children [\n    Shape {\n      geometry Box {\n      }\n    }\n  ]\n}\n"
+    );
+    let twice = run_with_stdin(&["fmt", "-"], text.as_bytes());
+    assert_eq!(String::from_utf8(twice.stdout).unwrap(), text);
+    // --check says whether a file is canonical.
+    let dir = temp_dir("fmt");
+    let path = dir.join("world.wbt");
+    std::fs::write(&path, input).unwrap();
+    assert_eq!(
+        regatta()
+            .args(["fmt", "--check"])
+            .arg(&path)
+            .status()
+            .unwrap()
+            .code(),
+        Some(1)
+    );
+    assert_eq!(
+        regatta()
+            .args(["fmt", "-w"])
+            .arg(&path)
+            .status()
+            .unwrap()
+            .code(),
+        Some(0)
+    );
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), text);
+    assert_eq!(
+        regatta()
+            .args(["fmt", "--check"])
+            .arg(&path)
+            .status()
+            .unwrap()
+            .code(),
+        Some(0)
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn fmt_refuses_a_file_with_syntax_errors_and_keeps_it() {
+    let dir = temp_dir("fmt-broken");
+    let path = dir.join("broken.wbt");
+    let broken = "Transform { translation 1 2 3\n";
+    std::fs::write(&path, broken).unwrap();
+    let output = regatta().args(["fmt", "-w"]).arg(&path).output().unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), broken);
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn schema_lists_fields_with_types_defaults_and_docs() {
+    let output = regatta()
+        .args(["schema", "PanoramicTurret"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8(output.stdout).unwrap();
+    assert!(text.contains("## PanoramicTurret"));
+    assert!(
+        text.contains("| `optics` | SFString | `\"exact\"` | \"paper\", \"exact\" |"),
+        "{text}"
+    );
+    let json = regatta()
+        .args(["schema", "--format", "json"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8(json.stdout).unwrap();
+    for node in [
+        "WorldInfo",
+        "Transform",
+        "IndexedFaceSet",
+        "DifferentialWheels",
+        "DistanceSensor",
+        "LightSensor",
+        "LinearCamera",
+    ] {
+        assert!(
+            text.contains(&format!("\"name\": \"{node}\"")),
+            "{node} missing from the schema"
+        );
+    }
+    let alias = regatta().args(["schema", "Pose"]).output().unwrap();
+    assert!(String::from_utf8(alias.stdout)
+        .unwrap()
+        .contains("## Transform"));
+    let unknown = regatta().args(["schema", "Transfrom"]).output().unwrap();
+    assert_eq!(unknown.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&unknown.stderr).contains("did you mean 'Transform'?"));
+}
