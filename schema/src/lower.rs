@@ -169,13 +169,18 @@ pub(crate) fn type_default(
     }
 }
 
+/// PROTOs visible at some point, in order of definition (later entries win).
+type ProtoTable = Rc<Vec<(String, Rc<ProtoDef>)>>;
+/// A PROTO instance's interface fields: declared type and bound value.
+pub(crate) type Bindings = BTreeMap<String, (FieldType, Option<Value>)>;
+
 /// A PROTO definition and the file it was read from.
 struct ProtoDef {
     file: FileId,
     proto: syntax::Proto,
     /// PROTOs of the PROTO bodies it is nested in (empty at file level); its own file's
     /// PROTOs are found through [`Lowerer::file_scopes`].
-    enclosing: Rc<Vec<(String, Rc<ProtoDef>)>>,
+    enclosing: ProtoTable,
 }
 
 /// What names mean at some point of a file or PROTO body.
@@ -183,9 +188,9 @@ struct ProtoDef {
 struct Scope {
     file: FileId,
     defs: HashMap<String, NodeId>,
-    protos: Rc<Vec<(String, Rc<ProtoDef>)>>,
+    protos: ProtoTable,
     /// PROTO interface bindings, inside a PROTO body.
-    interface: Option<Rc<BTreeMap<String, (FieldType, Option<Value>)>>>,
+    interface: Option<Rc<Bindings>>,
     /// DEF names inside nodes that were skipped (lenient mode), so that their USEs are
     /// skipped quietly too.
     skipped_defs: BTreeSet<String>,
@@ -221,7 +226,7 @@ struct Lowerer<'c> {
     parse_diagnostics: Vec<FileDiagnostic>,
     diagnostics: Vec<FileDiagnostic>,
     refined_missing: BTreeSet<(u32, u32)>,
-    builtins: Option<Rc<Vec<(String, Rc<ProtoDef>)>>>,
+    builtins: Option<ProtoTable>,
     /// EXTERNPROTO names that point where regatta does not go, with the URL.
     unresolved: HashMap<String, String>,
     instance_stack: Vec<String>,
@@ -230,7 +235,7 @@ struct Lowerer<'c> {
     /// Files already loaded (EXTERNPROTO, Inline), by canonical path.
     loaded: HashMap<PathBuf, FileId>,
     /// The PROTO table of each file, by file id.
-    file_scopes: HashMap<u32, Rc<Vec<(String, Rc<ProtoDef>)>>>,
+    file_scopes: HashMap<u32, ProtoTable>,
     budget_reported: bool,
     /// Too-deep instance nesting is reported once: one cause, one message.
     depth_reported: bool,
@@ -344,7 +349,7 @@ impl<'c> Lowerer<'c> {
         }
     }
 
-    fn builtins(&mut self) -> Rc<Vec<(String, Rc<ProtoDef>)>> {
+    fn builtins(&mut self) -> ProtoTable {
         if let Some(builtins) = &self.builtins {
             return builtins.clone();
         }
@@ -379,7 +384,7 @@ impl<'c> Lowerer<'c> {
         file: FileId,
         parsed: &syntax::SourceFile,
         depth: usize,
-    ) -> Rc<Vec<(String, Rc<ProtoDef>)>> {
+    ) -> ProtoTable {
         let mut list: Vec<(String, Rc<ProtoDef>)> = self.builtins().iter().cloned().collect();
         for item in &parsed.items {
             if let Item::ExternProto(extern_proto) = item {
@@ -428,7 +433,7 @@ impl<'c> Lowerer<'c> {
     }
 
     /// What a PROTO's body sees: its file's PROTOs, then those of enclosing PROTO bodies.
-    fn visible_protos(&self, def: &ProtoDef) -> Rc<Vec<(String, Rc<ProtoDef>)>> {
+    fn visible_protos(&self, def: &ProtoDef) -> ProtoTable {
         let file_level = self
             .file_scopes
             .get(&def.file.0)

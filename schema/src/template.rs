@@ -6,9 +6,7 @@
 //! `+ - * /` and parentheses. Statement blocks (`%< … >%`) and anything else are not run:
 //! the caller reports them.
 
-use std::collections::BTreeMap;
-
-use crate::value::{FieldType, Value};
+use crate::value::Value;
 
 /// The result of an expression: a number or a vector (spread into its components).
 #[derive(Clone, Debug, PartialEq)]
@@ -18,10 +16,7 @@ pub enum Evaluated {
 }
 
 /// Evaluates the inside of an expression template (`%<= … >%` or `%{= … }%`).
-pub fn evaluate(
-    template_text: &str,
-    fields: &BTreeMap<String, (FieldType, Option<Value>)>,
-) -> Result<Evaluated, String> {
+pub fn evaluate(template_text: &str, fields: &crate::lower::Bindings) -> Result<Evaluated, String> {
     let inner = template_text
         .strip_prefix("%<=")
         .and_then(|t| t.strip_suffix(">%"))
@@ -52,7 +47,7 @@ struct ExprParser<'a> {
     bytes: &'a [u8],
     text: &'a str,
     pos: usize,
-    fields: &'a BTreeMap<String, (FieldType, Option<Value>)>,
+    fields: &'a crate::lower::Bindings,
 }
 
 const MAX_NESTING: usize = 64;
@@ -208,7 +203,8 @@ fn combine(a: Evaluated, b: Evaluated, op: impl Fn(f64, f64) -> f64) -> Result<E
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::value::BaseType;
+    use crate::value::{BaseType, FieldType};
+    use std::collections::BTreeMap;
 
     #[test]
     fn arithmetic_over_fields() {

@@ -1,6 +1,7 @@
 //! `regatta`: the command line. Each subcommand lives in its own module; this file only
 //! dispatches and maps results to exit codes (0 clean, 1 errors found, 2 usage errors).
 
+mod bench;
 mod check;
 mod fmt;
 mod schema;
@@ -36,6 +37,8 @@ enum Command {
     Schema(schema::Args),
     /// Print a world file in canonical form (comments kept).
     Fmt(fmt::Args),
+    /// Run a benchmark and print its figures.
+    Bench(bench::Args),
 }
 
 /// What a subcommand reports back.
@@ -67,6 +70,7 @@ fn main() -> ExitCode {
         Command::Check(args) => check::run(args, color),
         Command::Schema(args) => schema::run(args),
         Command::Fmt(args) => fmt::run(args, color),
+        Command::Bench(args) => bench::run(args),
     };
     match result {
         Ok(Outcome::Clean) => ExitCode::SUCCESS,

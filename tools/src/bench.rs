@@ -1,0 +1,119 @@
+//! `regatta bench`: benchmarks that report figures (speed is measured here, never in tests).
+//!
+//! `bench parse` generates a mesh-heavy world (one IndexedFaceSet with millions of points),
+//! writes it to a temporary file and parses it in a child process, so that the peak resident
+//! memory it reports belongs to reading and parsing alone.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{bail, Context};
+
+use crate::Outcome;
+
+#[derive(clap::Args)]
+pub struct Args {
+    #[command(subcommand)]
+    what: What,
+}
+
+#[derive(clap::Subcommand)]
+enum What {
+    /// Parser throughput (MB/s) and peak memory (× file size) on a generated mesh world.
+    Parse {
+        /// Points in the generated IndexedFaceSet.
+        #[arg(long, default_value_t = 2_000_000)]
+        points: usize,
+        /// Timed parses; the best is reported.
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+        /// Parse this file instead of a generated one (used by the child process).
+        #[arg(long, hide = true)]
+        child: Option<PathBuf>,
+    },
+}
+
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    match args.what {
+        What::Parse {
+            points,
+            runs,
+            child: Some(path),
+        } => {
+            let _ = points;
+            parse_child(&path, runs)
+        }
+        What::Parse {
+            points,
+            runs,
+            child: None,
+        } => parse_parent(points, runs),
+    }
+}
+
+fn parse_parent(points: usize, runs: usize) -> anyhow::Result<Outcome> {
+    if runs == 0 {
+        bail!("--runs must be at least 1");
+    }
+    let dir = std::env::temp_dir().join(format!("regatta-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let path = dir.join("mesh.wbt");
+    let world = regatta_parser::testgen::mesh_world(points);
+    std::fs::write(&path, &world).with_context(|| format!("cannot write {}", path.display()))?;
+    let size = world.len();
+    drop(world);
+    let exe = std::env::current_exe().context("cannot find the regatta executable")?;
+    let output = std::process::Command::new(exe)
+        .args(["bench", "parse", "--runs", &runs.to_string(), "--child"])
+        .arg(&path)
+        .output()
+        .context("cannot run the measuring child process")?;
+    std::fs::remove_dir_all(&dir).ok();
+    if !output.status.success() {
+        bail!(
+            "the measuring process failed: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+    }
+    let report = String::from_utf8_lossy(&output.stdout);
+    println!("mesh world: {points} points, {:.1} MB", size as f64 / 1e6);
+    print!("{report}");
+    Ok(Outcome::Clean)
+}
+
+fn parse_child(path: &std::path::Path, runs: usize) -> anyhow::Result<Outcome> {
+    let size = std::fs::metadata(path)?.len() as f64;
+    let mut best = f64::INFINITY;
+    let mut diagnostics = 0;
+    for _ in 0..runs.max(1) {
+        let start = Instant::now();
+        let source = regatta_parser::SourceText::read(path)?;
+        let parsed = regatta_parser::parse(&source.text);
+        let seconds = start.elapsed().as_secs_f64();
+        diagnostics = parsed.diagnostics.len();
+        best = best.min(seconds);
+        drop(parsed);
+        drop(source);
+    }
+    let peak = peak_resident_bytes().unwrap_or(0) as f64;
+    println!(
+        "read + parse: best of {runs}: {:.3} s, {:.0} MB/s",
+        best,
+        size / best / 1e6
+    );
+    println!(
+        "peak resident memory: {:.1} MB = {:.2} × the file size",
+        peak / 1e6,
+        peak / size
+    );
+    println!("diagnostics: {diagnostics}");
+    Ok(Outcome::Clean)
+}
+
+/// The process's peak resident set size (`VmHWM`), where the system reports it.
+fn peak_resident_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kilobytes: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kilobytes * 1024)
+}
