@@ -72,3 +72,50 @@ pub fn expect_file(expected: &Path, actual: &str) -> Result<(), String> {
         actual.lines().nth(first_difference).unwrap_or("<end>")
     ))
 }
+
+/// Checks and compiles a world given as text (strict mode); panics with the diagnostics if it
+/// does not check.
+pub fn compile_text(text: &str) -> regatta_runtime::Compiled {
+    let checked = regatta_schema::check(
+        regatta_parser::SourceText::from_bytes("test.wbt".to_owned(), text.as_bytes().to_vec()),
+        &regatta_schema::Options::default(),
+    );
+    assert!(!checked.has_errors(), "{}", checked.render(false));
+    regatta_runtime::compile(&checked.scene)
+}
+
+/// Compiles a project world from `worlds/`.
+pub fn compile_world(name: &str) -> regatta_runtime::Compiled {
+    let checked = regatta_schema::check_file(&root().join("worlds").join(name), true)
+        .expect("world readable");
+    assert!(!checked.has_errors(), "{}", checked.render(false));
+    regatta_runtime::compile(&checked.scene)
+}
+
+/// Renders robot 0's Panoramic turret at its start pose.
+pub fn panoramic_at_start(
+    compiled: &regatta_runtime::Compiled,
+    force_rays: bool,
+) -> regatta_runtime::optics::RetinaOutput {
+    use regatta_runtime::compile::rig::TurretRig;
+    use regatta_runtime::optics::{Panoramic, Renderer, RetinaOutput};
+    let renderer = Renderer::new(&compiled.graph, &compiled.plan, force_rays);
+    let poses = start_poses(compiled);
+    let view = renderer.view(&compiled.plan, &poses, 0);
+    let robot = &compiled.rig.robots[0];
+    let Some(TurretRig::Panoramic(rig)) = &robot.turret else {
+        panic!("robot 0 has no Panoramic turret")
+    };
+    let mut retina = Panoramic::new(rig);
+    let mut out = RetinaOutput::default();
+    retina.update(&renderer, &view, robot.start, robot.floor_y, &mut out);
+    out
+}
+
+/// Every robot at its start pose.
+pub fn start_poses(compiled: &regatta_runtime::Compiled) -> regatta_runtime::render::Poses {
+    regatta_runtime::render::Poses {
+        poses: compiled.rig.robots.iter().map(|r| r.start).collect(),
+        floor_y: compiled.rig.robots.iter().map(|r| r.floor_y).collect(),
+    }
+}

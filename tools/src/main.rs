@@ -3,8 +3,11 @@
 
 mod bench;
 mod check;
+mod explain;
 mod fmt;
+mod render;
 mod schema;
+mod world;
 
 use std::io::IsTerminal;
 use std::process::ExitCode;
@@ -39,6 +42,10 @@ enum Command {
     Fmt(fmt::Args),
     /// Run a benchmark and print its figures.
     Bench(bench::Args),
+    /// Print what a world compiles to: render graph, sensor rig, and the plan with its skips.
+    Explain(explain::Args),
+    /// Render what each robot's vision device sees, stage by stage (PNG or JSON).
+    Render(render::Args),
 }
 
 /// What a subcommand reports back.
@@ -71,6 +78,8 @@ fn main() -> ExitCode {
         Command::Schema(args) => schema::run(args),
         Command::Fmt(args) => fmt::run(args, color),
         Command::Bench(args) => bench::run(args),
+        Command::Explain(args) => explain::run(args, color),
+        Command::Render(args) => render::run(args, color),
     };
     match result {
         Ok(Outcome::Clean) => ExitCode::SUCCESS,

@@ -1,0 +1,298 @@
+//! The render graph: a flat, backend-neutral description of what can be seen. The CPU
+//! renderer, the wgpu backend and the glTF exporter all read it; none of their details live
+//! here.
+//!
+//! Box, Cylinder, Cone and Sphere stay analytic; IndexedFaceSet and ElevationGrid are
+//! triangulated (concave and non-planar faces included). Static parts are kept apart from
+//! robot-attached parts (whose frames are relative to their robot) and indexed by a BVH.
+
+use glam::DVec3;
+use regatta_schema::{NodeId, Scene, Value};
+
+use crate::geometry::{Aabb, Bvh, Frame};
+
+/// Handle of a primitive in [`RenderGraph::primitives`].
+pub type PrimitiveId = usize;
+
+/// Analytic or triangulated geometry, in the primitive's local frame.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shape {
+    Box {
+        half: DVec3,
+    },
+    Cylinder {
+        radius: f64,
+        height: f64,
+        side: bool,
+        bottom: bool,
+        top: bool,
+    },
+    Cone {
+        radius: f64,
+        height: f64,
+        side: bool,
+        bottom: bool,
+    },
+    Sphere {
+        radius: f64,
+    },
+    /// Index into [`RenderGraph::meshes`].
+    Mesh(usize),
+}
+
+impl Shape {
+    /// Bounds in the local frame.
+    pub fn local_bounds(&self, meshes: &[Mesh]) -> Aabb {
+        match self {
+            Shape::Box { half } => Aabb {
+                min: -*half,
+                max: *half,
+            },
+            Shape::Cylinder { radius, height, .. } | Shape::Cone { radius, height, .. } => {
+                let half = DVec3::new(*radius, height / 2.0, *radius);
+                Aabb {
+                    min: -half,
+                    max: half,
+                }
+            }
+            Shape::Sphere { radius } => Aabb {
+                min: DVec3::splat(-radius),
+                max: DVec3::splat(*radius),
+            },
+            Shape::Mesh(index) => Aabb::from_points(meshes[*index].positions.iter().copied()),
+        }
+    }
+
+    pub fn name(&self) -> &'static str {
+        match self {
+            Shape::Box { .. } => "Box",
+            Shape::Cylinder { .. } => "Cylinder",
+            Shape::Cone { .. } => "Cone",
+            Shape::Sphere { .. } => "Sphere",
+            Shape::Mesh(_) => "Mesh",
+        }
+    }
+}
+
+/// A triangle mesh with optional per-triangle colours (from Color nodes).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    pub positions: Vec<DVec3>,
+    pub triangles: Vec<[u32; 3]>,
+    pub triangle_colors: Option<Vec<[f64; 3]>>,
+    /// Whether back faces are culled (`solid TRUE`).
+    pub solid: bool,
+    pub crease_angle: f64,
+}
+
+/// VRML97 Material, plus infra-red reflectance. `unlit` is VRML's "no material": colour 1, no
+/// lighting.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub diffuse: [f64; 3],
+    pub ambient_intensity: f64,
+    pub specular: [f64; 3],
+    pub emissive: [f64; 3],
+    pub shininess: f64,
+    pub transparency: f64,
+    pub ir_reflectance: f64,
+    pub unlit: bool,
+}
+
+impl Material {
+    pub const UNLIT: Material = Material {
+        diffuse: [1.0; 3],
+        ambient_intensity: 0.0,
+        specular: [0.0; 3],
+        emissive: [1.0; 3],
+        shininess: 0.0,
+        transparency: 0.0,
+        ir_reflectance: 1.0,
+        unlit: true,
+    };
+}
+
+/// Who a primitive or light moves with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Owner {
+    Static,
+    /// Index into the sensor rig's robots; the frame is relative to the robot.
+    Robot(usize),
+}
+
+/// One drawable thing.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Primitive {
+    pub shape: Shape,
+    pub frame: Frame,
+    pub inverse: Frame,
+    pub material: usize,
+    pub owner: Owner,
+    /// The Shape node it comes from.
+    pub node: NodeId,
+    /// Bounds in the frame of its owner (world for static parts, robot for attached ones).
+    pub bounds: Aabb,
+    /// Rotated only about the vertical axis (cylinder and cone axes vertical, boxes
+    /// yaw-rotated) with circular cross-sections: what the column renderer handles.
+    pub upright: bool,
+}
+
+/// The light kinds of VRML97.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LightKind {
+    Directional {
+        direction: DVec3,
+    },
+    Point {
+        location: DVec3,
+        radius: f64,
+        attenuation: DVec3,
+    },
+    Spot {
+        location: DVec3,
+        direction: DVec3,
+        radius: f64,
+        attenuation: DVec3,
+        beam_width: f64,
+        cut_off: f64,
+    },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Light {
+    pub kind: LightKind,
+    pub color: [f64; 3],
+    pub intensity: f64,
+    pub ambient_intensity: f64,
+    pub on: bool,
+    pub shadows: bool,
+    pub owner: Owner,
+    pub node: NodeId,
+}
+
+/// What is seen where no geometry is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Background {
+    pub sky: [f64; 3],
+    /// Below the horizon, if the world gives ground colours.
+    pub ground: Option<[f64; 3]>,
+}
+
+/// The compiled scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderGraph {
+    pub primitives: Vec<Primitive>,
+    pub meshes: Vec<Mesh>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    pub background: Background,
+    /// The static primitives, in the order [`RenderGraph::static_index`] refers to.
+    pub static_primitives: Vec<PrimitiveId>,
+    pub static_index: Bvh,
+}
+
+impl RenderGraph {
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(|m| m.triangles.len()).sum()
+    }
+
+    /// Bounds of all static geometry.
+    pub fn static_bounds(&self) -> Aabb {
+        self.static_primitives
+            .iter()
+            .fold(Aabb::EMPTY, |b, &p| b.union(self.primitives[p].bounds))
+    }
+}
+
+/// Reads a Material node (or its absence) into a [`Material`].
+pub(crate) fn material_of(scene: &Scene, appearance: Option<NodeId>) -> Material {
+    let Some(material) = appearance.and_then(|a| scene.child(a, "material")) else {
+        return Material::UNLIT;
+    };
+    Material {
+        diffuse: scene.vec3(material, "diffuseColor"),
+        ambient_intensity: scene.float(material, "ambientIntensity"),
+        specular: scene.vec3(material, "specularColor"),
+        emissive: scene.vec3(material, "emissiveColor"),
+        shininess: scene.float(material, "shininess"),
+        transparency: scene.float(material, "transparency"),
+        ir_reflectance: scene.float(material, "irReflectance"),
+        unlit: false,
+    }
+}
+
+/// Reads a geometry node into a shape; meshes are triangulated into `meshes`. `None` for
+/// geometry with nothing to draw.
+pub(crate) fn shape_of(scene: &Scene, geometry: NodeId, meshes: &mut Vec<Mesh>) -> Option<Shape> {
+    match scene.type_name(geometry) {
+        "Box" => {
+            let size = scene.vec3(geometry, "size");
+            Some(Shape::Box {
+                half: DVec3::from_array(size) * 0.5,
+            })
+        }
+        "Cylinder" => Some(Shape::Cylinder {
+            radius: scene.float(geometry, "radius"),
+            height: scene.float(geometry, "height"),
+            side: scene.bool(geometry, "side"),
+            bottom: scene.bool(geometry, "bottom"),
+            top: scene.bool(geometry, "top"),
+        }),
+        "Cone" => Some(Shape::Cone {
+            radius: scene.float(geometry, "bottomRadius"),
+            height: scene.float(geometry, "height"),
+            side: scene.bool(geometry, "side"),
+            bottom: scene.bool(geometry, "bottom"),
+        }),
+        "Sphere" => Some(Shape::Sphere {
+            radius: scene.float(geometry, "radius"),
+        }),
+        "IndexedFaceSet" => {
+            let mesh = crate::compile::triangulate::indexed_face_set(scene, geometry);
+            (!mesh.triangles.is_empty()).then(|| {
+                meshes.push(mesh);
+                Shape::Mesh(meshes.len() - 1)
+            })
+        }
+        "ElevationGrid" => {
+            let mesh = crate::compile::triangulate::elevation_grid(scene, geometry);
+            (!mesh.triangles.is_empty()).then(|| {
+                meshes.push(mesh);
+                Shape::Mesh(meshes.len() - 1)
+            })
+        }
+        _ => None,
+    }
+}
+
+/// Background from the first Background node (sky colour × luminosity).
+pub(crate) fn background_of(scene: &Scene) -> Background {
+    let Some(&node) = scene.find("Background").first() else {
+        return Background {
+            sky: [0.0; 3],
+            ground: None,
+        };
+    };
+    let luminosity = scene.float(node, "luminosity");
+    let first = |name: &str| match scene.field(node, name) {
+        Value::Vec3s(colors) => colors.first().map(|c| c.map(|x| x * luminosity)),
+        _ => None,
+    };
+    Background {
+        sky: first("skyColor").unwrap_or([0.0; 3]),
+        ground: first("groundColor"),
+    }
+}
+
+/// Builds the static BVH over the graph's static primitives.
+pub(crate) fn index_static(graph: &mut RenderGraph) {
+    graph.static_primitives = (0..graph.primitives.len())
+        .filter(|&p| graph.primitives[p].owner == Owner::Static)
+        .collect();
+    let boxes: Vec<Aabb> = graph
+        .static_primitives
+        .iter()
+        .map(|&p| graph.primitives[p].bounds)
+        .collect();
+    graph.static_index = Bvh::build(&boxes);
+}

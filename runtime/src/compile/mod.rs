@@ -1,0 +1,431 @@
+//! The compiler: from a typed [`Scene`] to a [`RenderGraph`], a [`SensorRig`] and a [`Plan`].
+//!
+//! It walks the scene from its roots with the accumulated VRML97 transform (the z-up rotation
+//! first, for z-up files). Shapes become primitives, lights become lights, and each
+//! `DifferentialWheels` starts a robot: everything below it is attached to the robot, with
+//! frames relative to it, and its devices go to the rig.
+
+pub mod graph;
+pub mod plan;
+pub mod rig;
+pub mod triangulate;
+
+use glam::DVec3;
+use regatta_schema::{NodeId, Scene, Value};
+
+use crate::geometry::{axis_angle, Frame};
+use graph::{
+    background_of, index_static, material_of, shape_of, Light, LightKind, Material, Owner,
+    Primitive, RenderGraph,
+};
+pub use plan::Plan;
+use rig::{
+    filter_set, DistanceSensorRig, LightSensorRig, LinearCameraRig, Optics, PanoramicRig, Pose2,
+    RobotRig, SensorRig, TurretRig,
+};
+
+/// World-wide settings the runtime needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldSettings {
+    pub title: String,
+    /// Seconds.
+    pub time_step: f64,
+    pub seed: u64,
+}
+
+/// Everything a run needs, compiled from one scene.
+#[derive(Clone, Debug)]
+pub struct Compiled {
+    pub graph: RenderGraph,
+    pub rig: SensorRig,
+    pub plan: Plan,
+    pub settings: WorldSettings,
+    /// Things the compiler noticed and worked around (a tilted robot, a device outside a robot).
+    pub warnings: Vec<String>,
+}
+
+/// Compiles a scene.
+pub fn compile(scene: &Scene) -> Compiled {
+    let mut compiler = Compiler {
+        scene,
+        graph: RenderGraph {
+            primitives: Vec::new(),
+            meshes: Vec::new(),
+            materials: Vec::new(),
+            lights: Vec::new(),
+            background: background_of(scene),
+            static_primitives: Vec::new(),
+            static_index: Default::default(),
+        },
+        rig: SensorRig::default(),
+        warnings: Vec::new(),
+        materials: Vec::new(),
+    };
+    let root = scene.root_rotation();
+    let root_frame = Frame {
+        linear: axis_angle(DVec3::new(root[0], root[1], root[2]), root[3]),
+        translation: DVec3::ZERO,
+    };
+    for &node in &scene.roots {
+        compiler.walk(node, &root_frame, Owner::Static, 0);
+    }
+    index_static(&mut compiler.graph);
+    let settings = settings_of(scene);
+    let plan = Plan::new(&compiler.graph, &compiler.rig);
+    Compiled {
+        graph: compiler.graph,
+        rig: compiler.rig,
+        plan,
+        settings,
+        warnings: compiler.warnings,
+    }
+}
+
+fn settings_of(scene: &Scene) -> WorldSettings {
+    match scene.find("WorldInfo").first() {
+        Some(&info) => WorldSettings {
+            title: scene.string(info, "title").to_owned(),
+            time_step: scene.float(info, "basicTimeStep") / 1000.0,
+            seed: scene.int(info, "randomSeed").max(0) as u64,
+        },
+        None => WorldSettings {
+            title: String::new(),
+            time_step: 0.032,
+            seed: 0,
+        },
+    }
+}
+
+struct Compiler<'s> {
+    scene: &'s Scene,
+    graph: RenderGraph,
+    rig: SensorRig,
+    warnings: Vec<String>,
+    /// Material nodes already converted, to share entries.
+    materials: Vec<(Option<NodeId>, usize)>,
+}
+
+const MAX_WALK_DEPTH: usize = 256;
+
+impl Compiler<'_> {
+    fn walk(&mut self, node: NodeId, frame: &Frame, owner: Owner, depth: usize) {
+        if depth > MAX_WALK_DEPTH {
+            return;
+        }
+        let scene = self.scene;
+        match scene.type_name(node) {
+            "Transform" | "Solid" => {
+                let local = Frame::vrml(
+                    DVec3::from_array(scene.vec3(node, "translation")),
+                    scene.rotation(node, "rotation"),
+                    DVec3::from_array(scene.vec3(node, "scale")),
+                    if scene.spec(node).field_index("scaleOrientation").is_some() {
+                        scene.rotation(node, "scaleOrientation")
+                    } else {
+                        [0.0, 0.0, 1.0, 0.0]
+                    },
+                    if scene.spec(node).field_index("center").is_some() {
+                        DVec3::from_array(scene.vec3(node, "center"))
+                    } else {
+                        DVec3::ZERO
+                    },
+                );
+                let frame = frame.then(&local);
+                for &child in scene.children(node, "children") {
+                    self.walk(child, &frame, owner, depth + 1);
+                }
+            }
+            "Group" | "Anchor" | "Billboard" | "Collision" => {
+                for &child in scene.children(node, "children") {
+                    self.walk(child, frame, owner, depth + 1);
+                }
+            }
+            "Switch" => {
+                let which = scene.int(node, "whichChoice");
+                if let Some(&child) = usize::try_from(which)
+                    .ok()
+                    .and_then(|i| scene.children(node, "choice").get(i))
+                {
+                    self.walk(child, frame, owner, depth + 1);
+                }
+            }
+            "Shape" => self.shape(node, frame, owner),
+            "PointLight" | "DirectionalLight" | "SpotLight" => self.light(node, frame, owner),
+            "DifferentialWheels" => self.robot(node, frame, owner, depth),
+            "DistanceSensor" | "LightSensor" | "PanoramicTurret" | "LinearCamera" => match owner {
+                Owner::Robot(robot) => self.device(node, frame, robot),
+                Owner::Static => self.warnings.push(format!(
+                    "a {} outside any robot is ignored",
+                    scene.type_name(node)
+                )),
+            },
+            _ => {}
+        }
+    }
+
+    fn material(&mut self, appearance: Option<NodeId>) -> usize {
+        let key = appearance.and_then(|a| self.scene.child(a, "material"));
+        if let Some(&(_, index)) = self.materials.iter().find(|(k, _)| *k == key) {
+            return index;
+        }
+        let material: Material = material_of(self.scene, appearance);
+        self.graph.materials.push(material);
+        let index = self.graph.materials.len() - 1;
+        self.materials.push((key, index));
+        index
+    }
+
+    fn shape(&mut self, node: NodeId, frame: &Frame, owner: Owner) {
+        let scene = self.scene;
+        let Some(geometry) = scene.child(node, "geometry") else {
+            return;
+        };
+        let Some(shape) = shape_of(scene, geometry, &mut self.graph.meshes) else {
+            return;
+        };
+        let Some(inverse) = frame.inverse() else {
+            self.warnings
+                .push("a shape with a degenerate (zero-scale) transform is ignored".to_owned());
+            return;
+        };
+        let material = self.material(scene.child(node, "appearance"));
+        let bounds = shape.local_bounds(&self.graph.meshes).transformed(frame);
+        let upright = is_upright(&shape, frame);
+        self.graph.primitives.push(Primitive {
+            shape,
+            frame: *frame,
+            inverse,
+            material,
+            owner,
+            node,
+            bounds,
+            upright,
+        });
+    }
+
+    fn light(&mut self, node: NodeId, frame: &Frame, owner: Owner) {
+        let scene = self.scene;
+        let kind = match scene.type_name(node) {
+            "DirectionalLight" => LightKind::Directional {
+                direction: frame
+                    .apply_vector(DVec3::from_array(scene.vec3(node, "direction")))
+                    .normalize_or(DVec3::NEG_Y),
+            },
+            "PointLight" => LightKind::Point {
+                location: frame.apply(DVec3::from_array(scene.vec3(node, "location"))),
+                radius: scene.float(node, "radius"),
+                attenuation: DVec3::from_array(scene.vec3(node, "attenuation")),
+            },
+            _ => LightKind::Spot {
+                location: frame.apply(DVec3::from_array(scene.vec3(node, "location"))),
+                direction: frame
+                    .apply_vector(DVec3::from_array(scene.vec3(node, "direction")))
+                    .normalize_or(DVec3::NEG_Y),
+                radius: scene.float(node, "radius"),
+                attenuation: DVec3::from_array(scene.vec3(node, "attenuation")),
+                beam_width: scene.float(node, "beamWidth"),
+                cut_off: scene.float(node, "cutOffAngle"),
+            },
+        };
+        self.graph.lights.push(Light {
+            kind,
+            color: scene.vec3(node, "color"),
+            intensity: scene.float(node, "intensity"),
+            ambient_intensity: scene.float(node, "ambientIntensity"),
+            on: scene.bool(node, "on"),
+            shadows: scene.bool(node, "castShadows"),
+            owner,
+            node,
+        });
+    }
+
+    fn robot(&mut self, node: NodeId, frame: &Frame, owner: Owner, depth: usize) {
+        let scene = self.scene;
+        let name = scene.string(node, "name").to_owned();
+        if owner != Owner::Static {
+            self.warnings
+                .push(format!("robot '{name}' inside another robot is ignored"));
+            return;
+        }
+        let robot_frame = frame.then(&Frame::vrml(
+            DVec3::from_array(scene.vec3(node, "translation")),
+            scene.rotation(node, "rotation"),
+            DVec3::ONE,
+            [0.0, 0.0, 1.0, 0.0],
+            DVec3::ZERO,
+        ));
+        let forward = robot_frame.apply_vector(DVec3::X);
+        let up = robot_frame.apply_vector(DVec3::Y).normalize_or_zero();
+        if up.y < 0.999 {
+            self.warnings.push(format!(
+                "robot '{name}' is tilted; it is set upright on the floor"
+            ));
+        }
+        let start = Pose2 {
+            x: robot_frame.translation.x,
+            z: robot_frame.translation.z,
+            heading: libm::atan2(-forward.z, forward.x),
+        };
+        let index = self.rig.robots.len();
+        if self.rig.robots.iter().any(|r| r.name == name) {
+            self.warnings.push(format!(
+                "two robots are named '{name}'; --robot picks the first"
+            ));
+        }
+        self.rig.robots.push(RobotRig {
+            name,
+            node,
+            start,
+            floor_y: robot_frame.translation.y,
+            wheel_radius: scene.float(node, "wheelRadius"),
+            axle_length: scene.float(node, "axleLength"),
+            encoder_resolution: scene.float(node, "encoderResolution"),
+            max_speed: scene.float(node, "maxSpeed"),
+            wheel_speed_noise: scene.float(node, "wheelSpeedNoise"),
+            body_radius: scene.float(node, "bodyRadius"),
+            body_height: scene.float(node, "bodyHeight"),
+            controller: scene.string(node, "controller").to_owned(),
+            controller_args: scene.strings(node, "controllerArgs").to_vec(),
+            distance_sensors: Vec::new(),
+            light_sensors: Vec::new(),
+            turret: None,
+        });
+        // Attached parts: frames relative to the robot.
+        for &child in scene.children(node, "children") {
+            self.walk(child, &Frame::IDENTITY, Owner::Robot(index), depth + 1);
+        }
+        if let Some(turret) = scene.child(node, "turret") {
+            self.turret(turret, index);
+        }
+    }
+
+    /// A device inside a robot; `frame` is relative to the robot.
+    fn device(&mut self, node: NodeId, frame: &Frame, robot: usize) {
+        let scene = self.scene;
+        match scene.type_name(node) {
+            "DistanceSensor" => {
+                let (position, direction) = device_pose(scene, node, frame);
+                let rig = DistanceSensorRig {
+                    name: scene.string(node, "name").to_owned(),
+                    position,
+                    direction,
+                    lookup: lookup_table(scene, node),
+                    rays: scene.int(node, "numberOfRays").max(1) as usize,
+                    aperture: scene.float(node, "aperture"),
+                    range: scene.float(node, "range"),
+                    period: scene.float(node, "samplingPeriod"),
+                };
+                self.rig.robots[robot].distance_sensors.push(rig);
+            }
+            "LightSensor" => {
+                let (position, direction) = device_pose(scene, node, frame);
+                let rig = LightSensorRig {
+                    name: scene.string(node, "name").to_owned(),
+                    position,
+                    direction,
+                    lookup: lookup_table(scene, node),
+                    occlusion: scene.bool(node, "occlusion"),
+                    period: scene.float(node, "samplingPeriod"),
+                };
+                self.rig.robots[robot].light_sensors.push(rig);
+            }
+            _ => self.turret(node, robot),
+        }
+    }
+
+    fn turret(&mut self, node: NodeId, robot: usize) {
+        let scene = self.scene;
+        if self.rig.robots[robot].turret.is_some() {
+            self.warnings.push(format!(
+                "robot '{}' has two turrets; the first is used",
+                self.rig.robots[robot].name
+            ));
+            return;
+        }
+        let turret = match scene.type_name(node) {
+            "PanoramicTurret" => {
+                let roi = match scene.field(node, "regionOfInterest") {
+                    Value::Ints(v) if v.len() == 2 => {
+                        (v[0].clamp(0, 149) as usize, v[1].clamp(0, 149) as usize)
+                    }
+                    _ => (0, 149),
+                };
+                let (first, last) = if roi.0 <= roi.1 { roi } else { (roi.1, roi.0) };
+                let i_bda = scene.float(node, "iBda");
+                let bandpass = scene.vec2(node, "bandpassLambdas");
+                TurretRig::Panoramic(PanoramicRig {
+                    name: scene.string(node, "name").to_owned(),
+                    height: scene.float(node, "height"),
+                    optics: if scene.string(node, "optics") == "paper" {
+                        Optics::Paper
+                    } else {
+                        Optics::Exact
+                    },
+                    samples: scene.int(node, "samples").max(1) as usize,
+                    filters: filter_set(scene.strings(node, "filters")),
+                    lambda: scene.float(node, "lambda"),
+                    bandpass: (bandpass[0].min(bandpass[1]), bandpass[0].max(bandpass[1])),
+                    bits: scene.int(node, "bits").clamp(1, 16) as u32,
+                    i_bda: (i_bda > 0.0).then_some(i_bda),
+                    roi: (first, last),
+                    quantize_views: scene.bool(node, "quantizeViews"),
+                    period: scene.float(node, "samplingPeriod"),
+                })
+            }
+            _ => TurretRig::Linear(LinearCameraRig {
+                name: scene.string(node, "name").to_owned(),
+                height: scene.float(node, "height"),
+                pixels: scene.int(node, "pixels").max(1) as usize,
+                field_of_view: scene.float(node, "fieldOfView"),
+                vertical_field_of_view: scene.float(node, "verticalFieldOfView"),
+                samples: scene.int(node, "samples").max(1) as usize,
+                bits: scene.int(node, "bits").clamp(1, 16) as u32,
+                period: scene.float(node, "samplingPeriod"),
+            }),
+        };
+        self.rig.robots[robot].turret = Some(turret);
+    }
+}
+
+/// A device's position and looking direction (+x of its frame) in the robot frame.
+fn device_pose(scene: &Scene, node: NodeId, frame: &Frame) -> (DVec3, DVec3) {
+    let local = Frame::vrml(
+        DVec3::from_array(scene.vec3(node, "translation")),
+        scene.rotation(node, "rotation"),
+        DVec3::ONE,
+        [0.0, 0.0, 1.0, 0.0],
+        DVec3::ZERO,
+    );
+    let device = frame.then(&local);
+    (
+        device.translation,
+        device.apply_vector(DVec3::X).normalize_or(DVec3::X),
+    )
+}
+
+fn lookup_table(scene: &Scene, node: NodeId) -> Vec<[f64; 3]> {
+    match scene.field(node, "lookupTable") {
+        Value::Vec3s(rows) => rows.clone(),
+        _ => Vec::new(),
+    }
+}
+
+/// Whether the column renderer can draw a primitive: vertical axis, horizontal cross-section
+/// a circle (cylinders, cones) or a rectangle (boxes).
+fn is_upright(shape: &graph::Shape, frame: &Frame) -> bool {
+    let x = frame.apply_vector(DVec3::X);
+    let y = frame.apply_vector(DVec3::Y);
+    let z = frame.apply_vector(DVec3::Z);
+    let tolerance = 1e-9;
+    let vertical =
+        y.x.abs() <= tolerance * y.length() && y.z.abs() <= tolerance * y.length() && y.y > 0.0;
+    let horizontal = x.y.abs() <= tolerance * x.length() && z.y.abs() <= tolerance * z.length();
+    if !(vertical && horizontal) {
+        return false;
+    }
+    match shape {
+        graph::Shape::Box { .. } => true,
+        graph::Shape::Cylinder { .. } => (x.length() - z.length()).abs() <= tolerance * x.length(),
+        _ => false,
+    }
+}

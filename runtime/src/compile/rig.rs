@@ -1,0 +1,170 @@
+//! The sensor rig: every robot with its parameters and its devices, their mount poses in the
+//! robot's frame (+x forward, +y up, −z left).
+
+use glam::DVec3;
+
+use crate::retina::{FilterKind, FilterSet};
+
+/// A robot's position on the floor: x and z in metres, heading in radians counter-clockwise
+/// seen from above (0 faces +x).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose2 {
+    pub x: f64,
+    pub z: f64,
+    pub heading: f64,
+}
+
+impl Pose2 {
+    /// The robot's forward direction in the world.
+    pub fn forward(&self) -> DVec3 {
+        DVec3::new(libm::cos(self.heading), 0.0, -libm::sin(self.heading))
+    }
+
+    /// Robot-frame point to world (the robot frame's origin is on the floor at `y`).
+    pub fn to_world(&self, local: DVec3, floor_y: f64) -> DVec3 {
+        let (s, c) = (libm::sin(self.heading), libm::cos(self.heading));
+        DVec3::new(
+            self.x + c * local.x + s * local.z,
+            floor_y + local.y,
+            self.z - s * local.x + c * local.z,
+        )
+    }
+
+    /// Robot-frame direction to world.
+    pub fn direction_to_world(&self, local: DVec3) -> DVec3 {
+        let (s, c) = (libm::sin(self.heading), libm::cos(self.heading));
+        DVec3::new(
+            c * local.x + s * local.z,
+            local.y,
+            -s * local.x + c * local.z,
+        )
+    }
+}
+
+/// An infra-red proximity sensor.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DistanceSensorRig {
+    pub name: String,
+    pub position: DVec3,
+    pub direction: DVec3,
+    /// Rows (distance m, value, relative noise), distances increasing.
+    pub lookup: Vec<[f64; 3]>,
+    pub rays: usize,
+    pub aperture: f64,
+    pub range: f64,
+    pub period: f64,
+}
+
+/// An ambient light sensor.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightSensorRig {
+    pub name: String,
+    pub position: DVec3,
+    pub direction: DVec3,
+    pub lookup: Vec<[f64; 3]>,
+    pub occlusion: bool,
+    pub period: f64,
+}
+
+/// How the retina's optics are computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Optics {
+    /// Two 75×7 flat views warped to the cylinder (1999).
+    Paper,
+    /// Each photodiode's window integrated.
+    Exact,
+}
+
+/// The Panoramic turret's settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PanoramicRig {
+    pub name: String,
+    pub height: f64,
+    pub optics: Optics,
+    pub samples: usize,
+    pub filters: FilterSet,
+    pub lambda: f64,
+    pub bandpass: (f64, f64),
+    pub bits: u32,
+    /// `None`: calibrated so that one lit photodiode barely saturates.
+    pub i_bda: Option<f64>,
+    pub roi: (usize, usize),
+    pub quantize_views: bool,
+    pub period: f64,
+}
+
+/// The K213 linear camera's settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinearCameraRig {
+    pub name: String,
+    pub height: f64,
+    pub pixels: usize,
+    pub field_of_view: f64,
+    pub vertical_field_of_view: f64,
+    pub samples: usize,
+    pub bits: u32,
+    pub period: f64,
+}
+
+/// The turret on top of a robot.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TurretRig {
+    Panoramic(PanoramicRig),
+    Linear(LinearCameraRig),
+}
+
+/// One robot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RobotRig {
+    pub name: String,
+    pub node: regatta_schema::NodeId,
+    pub start: Pose2,
+    /// Height of the floor the robot stands on.
+    pub floor_y: f64,
+    pub wheel_radius: f64,
+    pub axle_length: f64,
+    pub encoder_resolution: f64,
+    pub max_speed: f64,
+    pub wheel_speed_noise: f64,
+    pub body_radius: f64,
+    pub body_height: f64,
+    pub controller: String,
+    pub controller_args: Vec<String>,
+    pub distance_sensors: Vec<DistanceSensorRig>,
+    pub light_sensors: Vec<LightSensorRig>,
+    pub turret: Option<TurretRig>,
+}
+
+/// Every robot of the world, in the order they appear in the file.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SensorRig {
+    pub robots: Vec<RobotRig>,
+}
+
+impl SensorRig {
+    /// Whether any robot carries a vision device (and so anything must be rendered).
+    pub fn has_vision(&self) -> bool {
+        self.robots.iter().any(|r| r.turret.is_some())
+    }
+
+    pub fn robot(&self, name: &str) -> Option<usize> {
+        self.robots.iter().position(|r| r.name == name)
+    }
+}
+
+/// Filters named in a world's `filters` field.
+pub(crate) fn filter_set(names: &[String]) -> FilterSet {
+    let mut set = FilterSet::default();
+    for name in names {
+        let kind = match name.as_str() {
+            "raw" => FilterKind::Raw,
+            "lowpass" => FilterKind::Lowpass,
+            "highpass" => FilterKind::Highpass,
+            "bandpass" => FilterKind::Bandpass,
+            "odd" => FilterKind::Odd,
+            _ => continue,
+        };
+        set.insert(kind);
+    }
+    set
+}

@@ -1,0 +1,14 @@
+//! The runtime: compiles a typed scene into a render graph, a sensor rig and a plan, renders
+//! what vision devices see on the CPU, and simulates the EDI retina stage by stage.
+//!
+//! Data flow: [`compile::compile`] → [`optics::Renderer`] (analytic columns or ray casting) →
+//! [`optics::Panoramic`] / [`optics::LinearCamera`] → [`retina`] stages. Geometric queries live
+//! apart in [`geometry`].
+
+pub mod compile;
+pub mod geometry;
+pub mod optics;
+pub mod render;
+pub mod retina;
+
+pub use compile::{compile, Compiled};

@@ -1,0 +1,417 @@
+//! Vision devices from the renderer to digital values: the Panoramic turret's optics (paper or
+//! exact), photodetectors, filters and converter, and the K213 linear camera.
+//!
+//! Paper optics (1999): two flat perspective views, 75×7 each, 120° wide and 11° tall at their
+//! centres, left view centred at +60°, right at −60°; each is warped to the cylinder
+//! (x = f·tan θ, y = √(x² + f²)·tan φ, bilinear, edges clamped) and its 7 rows averaged. Two
+//! errors are built in and measured by `regatta bench retina`: at θ = ±60° the band is twice
+//! as tall as the flat view (clamping repeats its edge rows), and a flat column is 2.65° wide at
+//! the centre, coarser than a 1.6° photodiode.
+//!
+//! Exact optics: each photodiode's 1.6° × 11° window integrated — analytically in elevation and
+//! piecewise between silhouette edges in azimuth by the column renderer, or by a stratified
+//! `samples × samples` grid of rays where the scene needs ray casting.
+
+use glam::DVec3;
+
+use crate::compile::graph::RenderGraph;
+use crate::compile::plan::{Plan, RendererChoice};
+use crate::compile::rig::{LinearCameraRig, Optics, PanoramicRig, Pose2};
+use crate::render::column::{ColumnFrame, ColumnScene, Strip};
+use crate::render::raycast::{Prepared, RayCaster};
+use crate::render::Poses;
+use crate::retina::{
+    self, calibrate_i_bda, convert, luminance, normalize, FilterKind, FilterSettings, HALF_BAND,
+    PIXELS, PIXEL_WIDTH,
+};
+
+/// Flat-view geometry of paper optics.
+pub const FLAT_COLUMNS: usize = 75;
+pub const FLAT_ROWS: usize = 7;
+const VIEW_HALF_WIDTH: f64 = std::f64::consts::FRAC_PI_3; // 60°
+
+/// The renderer a scene's plan chose, ready for frames.
+pub enum Renderer<'g> {
+    Columns(ColumnScene<'g>),
+    Rays(RayCaster<'g>),
+}
+
+/// One frame of a renderer for one viewer.
+pub enum View {
+    Columns(ColumnFrame),
+    Rays(Prepared),
+}
+
+impl<'g> Renderer<'g> {
+    /// The plan's renderer, or ray casting when `force_rays` (the reference).
+    pub fn new(graph: &'g RenderGraph, plan: &Plan, force_rays: bool) -> Renderer<'g> {
+        if force_rays || plan.renderer != RendererChoice::Columns {
+            Renderer::Rays(RayCaster::new(graph, plan))
+        } else {
+            Renderer::Columns(ColumnScene::new(graph, plan))
+        }
+    }
+
+    pub fn name(&self) -> &'static str {
+        match self {
+            Renderer::Columns(_) => "columns",
+            Renderer::Rays(_) => "rays",
+        }
+    }
+
+    pub fn view(&self, plan: &Plan, poses: &Poses, viewer: usize) -> View {
+        match self {
+            Renderer::Columns(scene) => View::Columns(scene.prepare(plan, poses, Some(viewer))),
+            Renderer::Rays(caster) => View::Rays(caster.prepare(plan, poses, Some(viewer))),
+        }
+    }
+
+    /// Mean RGB over each pixel window of a strip (exact optics).
+    pub fn integrate(
+        &self,
+        view: &View,
+        eye: DVec3,
+        heading: f64,
+        strip: &Strip,
+        samples: usize,
+        out: &mut [[f64; 3]],
+    ) {
+        match (self, view) {
+            (Renderer::Columns(scene), View::Columns(frame)) => {
+                scene.integrate(frame, eye, heading, strip, samples, out)
+            }
+            (Renderer::Rays(caster), View::Rays(frame)) => {
+                let n = samples.max(1);
+                let half_band = libm::atan(strip.tan_half_band);
+                for (pixel, rgb_out) in out.iter_mut().enumerate().take(strip.centers.len()) {
+                    let mut sum = [0.0; 3];
+                    for i in 0..n {
+                        let alpha = strip.centers[pixel]
+                            + ((i as f64 + 0.5) / n as f64 - 0.5) * strip.width;
+                        let world = heading + alpha;
+                        let (cw, sw) = (libm::cos(world), libm::sin(world));
+                        for j in 0..n {
+                            let phi = ((j as f64 + 0.5) / n as f64 * 2.0 - 1.0) * half_band;
+                            let (cp, sp) = (libm::cos(phi), libm::sin(phi));
+                            let rgb = caster.rgb(frame, eye, DVec3::new(cw * cp, sp, -sw * cp));
+                            for k in 0..3 {
+                                sum[k] += rgb[k];
+                            }
+                        }
+                    }
+                    *rgb_out = sum.map(|v| v / (n * n) as f64);
+                }
+            }
+            _ => unreachable!("a view comes from its own renderer"),
+        }
+    }
+
+    /// RGB of one flat-view pixel direction given in the robot frame as (azimuth of the
+    /// column, tan-elevation).
+    fn point(
+        &self,
+        view: &View,
+        eye: DVec3,
+        heading: f64,
+        alpha: f64,
+        tan_elevation: f64,
+    ) -> [f64; 3] {
+        let world = heading + alpha;
+        let (cw, sw) = (libm::cos(world), libm::sin(world));
+        match (self, view) {
+            (Renderer::Columns(scene), View::Columns(frame)) => {
+                let mut out = [[0.0; 3]];
+                scene.sample_column(
+                    frame,
+                    eye,
+                    glam::DVec2::new(cw, -sw),
+                    alpha,
+                    heading,
+                    &[tan_elevation],
+                    &mut out,
+                );
+                out[0]
+            }
+            (Renderer::Rays(caster), View::Rays(frame)) => {
+                caster.rgb(frame, eye, DVec3::new(cw, tan_elevation, -sw))
+            }
+            _ => unreachable!("a view comes from its own renderer"),
+        }
+    }
+}
+
+/// Everything one retina update computes; every stage is kept.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RetinaOutput {
+    /// Photocurrents (luminance) of the 150 photodiodes.
+    pub luminance: Vec<f64>,
+    /// Normalised image: luminance / mean.
+    pub analog: Vec<f64>,
+    /// True when every photodiode read 0: `analog` is then all zeros.
+    pub dark: bool,
+    /// Each enabled filter's output over the 150 pixels.
+    pub filtered: Vec<(FilterKind, Vec<f64>)>,
+    /// Each enabled filter's converted output over the region of interest.
+    pub digital: Vec<(FilterKind, Vec<u16>)>,
+    pub i_bda: Vec<(FilterKind, f64)>,
+    /// Paper optics only: the flat views (RGB, row-major 75×7) and the warped strips
+    /// (luminance, 75×7), left view first.
+    pub flat_views: Vec<Vec<[f64; 3]>>,
+    pub warped: Vec<Vec<f64>>,
+}
+
+/// A Panoramic turret ready to update: strips precomputed, I_bda calibrated per filter.
+pub struct Panoramic {
+    pub rig: PanoramicRig,
+    strip: Strip,
+    settings: FilterSettings,
+    i_bda: Vec<(FilterKind, f64)>,
+    rgb: Vec<[f64; 3]>,
+}
+
+impl Panoramic {
+    pub fn new(rig: &PanoramicRig) -> Panoramic {
+        let centers = (0..PIXELS).map(retina::pixel_azimuth).collect();
+        let settings = FilterSettings {
+            filters: rig.filters,
+            lambda: rig.lambda,
+            bandpass: rig.bandpass,
+            bits: rig.bits,
+            i_bda: rig.i_bda,
+        };
+        let i_bda = rig
+            .filters
+            .iter()
+            .map(|k| {
+                (
+                    k,
+                    rig.i_bda
+                        .unwrap_or_else(|| calibrate_i_bda(k, &settings, PIXELS)),
+                )
+            })
+            .collect();
+        Panoramic {
+            rig: rig.clone(),
+            strip: Strip::new(centers, PIXEL_WIDTH, HALF_BAND),
+            settings,
+            i_bda,
+            rgb: vec![[0.0; 3]; PIXELS],
+        }
+    }
+
+    /// Changes filter settings (the API's set-λ, set-bits, enable/disable); I_bda follows.
+    pub fn reconfigure(&mut self, rig: PanoramicRig) {
+        *self = Panoramic::new(&rig);
+    }
+
+    /// Renders and processes one update for a robot at `pose` on a floor at `floor_y`.
+    pub fn update(
+        &mut self,
+        renderer: &Renderer,
+        view: &View,
+        pose: Pose2,
+        floor_y: f64,
+        out: &mut RetinaOutput,
+    ) {
+        let eye = DVec3::new(pose.x, floor_y + self.rig.height, pose.z);
+        out.flat_views.clear();
+        out.warped.clear();
+        match self.rig.optics {
+            Optics::Exact => renderer.integrate(
+                view,
+                eye,
+                pose.heading,
+                &self.strip,
+                self.rig.samples,
+                &mut self.rgb,
+            ),
+            Optics::Paper => paper(
+                renderer,
+                view,
+                eye,
+                pose.heading,
+                self.rig.samples,
+                self.rig.quantize_views,
+                &mut self.rgb,
+                out,
+            ),
+        }
+        out.luminance.clear();
+        out.luminance.extend(self.rgb.iter().map(|&c| luminance(c)));
+        self.process(out);
+    }
+
+    /// Photodetectors to digital, from `out.luminance`.
+    pub fn process(&self, out: &mut RetinaOutput) {
+        out.analog.resize(out.luminance.len(), 0.0);
+        out.dark = !normalize(&out.luminance, &mut out.analog);
+        out.filtered.clear();
+        out.digital.clear();
+        out.i_bda.clone_from(&self.i_bda);
+        let (first, last) = self.rig.roi;
+        for &(kind, i_bda) in &self.i_bda {
+            let mut filtered = vec![0.0; out.analog.len()];
+            retina::apply(kind, &self.settings, &out.analog, &mut filtered);
+            let digital = filtered[first..=last.min(filtered.len() - 1)]
+                .iter()
+                .map(|&f| convert(f, i_bda, self.settings.bits))
+                .collect();
+            out.filtered.push((kind, filtered));
+            out.digital.push((kind, digital));
+        }
+    }
+}
+
+/// The paper's optics: render, quantise, warp, average.
+#[allow(clippy::too_many_arguments)]
+fn paper(
+    renderer: &Renderer,
+    view: &View,
+    eye: DVec3,
+    heading: f64,
+    samples: usize,
+    quantize: bool,
+    rgb_out: &mut [[f64; 3]],
+    out: &mut RetinaOutput,
+) {
+    let f = 1.0;
+    let x_extent = f * libm::tan(VIEW_HALF_WIDTH);
+    let y_extent = f * libm::tan(HALF_BAND);
+    let n = samples.max(1);
+    for (v, view_center) in [VIEW_HALF_WIDTH, -VIEW_HALF_WIDTH].into_iter().enumerate() {
+        // Render the flat view: columns left to right (x grows to the right, azimuth falls),
+        // rows top to bottom.
+        let mut flat = vec![[0.0; 3]; FLAT_COLUMNS * FLAT_ROWS];
+        for c in 0..FLAT_COLUMNS {
+            for r in 0..FLAT_ROWS {
+                let mut sum = [0.0; 3];
+                for si in 0..n {
+                    let x = x_extent
+                        * (2.0 * (c as f64 + (si as f64 + 0.5) / n as f64) / FLAT_COLUMNS as f64
+                            - 1.0);
+                    let alpha = view_center - libm::atan(x / f);
+                    for sj in 0..n {
+                        let y = y_extent
+                            * (1.0
+                                - 2.0 * (r as f64 + (sj as f64 + 0.5) / n as f64)
+                                    / FLAT_ROWS as f64);
+                        let tan_elevation = y / (x * x + f * f).sqrt();
+                        let rgb = renderer.point(view, eye, heading, alpha, tan_elevation);
+                        for k in 0..3 {
+                            sum[k] += rgb[k];
+                        }
+                    }
+                }
+                let mut rgb = sum.map(|s| s / (n * n) as f64);
+                if quantize {
+                    rgb = rgb.map(|channel| libm::round(channel.clamp(0.0, 1.0) * 255.0) / 255.0);
+                }
+                flat[r * FLAT_COLUMNS + c] = rgb;
+            }
+        }
+        let flat_luminance: Vec<f64> = flat.iter().map(|&c| luminance(c)).collect();
+        // Warp to the cylinder and average the rows.
+        let mut warped = vec![0.0; FLAT_COLUMNS * FLAT_ROWS];
+        for j in 0..FLAT_COLUMNS {
+            let pixel = v * FLAT_COLUMNS + j;
+            let theta = retina::pixel_azimuth(pixel) - view_center;
+            let x = -f * libm::tan(theta);
+            let u = (x / x_extent + 1.0) / 2.0 * FLAT_COLUMNS as f64 - 0.5;
+            let mut row_sum = 0.0;
+            for k in 0..FLAT_ROWS {
+                let phi = HALF_BAND - (k as f64 + 0.5) * 2.0 * HALF_BAND / FLAT_ROWS as f64;
+                let y = (x * x + f * f).sqrt() * libm::tan(phi);
+                let w = (1.0 - y / y_extent) / 2.0 * FLAT_ROWS as f64 - 0.5;
+                let value = bilinear(&flat_luminance, u, w);
+                warped[k * FLAT_COLUMNS + j] = value;
+                row_sum += value;
+            }
+            // The row mean is luminance already; keep it as grey RGB for the common path.
+            let mean = row_sum / FLAT_ROWS as f64;
+            rgb_out[pixel] = [mean, mean, mean];
+        }
+        out.flat_views.push(flat);
+        out.warped.push(warped);
+    }
+}
+
+/// Bilinear sample of a 75×7 image at continuous pixel coordinates, edges clamped.
+fn bilinear(image: &[f64], u: f64, w: f64) -> f64 {
+    let u = u.clamp(0.0, (FLAT_COLUMNS - 1) as f64);
+    let w = w.clamp(0.0, (FLAT_ROWS - 1) as f64);
+    let (c0, r0) = (u.floor() as usize, w.floor() as usize);
+    let (c1, r1) = ((c0 + 1).min(FLAT_COLUMNS - 1), (r0 + 1).min(FLAT_ROWS - 1));
+    let (fu, fw) = (u - c0 as f64, w - r0 as f64);
+    let at = |c: usize, r: usize| image[r * FLAT_COLUMNS + c];
+    (at(c0, r0) * (1.0 - fu) + at(c1, r0) * fu) * (1.0 - fw)
+        + (at(c0, r1) * (1.0 - fu) + at(c1, r1) * fu) * fw
+}
+
+/// What a K213 update gives.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LinearCameraOutput {
+    pub luminance: Vec<f64>,
+    pub analog: Vec<f64>,
+    pub dark: bool,
+    /// Grey levels: the light-level sensor acts as an iris, putting the mean at mid-scale:
+    /// `min(2^b − 1, ⌊analog·(2^b − 1)/2 + ½⌋)`.
+    pub digital: Vec<u16>,
+    /// Mean luminance, 0…255 (linear, clamped).
+    pub light_level: u16,
+}
+
+/// A K213 linear camera ready to update.
+pub struct LinearCamera {
+    pub rig: LinearCameraRig,
+    strip: Strip,
+    rgb: Vec<[f64; 3]>,
+}
+
+impl LinearCamera {
+    pub fn new(rig: &LinearCameraRig) -> LinearCamera {
+        let width = rig.field_of_view / rig.pixels as f64;
+        let centers = (0..rig.pixels)
+            .map(|i| rig.field_of_view / 2.0 - (i as f64 + 0.5) * width)
+            .collect();
+        LinearCamera {
+            rig: rig.clone(),
+            strip: Strip::new(centers, width, rig.vertical_field_of_view / 2.0),
+            rgb: vec![[0.0; 3]; rig.pixels],
+        }
+    }
+
+    pub fn update(
+        &mut self,
+        renderer: &Renderer,
+        view: &View,
+        pose: Pose2,
+        floor_y: f64,
+        out: &mut LinearCameraOutput,
+    ) {
+        let eye = DVec3::new(pose.x, floor_y + self.rig.height, pose.z);
+        renderer.integrate(
+            view,
+            eye,
+            pose.heading,
+            &self.strip,
+            self.rig.samples,
+            &mut self.rgb,
+        );
+        out.luminance.clear();
+        out.luminance.extend(self.rgb.iter().map(|&c| luminance(c)));
+        out.analog.resize(out.luminance.len(), 0.0);
+        out.dark = !normalize(&out.luminance, &mut out.analog);
+        let top = ((1u32 << self.rig.bits) - 1) as f64;
+        out.digital = out
+            .analog
+            .iter()
+            .map(|&a| libm::floor(a * top / 2.0 + 0.5).clamp(0.0, top) as u16)
+            .collect();
+        let mean = out.luminance.iter().sum::<f64>() / out.luminance.len().max(1) as f64;
+        out.light_level = if mean.is_finite() {
+            libm::round(mean.clamp(0.0, 1.0) * 255.0) as u16
+        } else {
+            0
+        };
+    }
+}

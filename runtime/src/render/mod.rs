@@ -1,0 +1,195 @@
+//! The CPU renderer: radiance by the VRML97 lighting model (ISO/IEC 14772-1 §4.14), from exact
+//! ray casting ([`raycast`]) or, for scenes of upright primitives, from analytic columns
+//! ([`column`]). Deterministic, single-threaded per view, no GPU, no window.
+//!
+//! Radiance: `emissive + Σ on·attenuation·spot·colour·(ambient + diffuse + specular)` in linear
+//! units, per RGB channel; attenuation `1/max(a0 + a1·d + a2·d², 1)`; lights beyond their
+//! radius give nothing; shadows only for lights with `castShadows TRUE`.
+
+pub mod column;
+pub mod raycast;
+
+use glam::DVec3;
+
+use crate::compile::graph::{LightKind, Material, Owner, RenderGraph};
+use crate::compile::plan::Plan;
+use crate::compile::rig::Pose2;
+use crate::geometry::Frame;
+
+/// Where every robot is now: what moves robot-attached primitives and lights.
+#[derive(Clone, Debug, Default)]
+pub struct Poses {
+    pub poses: Vec<Pose2>,
+    pub floor_y: Vec<f64>,
+}
+
+impl Poses {
+    /// The robot's frame in the world.
+    pub fn frame(&self, robot: usize) -> Frame {
+        let pose = self.poses[robot];
+        let (s, c) = (libm::sin(pose.heading), libm::cos(pose.heading));
+        Frame {
+            linear: glam::DMat3::from_cols(DVec3::new(c, 0.0, -s), DVec3::Y, DVec3::new(s, 0.0, c)),
+            translation: DVec3::new(pose.x, self.floor_y[robot], pose.z),
+        }
+    }
+}
+
+/// A light resolved to world space for one frame.
+#[derive(Clone, Debug)]
+pub(crate) struct WorldLight {
+    kind: LightKind,
+    color: [f64; 3],
+    intensity: f64,
+    ambient_intensity: f64,
+    shadows: bool,
+}
+
+/// The lights of the plan, with robot-carried ones moved to the robots' current poses.
+pub(crate) fn world_lights(graph: &RenderGraph, plan: &Plan, poses: &Poses) -> Vec<WorldLight> {
+    plan.lights
+        .iter()
+        .map(|&index| {
+            let light = &graph.lights[index];
+            let kind = match (light.owner, &light.kind) {
+                (Owner::Robot(robot), kind) if robot < poses.poses.len() => {
+                    let frame = poses.frame(robot);
+                    match kind.clone() {
+                        LightKind::Directional { direction } => LightKind::Directional {
+                            direction: frame.apply_vector(direction),
+                        },
+                        LightKind::Point {
+                            location,
+                            radius,
+                            attenuation,
+                        } => LightKind::Point {
+                            location: frame.apply(location),
+                            radius,
+                            attenuation,
+                        },
+                        LightKind::Spot {
+                            location,
+                            direction,
+                            radius,
+                            attenuation,
+                            beam_width,
+                            cut_off,
+                        } => LightKind::Spot {
+                            location: frame.apply(location),
+                            direction: frame.apply_vector(direction),
+                            radius,
+                            attenuation,
+                            beam_width,
+                            cut_off,
+                        },
+                    }
+                }
+                (_, kind) => kind.clone(),
+            };
+            WorldLight {
+                kind,
+                color: light.color,
+                intensity: light.intensity,
+                ambient_intensity: light.ambient_intensity,
+                shadows: light.shadows,
+            }
+        })
+        .collect()
+}
+
+/// VRML97 radiance of a surface point seen from `eye`. `occluded(point, light_position or
+/// direction)` answers shadow queries for lights that ask for them.
+pub(crate) fn shade(
+    material: &Material,
+    color_override: Option<[f64; 3]>,
+    point: DVec3,
+    normal: DVec3,
+    eye: DVec3,
+    lights: &[WorldLight],
+    occluded: &mut dyn FnMut(DVec3, &LightKind) -> bool,
+) -> [f64; 3] {
+    let diffuse = color_override.unwrap_or(material.diffuse);
+    if material.unlit {
+        return color_override.unwrap_or(material.emissive);
+    }
+    let mut out = material.emissive;
+    let view = (eye - point).normalize_or_zero();
+    // A surface seen from behind is lit as its front (two-sided lighting, as viewers do).
+    let normal = if normal.dot(view) < 0.0 {
+        -normal
+    } else {
+        normal
+    };
+    for light in lights {
+        let (to_light, attenuation, spot) = match &light.kind {
+            LightKind::Directional { direction } => (-*direction, 1.0, 1.0),
+            LightKind::Point {
+                location,
+                radius,
+                attenuation,
+            } => {
+                let offset = *location - point;
+                let distance = offset.length();
+                if distance > *radius {
+                    continue;
+                }
+                (
+                    offset / distance.max(1e-300),
+                    attenuate(*attenuation, distance),
+                    1.0,
+                )
+            }
+            LightKind::Spot {
+                location,
+                direction,
+                radius,
+                attenuation,
+                beam_width,
+                cut_off,
+            } => {
+                let offset = *location - point;
+                let distance = offset.length();
+                if distance > *radius {
+                    continue;
+                }
+                let to_light = offset / distance.max(1e-300);
+                let cos_angle = (-to_light).dot(*direction);
+                let angle = libm::acos(cos_angle.clamp(-1.0, 1.0));
+                let spot = if angle >= *cut_off {
+                    0.0
+                } else if angle <= *beam_width {
+                    1.0
+                } else {
+                    (angle - cut_off) / (beam_width - cut_off)
+                };
+                (to_light, attenuate(*attenuation, distance), spot)
+            }
+        };
+        if attenuation * spot == 0.0 {
+            continue;
+        }
+        let n_dot_l = normal.dot(to_light).max(0.0);
+        let mut specular_factor = 0.0;
+        if n_dot_l > 0.0 && material.specular.iter().any(|&c| c > 0.0) {
+            let half = (to_light + view).normalize_or_zero();
+            specular_factor = libm::pow(normal.dot(half).max(0.0), material.shininess * 128.0);
+        }
+        let lit = n_dot_l > 0.0 && !(light.shadows && occluded(point, &light.kind));
+        let scale = attenuation * spot;
+        for k in 0..3 {
+            let ambient = light.ambient_intensity * diffuse[k] * material.ambient_intensity;
+            let direct = if lit {
+                light.intensity * (diffuse[k] * n_dot_l + material.specular[k] * specular_factor)
+            } else {
+                0.0
+            };
+            out[k] += scale * light.color[k] * (ambient + direct);
+        }
+    }
+    out
+}
+
+fn attenuate(coefficients: DVec3, distance: f64) -> f64 {
+    1.0 / (coefficients.x + coefficients.y * distance + coefficients.z * distance * distance)
+        .max(1.0)
+}

@@ -1,0 +1,259 @@
+//! Ray casting: exact intersections with the analytic primitives, a BVH per mesh and one over
+//! the static primitives. The reference every faster path is measured against, and the
+//! renderer for scenes the column renderer cannot draw.
+
+use glam::DVec3;
+
+use super::{shade, world_lights, Poses, WorldLight};
+use crate::compile::graph::{LightKind, Owner, Primitive, RenderGraph, Shape};
+use crate::compile::plan::Plan;
+use crate::geometry::{
+    ray_box, ray_cone, ray_cylinder, ray_sphere, ray_triangle, Aabb, Bvh, Frame, LocalHit, Ray,
+};
+
+/// A surface hit in world space.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    pub primitive: usize,
+    pub t: f64,
+    pub point: DVec3,
+    pub normal: DVec3,
+    /// A mesh triangle's own colour, replacing the material's diffuse colour.
+    pub color: Option<[f64; 3]>,
+}
+
+/// Per-graph data: BVHs over each mesh's triangles.
+pub struct RayCaster<'g> {
+    pub graph: &'g RenderGraph,
+    mesh_bvhs: Vec<Bvh>,
+    visible: Vec<bool>,
+}
+
+/// One frame for one viewer: robot-attached primitives placed, lights resolved.
+pub struct Prepared {
+    dynamic: Vec<(usize, Frame, Frame, Aabb)>,
+    lights: Vec<WorldLight>,
+}
+
+impl<'g> RayCaster<'g> {
+    pub fn new(graph: &'g RenderGraph, plan: &Plan) -> RayCaster<'g> {
+        let mesh_bvhs = graph
+            .meshes
+            .iter()
+            .map(|mesh| {
+                let boxes: Vec<Aabb> = mesh
+                    .triangles
+                    .iter()
+                    .map(|t| Aabb::from_points(t.iter().map(|&i| mesh.positions[i as usize])))
+                    .collect();
+                Bvh::build(&boxes)
+            })
+            .collect();
+        let mut visible = vec![false; graph.primitives.len()];
+        for &p in &plan.visible {
+            visible[p] = true;
+        }
+        RayCaster {
+            graph,
+            mesh_bvhs,
+            visible,
+        }
+    }
+
+    /// Places robot parts for `poses`; `viewer` adds the viewer's own visible parts and removes
+    /// its other parts (a robot does not see the inside of its own body).
+    pub fn prepare(&self, plan: &Plan, poses: &Poses, viewer: Option<usize>) -> Prepared {
+        let mut dynamic = Vec::new();
+        for (index, primitive) in self.graph.primitives.iter().enumerate() {
+            let Owner::Robot(robot) = primitive.owner else {
+                continue;
+            };
+            if robot >= poses.poses.len() {
+                continue;
+            }
+            let own = Some(robot) == viewer;
+            let wanted = if own {
+                plan.own_visible
+                    .get(robot)
+                    .is_some_and(|v| v.contains(&index))
+            } else {
+                self.visible[index]
+            };
+            if !wanted {
+                continue;
+            }
+            let robot_frame = poses.frame(robot);
+            let frame = robot_frame.then(&primitive.frame);
+            let Some(inverse) = frame.inverse() else {
+                continue;
+            };
+            let bounds = primitive
+                .shape
+                .local_bounds(&self.graph.meshes)
+                .transformed(&frame);
+            dynamic.push((index, frame, inverse, bounds));
+        }
+        Prepared {
+            dynamic,
+            lights: world_lights(self.graph, plan, poses),
+        }
+    }
+
+    fn hit_primitive(
+        &self,
+        primitive: &Primitive,
+        frame: &Frame,
+        inverse: &Frame,
+        ray: &Ray,
+        t_max: f64,
+    ) -> Option<(LocalHit, Option<[f64; 3]>)> {
+        let local = Ray {
+            origin: inverse.apply(ray.origin),
+            direction: inverse.apply_vector(ray.direction),
+        };
+        let hit = match &primitive.shape {
+            Shape::Box { half } => ray_box(&local, *half, t_max).map(|h| (h, None)),
+            Shape::Sphere { radius } => ray_sphere(&local, *radius, t_max).map(|h| (h, None)),
+            Shape::Cylinder {
+                radius,
+                height,
+                side,
+                bottom,
+                top,
+            } => ray_cylinder(&local, *radius, *height, *side, *bottom, *top, t_max)
+                .map(|h| (h, None)),
+            Shape::Cone {
+                radius,
+                height,
+                side,
+                bottom,
+            } => ray_cone(&local, *radius, *height, *side, *bottom, t_max).map(|h| (h, None)),
+            Shape::Mesh(m) => {
+                let mesh = &self.graph.meshes[*m];
+                let mut best: Option<LocalHit> = None;
+                let found = self.mesh_bvhs[*m].nearest(&local, t_max, |tri, limit| {
+                    let [a, b, c] =
+                        mesh.triangles[tri as usize].map(|i| mesh.positions[i as usize]);
+                    let hit = ray_triangle(&local, a, b, c, limit)?;
+                    best = Some(hit);
+                    Some(hit.t)
+                });
+                found.map(|(tri, t)| {
+                    let [a, b, c] =
+                        mesh.triangles[tri as usize].map(|i| mesh.positions[i as usize]);
+                    let hit = ray_triangle(&local, a, b, c, f64::INFINITY).unwrap_or(LocalHit {
+                        t,
+                        normal: DVec3::Y,
+                    });
+                    let color = mesh
+                        .triangle_colors
+                        .as_ref()
+                        .and_then(|c| c.get(tri as usize).copied());
+                    (
+                        LocalHit {
+                            t,
+                            normal: hit.normal,
+                        },
+                        color,
+                    )
+                })
+            }
+        }?;
+        let normal = frame.apply_normal(inverse, hit.0.normal);
+        Some((LocalHit { t: hit.0.t, normal }, hit.1))
+    }
+
+    /// The nearest visible surface along a ray within `t_max`.
+    pub fn trace(&self, frame: &Prepared, ray: &Ray, t_max: f64) -> Option<Hit> {
+        let graph = self.graph;
+        let mut best: Option<Hit> = None;
+        let mut limit = t_max;
+        graph.static_index.nearest(ray, t_max, |item, t_limit| {
+            let index = graph.static_primitives[item as usize];
+            if !self.visible[index] {
+                return None;
+            }
+            let primitive = &graph.primitives[index];
+            let (hit, color) = self.hit_primitive(
+                primitive,
+                &primitive.frame,
+                &primitive.inverse,
+                ray,
+                t_limit.min(limit),
+            )?;
+            limit = hit.t;
+            best = Some(Hit {
+                primitive: index,
+                t: hit.t,
+                point: ray.at(hit.t),
+                normal: hit.normal,
+                color,
+            });
+            Some(hit.t)
+        });
+        for (index, world, inverse, bounds) in &frame.dynamic {
+            if bounds
+                .ray_interval(ray, ray.direction.recip(), limit)
+                .is_none()
+            {
+                continue;
+            }
+            let primitive = &graph.primitives[*index];
+            if let Some((hit, color)) = self.hit_primitive(primitive, world, inverse, ray, limit) {
+                limit = hit.t;
+                best = Some(Hit {
+                    primitive: *index,
+                    t: hit.t,
+                    point: ray.at(hit.t),
+                    normal: hit.normal,
+                    color,
+                });
+            }
+        }
+        best
+    }
+
+    /// Linear RGB arriving at `origin` from `direction`.
+    pub fn rgb(&self, frame: &Prepared, origin: DVec3, direction: DVec3) -> [f64; 3] {
+        let ray = Ray { origin, direction };
+        match self.trace(frame, &ray, f64::INFINITY) {
+            Some(hit) => {
+                let material = &self.graph.materials[self.graph.primitives[hit.primitive].material];
+                let mut occluded =
+                    |point: DVec3, kind: &LightKind| self.occluded(frame, point, kind);
+                shade(
+                    material,
+                    hit.color,
+                    hit.point,
+                    hit.normal,
+                    origin,
+                    &frame.lights,
+                    &mut occluded,
+                )
+            }
+            None => self.background(direction),
+        }
+    }
+
+    /// What is seen where nothing is hit.
+    pub fn background(&self, direction: DVec3) -> [f64; 3] {
+        let background = &self.graph.background;
+        match background.ground {
+            Some(ground) if direction.y < 0.0 => ground,
+            _ => background.sky,
+        }
+    }
+
+    fn occluded(&self, frame: &Prepared, point: DVec3, kind: &LightKind) -> bool {
+        let (direction, distance) = match kind {
+            LightKind::Directional { direction } => (-*direction, f64::INFINITY),
+            LightKind::Point { location, .. } | LightKind::Spot { location, .. } => {
+                let offset = *location - point;
+                (offset, 1.0)
+            }
+        };
+        let origin = point + direction.normalize_or_zero() * 1e-9;
+        self.trace(frame, &Ray { origin, direction }, distance * (1.0 - 1e-9))
+            .is_some()
+    }
+}

@@ -1,0 +1,359 @@
+//! The EDI retina after its optics: photodetectors and normalisation, the resistive filtering
+//! network, and the A/D converter (`../shared/reference/retina.md`, the paper's §3.2–3.4).
+//!
+//! Boundary rule of every network: the chain is mirrored at its ends (half-sample symmetric).
+//! That is exactly the finite chain of 150 nodes whose end nodes have one neighbour, so the
+//! O(n) recursions here equal the direct finite-chain solution everywhere, ends included.
+
+/// Photodiodes of the EDI retina.
+pub const PIXELS: usize = 150;
+/// Angular width of one photodiode (rad): 1.6°.
+pub const PIXEL_WIDTH: f64 = 1.6 * std::f64::consts::PI / 180.0;
+/// Half the elevation band (rad): 5.5°.
+pub const HALF_BAND: f64 = 5.5 * std::f64::consts::PI / 180.0;
+
+/// Azimuth of pixel `i` (rad, counter-clockwise from forward): +120° − (i + ½)·1.6°.
+pub fn pixel_azimuth(i: usize) -> f64 {
+    (120.0 - (i as f64 + 0.5) * 1.6) * std::f64::consts::PI / 180.0
+}
+
+/// One output of the filtering layer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum FilterKind {
+    /// The analog image itself.
+    Raw,
+    Lowpass,
+    Highpass,
+    Bandpass,
+    Odd,
+}
+
+impl FilterKind {
+    pub const ALL: [FilterKind; 5] = [
+        FilterKind::Raw,
+        FilterKind::Lowpass,
+        FilterKind::Highpass,
+        FilterKind::Bandpass,
+        FilterKind::Odd,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            FilterKind::Raw => "raw",
+            FilterKind::Lowpass => "lowpass",
+            FilterKind::Highpass => "highpass",
+            FilterKind::Bandpass => "bandpass",
+            FilterKind::Odd => "odd",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<FilterKind> {
+        FilterKind::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    fn bit(self) -> u8 {
+        1 << (self as u8)
+    }
+}
+
+/// A set of enabled filters (only these are computed).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct FilterSet(u8);
+
+impl FilterSet {
+    pub fn insert(&mut self, kind: FilterKind) {
+        self.0 |= kind.bit();
+    }
+    pub fn remove(&mut self, kind: FilterKind) {
+        self.0 &= !kind.bit();
+    }
+    pub fn contains(self, kind: FilterKind) -> bool {
+        self.0 & kind.bit() != 0
+    }
+    pub fn iter(self) -> impl Iterator<Item = FilterKind> {
+        FilterKind::ALL
+            .into_iter()
+            .filter(move |k| self.contains(*k))
+    }
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+}
+
+/// Photodetectors: PAL/BT.601 luminance of linear RGB.
+pub fn luminance(rgb: [f64; 3]) -> f64 {
+    0.299 * rgb[0] + 0.587 * rgb[1] + 0.114 * rgb[2]
+}
+
+/// Normalisation circuit: `analog[i] = y[i] / mean(y)`. Returns false (and zeros) when the
+/// mean is zero or not finite: a dark retina has no defined image, never NaN.
+pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
+    let n = y.len() as f64;
+    // Scale first so that 1e300-size radiances cannot overflow the sum.
+    let peak = y.iter().fold(
+        0.0f64,
+        |m, &v| if v.is_finite() { m.max(v.abs()) } else { m },
+    );
+    if peak == 0.0 || !peak.is_finite() {
+        analog.iter_mut().for_each(|a| *a = 0.0);
+        return false;
+    }
+    let mean = y
+        .iter()
+        .map(|&v| if v.is_finite() { v / peak } else { 0.0 })
+        .sum::<f64>()
+        / n;
+    if mean <= 0.0 {
+        analog.iter_mut().for_each(|a| *a = 0.0);
+        return false;
+    }
+    for (a, &v) in analog.iter_mut().zip(y) {
+        *a = if v.is_finite() {
+            (v / peak) / mean
+        } else {
+            0.0
+        };
+    }
+    true
+}
+
+/// `a = e^(−1/λ)` and `1 − a`, the latter without cancellation for large λ.
+fn decay(lambda: f64) -> (f64, f64) {
+    let lambda = lambda.max(1e-12);
+    (libm::exp(-1.0 / lambda), -libm::expm1(-1.0 / lambda))
+}
+
+/// Σ_{k≥0} a^k s_k for the mirrored, 2n-periodic continuation `s` of `x` read from one end:
+/// x[0], x[1], …, x[n−1], x[n−1], …, x[0], x[0], … (from the right end when `reversed`).
+/// `lambda` gives `1 − a^(2n) = −expm1(−2n/λ)` without cancellation.
+fn mirrored_tail_sum(x: &[f64], a: f64, lambda: f64, reversed: bool) -> f64 {
+    let n = x.len();
+    let get = |k: usize| if reversed { x[n - 1 - k] } else { x[k] };
+    let mut sum = 0.0;
+    let mut power = 1.0;
+    for k in 0..n {
+        sum += power * get(k);
+        power *= a;
+    }
+    for k in (0..n).rev() {
+        sum += power * get(k);
+        power *= a;
+    }
+    sum / -libm::expm1(-2.0 * n as f64 / lambda.max(1e-12))
+}
+
+/// Causal pass `y[i] = a·y[i−1] + (1−a)·x[i]` with the mirrored past.
+fn right_going(x: &[f64], lambda: f64, out: &mut [f64]) {
+    let (a, one_minus_a) = decay(lambda);
+    let mut previous = one_minus_a * mirrored_tail_sum(x, a, lambda, false);
+    for (o, &v) in out.iter_mut().zip(x) {
+        previous = a * previous + one_minus_a * v;
+        *o = previous;
+    }
+}
+
+/// Anti-causal pass `y[i] = a·y[i+1] + (1−a)·x[i]` with the mirrored future.
+fn left_going(x: &[f64], lambda: f64, out: &mut [f64]) {
+    let (a, one_minus_a) = decay(lambda);
+    let mut next = one_minus_a * mirrored_tail_sum(x, a, lambda, true);
+    for (o, &v) in out.iter_mut().zip(x).rev() {
+        next = a * next + one_minus_a * v;
+        *o = next;
+    }
+}
+
+/// Lowpass (symmetric exponential kernel `(1−a)/(1+a)·a^|n|`, unit DC gain) in O(n): a
+/// right-going pass, then a left-going pass over its output. Mirror symmetry of the result
+/// gives the left pass its start exactly: `y[n−1] = r[n−1]`.
+pub fn lowpass(x: &[f64], lambda: f64, out: &mut [f64]) {
+    let n = x.len();
+    if n == 0 {
+        return;
+    }
+    let (a, one_minus_a) = decay(lambda);
+    let mut right = vec![0.0; n];
+    right_going(x, lambda, &mut right);
+    let mut next = right[n - 1];
+    out[n - 1] = next;
+    for i in (0..n - 1).rev() {
+        next = a * next + one_minus_a * right[i];
+        out[i] = next;
+    }
+}
+
+/// Highpass (edge enhancing): `x − lowpass(x)`.
+pub fn highpass(x: &[f64], lambda: f64, out: &mut [f64]) {
+    lowpass(x, lambda, out);
+    for (o, &v) in out.iter_mut().zip(x) {
+        *o = v - *o;
+    }
+}
+
+/// Bandpass: `lowpass_λ1(x) − lowpass_λ2(x)`, λ1 < λ2 (a difference of exponentials).
+pub fn bandpass(x: &[f64], lambda1: f64, lambda2: f64, out: &mut [f64]) {
+    let mut wide = vec![0.0; x.len()];
+    lowpass(x, lambda1, out);
+    lowpass(x, lambda2, &mut wide);
+    for (o, w) in out.iter_mut().zip(wide) {
+        *o -= w;
+    }
+}
+
+/// Odd (derivative): right-going minus left-going unidirectional network, kernel
+/// `(1−b)·sgn(n)·b^|n|` with `b = e^(−1/λ)`: zero at the centre, zero DC gain, antisymmetric.
+/// A rising edge to the right gives a positive response just after it.
+pub fn odd(x: &[f64], lambda: f64, out: &mut [f64]) {
+    let mut left = vec![0.0; x.len()];
+    right_going(x, lambda, out);
+    left_going(x, lambda, &mut left);
+    for (o, l) in out.iter_mut().zip(left) {
+        *o -= l;
+    }
+}
+
+/// Direct references the fast filters are tested against. They share nothing with the O(n)
+/// code: the lowpass solves the finite resistive chain's linear system by Gaussian
+/// elimination; the odd filter sums its kernel over the mirrored input.
+pub mod reference {
+    /// The finite chain: node i tied to its input by Gv and to each existing neighbour by Gh,
+    /// with `a + 1/a = 2 + Gv/Gh`. Solves the dense system.
+    pub fn lowpass(x: &[f64], lambda: f64) -> Vec<f64> {
+        let n = x.len();
+        let a = (-1.0 / lambda).exp();
+        let c = a + 1.0 / a - 2.0; // Gv / Gh
+        let mut m = vec![vec![0.0; n + 1]; n];
+        for i in 0..n {
+            let neighbours = (i > 0) as usize + (i + 1 < n) as usize;
+            m[i][i] = c + neighbours as f64;
+            if i > 0 {
+                m[i][i - 1] = -1.0;
+            }
+            if i + 1 < n {
+                m[i][i + 1] = -1.0;
+            }
+            m[i][n] = c * x[i];
+        }
+        // Gaussian elimination with partial pivoting.
+        for col in 0..n {
+            let pivot = (col..n)
+                .max_by(|&p, &q| m[p][col].abs().total_cmp(&m[q][col].abs()))
+                .unwrap();
+            m.swap(col, pivot);
+            for row in col + 1..n {
+                let f = m[row][col] / m[col][col];
+                if f != 0.0 {
+                    for k in col..=n {
+                        m[row][k] -= f * m[col][k];
+                    }
+                }
+            }
+        }
+        let mut y = vec![0.0; n];
+        for row in (0..n).rev() {
+            let s: f64 = (row + 1..n).map(|k| m[row][k] * y[k]).sum();
+            y[row] = (m[row][n] - s) / m[row][row];
+        }
+        y
+    }
+
+    /// The input continued by mirroring at both ends (period 2n).
+    fn mirrored(x: &[f64], i: i64) -> f64 {
+        let n = x.len() as i64;
+        let k = i.rem_euclid(2 * n);
+        if k < n {
+            x[k as usize]
+        } else {
+            x[(2 * n - 1 - k) as usize]
+        }
+    }
+
+    /// Dense convolution of the mirrored input with the odd kernel, to where it vanishes.
+    pub fn odd(x: &[f64], lambda: f64) -> Vec<f64> {
+        let b = (-1.0 / lambda).exp();
+        let reach = ((lambda * 60.0).ceil() as i64).max(1);
+        (0..x.len() as i64)
+            .map(|i| {
+                (1..=reach)
+                    .map(|m| {
+                        (1.0 - b) * b.powi(m as i32) * (mirrored(x, i - m) - mirrored(x, i + m))
+                    })
+                    .sum()
+            })
+            .collect()
+    }
+}
+
+/// Settings of the filtering layer and converter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilterSettings {
+    pub filters: FilterSet,
+    pub lambda: f64,
+    pub bandpass: (f64, f64),
+    pub bits: u32,
+    /// `None`: calibrated as the paper says.
+    pub i_bda: Option<f64>,
+}
+
+/// Applies one filter to `analog`.
+pub fn apply(kind: FilterKind, settings: &FilterSettings, analog: &[f64], out: &mut [f64]) {
+    match kind {
+        FilterKind::Raw => out.copy_from_slice(analog),
+        FilterKind::Lowpass => lowpass(analog, settings.lambda, out),
+        FilterKind::Highpass => highpass(analog, settings.lambda, out),
+        FilterKind::Bandpass => bandpass(analog, settings.bandpass.0, settings.bandpass.1, out),
+        FilterKind::Odd => odd(analog, settings.lambda, out),
+    }
+}
+
+/// I_bda as the paper sets it: the largest |filtered| produced when one photodiode — the
+/// central one, away from the chain's ends — is lit and all others are dark (analog 150 there,
+/// mean 1). Near the ends the mirror doubles the response, so an end pixel lit alone saturates.
+pub fn calibrate_i_bda(kind: FilterKind, settings: &FilterSettings, pixels: usize) -> f64 {
+    let mut y = vec![0.0; pixels];
+    y[pixels / 2] = 1.0;
+    let mut analog = vec![0.0; pixels];
+    normalize(&y, &mut analog);
+    let mut out = vec![0.0; pixels];
+    apply(kind, settings, &analog, &mut out);
+    let peak = out.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if peak > 0.0 && peak.is_finite() {
+        peak
+    } else {
+        1.0
+    }
+}
+
+/// The b-bit converter: `(2^b − 1)/2 · (1 + filtered / I_bda)`, rounded half up (so the high
+/// bit is exactly the sign of `filtered`: set when `filtered ≥ 0`), clamped to 0…2^b − 1.
+pub fn convert(filtered: f64, i_bda: f64, bits: u32) -> u16 {
+    let top = ((1u32 << bits) - 1) as f64;
+    let value = top / 2.0 * (1.0 + filtered / i_bda);
+    let rounded = libm::floor(value + 0.5);
+    if rounded.is_nan() {
+        return 0;
+    }
+    rounded.clamp(0.0, top) as u16
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pixel_geometry_follows_the_reference() {
+        assert!((pixel_azimuth(0) - 119.2f64.to_radians()).abs() < 1e-12);
+        assert!(pixel_azimuth(74) > 0.0 && pixel_azimuth(75) < 0.0);
+        assert!((pixel_azimuth(74) + pixel_azimuth(75)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn conversion_sign_bit() {
+        assert_eq!(convert(0.0, 1.0, 6), 32);
+        assert_eq!(convert(-1e-12, 1.0, 6), 31);
+        assert_eq!(convert(1.0, 1.0, 6), 63);
+        assert_eq!(convert(-1.0, 1.0, 6), 0);
+        assert_eq!(convert(5.0, 1.0, 6), 63);
+        assert_eq!(convert(f64::NAN, 1.0, 6), 0);
+        assert_eq!(convert(0.0, 1.0, 8), 128);
+    }
+}

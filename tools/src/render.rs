@@ -1,0 +1,267 @@
+//! `regatta render`: what each robot's vision device sees at its pose in the file, stage by
+//! stage, as enlarged PNG strips or as JSON.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
+use image::{GrayImage, Luma, Rgb, RgbImage};
+use regatta_runtime::compile::rig::TurretRig;
+use regatta_runtime::optics::{
+    LinearCamera, LinearCameraOutput, Panoramic, Renderer, RetinaOutput, FLAT_COLUMNS, FLAT_ROWS,
+};
+use regatta_runtime::render::Poses;
+use serde_json::json;
+
+use crate::Outcome;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The world file.
+    world: PathBuf,
+    /// Only this robot (by name).
+    #[arg(long)]
+    robot: Option<String>,
+    /// Directory for the PNG images.
+    #[arg(long, default_value = "out/render")]
+    out: PathBuf,
+    /// PNG images, or one JSON object per robot on standard output.
+    #[arg(long, value_enum, default_value_t = Format::Png)]
+    format: Format,
+    /// Read a foreign file leniently.
+    #[arg(long)]
+    lenient: bool,
+    /// Render with the ray caster even where the column renderer applies (the reference).
+    #[arg(long)]
+    rays: bool,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Format {
+    Png,
+    Json,
+}
+
+/// Pixels per photodiode horizontally, and strip height, in the pictures.
+const SCALE: u32 = 6;
+const STRIP_HEIGHT: u32 = 36;
+
+pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
+    let loaded = crate::world::load(&args.world, args.lenient, color)?;
+    let compiled = &loaded.compiled;
+    let robots: Vec<usize> = match &args.robot {
+        Some(name) => match compiled.rig.robot(name) {
+            Some(index) => vec![index],
+            None => {
+                let names: Vec<&str> = compiled
+                    .rig
+                    .robots
+                    .iter()
+                    .map(|r| r.name.as_str())
+                    .collect();
+                bail!(
+                    "no robot named '{name}' in {}; robots: {}",
+                    args.world.display(),
+                    names.join(", ")
+                );
+            }
+        },
+        None => (0..compiled.rig.robots.len()).collect(),
+    };
+    let with_vision: Vec<usize> = robots
+        .into_iter()
+        .filter(|&r| compiled.rig.robots[r].turret.is_some())
+        .collect();
+    if with_vision.is_empty() {
+        eprintln!("no robot carries a vision device: nothing to render");
+        return Ok(Outcome::Clean);
+    }
+    let renderer = Renderer::new(&compiled.graph, &compiled.plan, args.rays);
+    let poses = Poses {
+        poses: compiled.rig.robots.iter().map(|r| r.start).collect(),
+        floor_y: compiled.rig.robots.iter().map(|r| r.floor_y).collect(),
+    };
+    if args.format == Format::Png {
+        std::fs::create_dir_all(&args.out)
+            .with_context(|| format!("cannot create {}", args.out.display()))?;
+    }
+    for robot in with_vision {
+        let rig = &compiled.rig.robots[robot];
+        let view = renderer.view(&compiled.plan, &poses, robot);
+        match rig.turret.as_ref().expect("filtered above") {
+            TurretRig::Panoramic(panoramic) => {
+                let mut retina = Panoramic::new(panoramic);
+                let mut output = RetinaOutput::default();
+                retina.update(&renderer, &view, rig.start, rig.floor_y, &mut output);
+                match args.format {
+                    Format::Json => {
+                        println!("{}", panoramic_json(&rig.name, panoramic.roi, &output))
+                    }
+                    Format::Png => {
+                        let written =
+                            panoramic_pngs(&args.out, &rig.name, panoramic.bits, &output)?;
+                        for path in written {
+                            println!("{}", path.display());
+                        }
+                    }
+                }
+            }
+            TurretRig::Linear(camera) => {
+                let mut k213 = LinearCamera::new(camera);
+                let mut output = LinearCameraOutput::default();
+                k213.update(&renderer, &view, rig.start, rig.floor_y, &mut output);
+                match args.format {
+                    Format::Json => println!(
+                        "{}",
+                        json!({"robot": rig.name, "device": "LinearCamera", "analog": output.analog, "digital": output.digital, "light_level": output.light_level, "dark": output.dark})
+                    ),
+                    Format::Png => {
+                        let top = ((1u32 << camera.bits) - 1) as f64;
+                        let stages = [
+                            ("luminance", normalized(&output.luminance)),
+                            ("analog", normalized(&output.analog)),
+                            (
+                                "digital",
+                                output.digital.iter().map(|&d| d as f64 / top).collect(),
+                            ),
+                        ];
+                        for (stage, values) in stages {
+                            let path = args.out.join(format!("{}-k213-{stage}.png", rig.name));
+                            strip(&values)
+                                .save(&path)
+                                .with_context(|| format!("cannot write {}", path.display()))?;
+                            println!("{}", path.display());
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(Outcome::Clean)
+}
+
+fn panoramic_json(name: &str, roi: (usize, usize), output: &RetinaOutput) -> serde_json::Value {
+    let filtered: serde_json::Map<String, serde_json::Value> = output
+        .filtered
+        .iter()
+        .map(|(k, v)| (k.name().to_owned(), json!(v)))
+        .collect();
+    let digital: serde_json::Map<String, serde_json::Value> = output
+        .digital
+        .iter()
+        .map(|(k, v)| (k.name().to_owned(), json!(v)))
+        .collect();
+    let i_bda: serde_json::Map<String, serde_json::Value> = output
+        .i_bda
+        .iter()
+        .map(|(k, v)| (k.name().to_owned(), json!(v)))
+        .collect();
+    json!({
+        "robot": name,
+        "device": "PanoramicTurret",
+        "analog": output.analog,
+        "filtered": filtered,
+        "digital": digital,
+        "i_bda": i_bda,
+        "region_of_interest": [roi.0, roi.1],
+        "dark": output.dark,
+    })
+}
+
+/// Values scaled to [0, 1] by their largest magnitude (a dark strip stays black).
+fn normalized(values: &[f64]) -> Vec<f64> {
+    let peak = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    values
+        .iter()
+        .map(|v| if peak > 0.0 { v / peak } else { 0.0 })
+        .collect()
+}
+
+/// Signed values mapped to grey around mid-grey.
+fn signed(values: &[f64]) -> Vec<f64> {
+    let peak = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    values
+        .iter()
+        .map(|v| {
+            if peak > 0.0 {
+                0.5 + 0.5 * v / peak
+            } else {
+                0.5
+            }
+        })
+        .collect()
+}
+
+fn grey(value: f64) -> u8 {
+    (value.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+/// A 1-D strip, enlarged.
+fn strip(values: &[f64]) -> GrayImage {
+    GrayImage::from_fn(values.len() as u32 * SCALE, STRIP_HEIGHT, |x, _| {
+        Luma([grey(values[(x / SCALE) as usize])])
+    })
+}
+
+fn panoramic_pngs(
+    dir: &Path,
+    robot: &str,
+    bits: u32,
+    output: &RetinaOutput,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let mut written = Vec::new();
+    let mut save = |name: String, image: image::DynamicImage| -> anyhow::Result<()> {
+        let path = dir.join(name);
+        image
+            .save(&path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        written.push(path);
+        Ok(())
+    };
+    let enlarge = 8;
+    for (v, flat) in output.flat_views.iter().enumerate() {
+        let side = if v == 0 { "left" } else { "right" };
+        let image = RgbImage::from_fn(
+            FLAT_COLUMNS as u32 * enlarge,
+            FLAT_ROWS as u32 * enlarge,
+            |x, y| {
+                let c = flat[(y / enlarge) as usize * FLAT_COLUMNS + (x / enlarge) as usize];
+                Rgb(c.map(grey))
+            },
+        );
+        save(format!("{robot}-flat-{side}.png"), image.into())?;
+        let warped = &output.warped[v];
+        let peak = warped.iter().fold(0.0f64, |m, v| m.max(*v));
+        let image = GrayImage::from_fn(
+            FLAT_COLUMNS as u32 * enlarge,
+            FLAT_ROWS as u32 * enlarge,
+            |x, y| {
+                let value = warped[(y / enlarge) as usize * FLAT_COLUMNS + (x / enlarge) as usize];
+                Luma([grey(if peak > 0.0 { value / peak } else { 0.0 })])
+            },
+        );
+        save(format!("{robot}-warped-{side}.png"), image.into())?;
+    }
+    save(
+        format!("{robot}-1-luminance.png"),
+        strip(&normalized(&output.luminance)).into(),
+    )?;
+    save(
+        format!("{robot}-2-analog.png"),
+        strip(&normalized(&output.analog)).into(),
+    )?;
+    let top = ((1u32 << bits) - 1) as f64;
+    for (kind, values) in &output.filtered {
+        save(
+            format!("{robot}-3-filtered-{}.png", kind.name()),
+            strip(&signed(values)).into(),
+        )?;
+    }
+    for (kind, values) in &output.digital {
+        let scaled: Vec<f64> = values.iter().map(|&d| d as f64 / top).collect();
+        save(
+            format!("{robot}-4-digital-{}.png", kind.name()),
+            strip(&scaled).into(),
+        )?;
+    }
+    Ok(written)
+}
