@@ -306,3 +306,89 @@ fn the_k213_sees_a_stripe_at_its_pixel() {
         assert_eq!(*out.digital.iter().max().unwrap(), 255);
     }
 }
+
+mod stability {
+    //! Numerical stability: λ from 0.01 to 10⁴ pixels, radiances from 1e-9 to 1e9, a robot
+    //! 1 km from the origin. Documented tolerances: filters stay finite with DC gain within
+    //! 1e-9 of its exact value; analog[] is invariant to a global scale within 1e-9 relative;
+    //! moving the whole world by 1 km changes analog[] by less than 1e-6.
+    use proptest::prelude::*;
+    use regatta_runtime::retina::{self, normalize, PIXELS};
+    use regatta_tests::{compile_text, panoramic_at_start};
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+        #[test]
+        fn filters_stay_finite_and_keep_their_dc_gain(exponent in -2.0f64..4.0, level in 0.0f64..1e3, values in prop::collection::vec(0.0f64..10.0, PIXELS)) {
+            let lambda = 10f64.powf(exponent);
+            let mut out = vec![0.0; PIXELS];
+            for filter in [retina::lowpass as fn(&[f64], f64, &mut [f64]), retina::highpass, retina::odd] {
+                filter(&values, lambda, &mut out);
+                prop_assert!(out.iter().all(|v| v.is_finite()), "λ {}", lambda);
+            }
+            let flat = vec![level; PIXELS];
+            retina::lowpass(&flat, lambda, &mut out);
+            prop_assert!(out.iter().all(|v| (v - level).abs() <= 1e-9 * level.max(1.0)), "lowpass DC at λ {}", lambda);
+            retina::odd(&flat, lambda, &mut out);
+            prop_assert!(out.iter().all(|v| v.abs() <= 1e-9 * level.max(1.0)), "odd DC at λ {}", lambda);
+        }
+
+        #[test]
+        fn photodetectors_are_scale_invariant_from_1e_minus_9_to_1e9(exponent in -9.0f64..9.0, values in prop::collection::vec(0.0f64..1.0, PIXELS)) {
+            let scale = 10f64.powf(exponent);
+            let scaled: Vec<f64> = values.iter().map(|v| v * scale).collect();
+            let (mut a, mut b) = (vec![0.0; PIXELS], vec![0.0; PIXELS]);
+            let lit = normalize(&values, &mut a);
+            prop_assert_eq!(lit, normalize(&scaled, &mut b));
+            for (x, y) in a.iter().zip(&b) {
+                prop_assert!(x.is_finite() && (x - y).abs() <= 1e-9 * x.abs().max(1.0));
+            }
+        }
+    }
+
+    fn world(offset: f64, light_scale: f64) -> String {
+        format!(
+            "#VRML_SIM R2023b utf8
+WorldInfo {{ coordinateSystem \"NUE\" }}
+DirectionalLight {{ direction 0.3 -1 0.2 intensity {} ambientIntensity {} }}
+Transform {{ translation {offset} 0 {offset} children [
+  Arena {{ size 1 1 }}
+  Buoy {{ translation 0.2 0 -0.2 color 0.9 0.2 0.1 lampColor 0 0 0 }}
+  Buoy {{ translation -0.3 0 0.1 color 0.1 0.8 0.2 lampColor 0 0 0 }}
+] }}
+Khepera {{ translation {} 0 {} rotation 0 1 0 0.3 controller \"none\" turret PanoramicTurret {{ filters [ \"raw\" \"odd\" \"bandpass\" ] }} }}
+",
+            0.3 * light_scale,
+            0.2 * light_scale,
+            offset + 0.05,
+            offset - 0.1
+        )
+    }
+
+    #[test]
+    fn a_robot_1_km_from_the_origin_sees_what_it_sees_at_the_origin() {
+        let here = panoramic_at_start(&compile_text(&world(0.0, 1.0)), false);
+        let far = panoramic_at_start(&compile_text(&world(1000.0, 1.0)), false);
+        for (a, b) in here.analog.iter().zip(&far.analog) {
+            assert!((a - b).abs() < 1e-6, "{a} vs {b}");
+        }
+        assert_eq!(here.digital, far.digital);
+    }
+
+    #[test]
+    fn lights_from_1e_minus_9_to_1e9_give_the_same_image() {
+        let reference = panoramic_at_start(&compile_text(&world(0.0, 1.0)), false);
+        for scale in [1e-9, 1e-3, 1e3, 1e9] {
+            let scaled = panoramic_at_start(&compile_text(&world(0.0, scale)), false);
+            assert!(scaled.analog.iter().all(|a| a.is_finite()));
+            for (a, b) in reference.analog.iter().zip(&scaled.analog) {
+                assert!(
+                    (a - b).abs() <= 1e-9 * a.abs().max(1.0),
+                    "scale {scale}: {a} vs {b}"
+                );
+            }
+            assert_eq!(reference.digital, scaled.digital, "scale {scale}");
+        }
+    }
+}

@@ -17,7 +17,7 @@ use glam::DVec3;
 use crate::compile::graph::RenderGraph;
 use crate::compile::plan::{Plan, RendererChoice};
 use crate::compile::rig::{LinearCameraRig, Optics, PanoramicRig, Pose2};
-use crate::render::column::{ColumnFrame, ColumnScene, Strip};
+use crate::render::column::{ColumnFrame, ColumnScene, Look, Strip};
 use crate::render::raycast::{Prepared, RayCaster};
 use crate::render::Poses;
 use crate::retina::{
@@ -66,7 +66,9 @@ impl<'g> Renderer<'g> {
         }
     }
 
-    /// Mean RGB over each pixel window of a strip (exact optics).
+    /// Mean RGB over each pixel window of a strip (exact optics). `stride` applies to the
+    /// column renderer (see [`ColumnScene::integrate`]).
+    #[allow(clippy::too_many_arguments)]
     pub fn integrate(
         &self,
         view: &View,
@@ -74,11 +76,12 @@ impl<'g> Renderer<'g> {
         heading: f64,
         strip: &Strip,
         samples: usize,
+        stride: usize,
         out: &mut [[f64; 3]],
     ) {
         match (self, view) {
             (Renderer::Columns(scene), View::Columns(frame)) => {
-                scene.integrate(frame, eye, heading, strip, samples, out)
+                scene.integrate(frame, eye, heading, strip, samples, stride, out)
             }
             (Renderer::Rays(caster), View::Rays(frame)) => {
                 let n = samples.max(1);
@@ -106,36 +109,41 @@ impl<'g> Renderer<'g> {
         }
     }
 
-    /// RGB of one flat-view pixel direction given in the robot frame as (azimuth of the
-    /// column, tan-elevation).
-    fn point(
+    /// RGB along one azimuth (relative to the heading) at several tan-elevations: one
+    /// column of a flat view.
+    #[allow(clippy::too_many_arguments)]
+    fn flat_column(
         &self,
         view: &View,
+        look: Option<&Look>,
         eye: DVec3,
         heading: f64,
         alpha: f64,
-        tan_elevation: f64,
-    ) -> [f64; 3] {
-        let world = heading + alpha;
-        let (cw, sw) = (libm::cos(world), libm::sin(world));
-        match (self, view) {
-            (Renderer::Columns(scene), View::Columns(frame)) => {
-                let mut out = [[0.0; 3]];
-                scene.sample_column(
-                    frame,
-                    eye,
-                    glam::DVec2::new(cw, -sw),
-                    alpha,
-                    heading,
-                    &[tan_elevation],
-                    &mut out,
-                );
-                out[0]
+        tans: &[f64],
+        out: &mut [[f64; 3]],
+    ) {
+        match (self, view, look) {
+            (Renderer::Columns(scene), View::Columns(frame), Some(look)) => {
+                scene.sample_column(frame, look, look.direction(alpha), alpha, tans, out);
             }
-            (Renderer::Rays(caster), View::Rays(frame)) => {
-                caster.rgb(frame, eye, DVec3::new(cw, tan_elevation, -sw))
+            (Renderer::Rays(caster), View::Rays(frame), _) => {
+                let world = heading + alpha;
+                let (cw, sw) = (libm::cos(world), libm::sin(world));
+                for (t, rgb) in tans.iter().zip(out.iter_mut()) {
+                    *rgb = caster.rgb(frame, eye, DVec3::new(cw, *t, -sw));
+                }
             }
             _ => unreachable!("a view comes from its own renderer"),
+        }
+    }
+
+    /// The per-eye precomputation of the column renderer.
+    fn look(&self, view: &View, eye: DVec3, heading: f64) -> Option<Look> {
+        match (self, view) {
+            (Renderer::Columns(scene), View::Columns(frame)) => {
+                Some(scene.look(frame, eye, heading))
+            }
+            _ => None,
         }
     }
 }
@@ -223,6 +231,7 @@ impl Panoramic {
                 pose.heading,
                 &self.strip,
                 self.rig.samples,
+                self.rig.stride,
                 &mut self.rgb,
             ),
             Optics::Paper => paper(
@@ -245,19 +254,29 @@ impl Panoramic {
     pub fn process(&self, out: &mut RetinaOutput) {
         out.analog.resize(out.luminance.len(), 0.0);
         out.dark = !normalize(&out.luminance, &mut out.analog);
-        out.filtered.clear();
-        out.digital.clear();
-        out.i_bda.clone_from(&self.i_bda);
+        // Buffers are reused from update to update: no allocation once warm.
+        out.filtered
+            .resize_with(self.i_bda.len(), || (FilterKind::Raw, Vec::new()));
+        out.digital
+            .resize_with(self.i_bda.len(), || (FilterKind::Raw, Vec::new()));
+        if out.i_bda != self.i_bda {
+            out.i_bda.clone_from(&self.i_bda);
+        }
         let (first, last) = self.rig.roi;
-        for &(kind, i_bda) in &self.i_bda {
-            let mut filtered = vec![0.0; out.analog.len()];
-            retina::apply(kind, &self.settings, &out.analog, &mut filtered);
-            let digital = filtered[first..=last.min(filtered.len() - 1)]
-                .iter()
-                .map(|&f| convert(f, i_bda, self.settings.bits))
-                .collect();
-            out.filtered.push((kind, filtered));
-            out.digital.push((kind, digital));
+        for (slot, &(kind, i_bda)) in self.i_bda.iter().enumerate() {
+            let (filtered_kind, filtered) = &mut out.filtered[slot];
+            *filtered_kind = kind;
+            filtered.resize(out.analog.len(), 0.0);
+            retina::apply(kind, &self.settings, &out.analog, filtered);
+            let (digital_kind, digital) = &mut out.digital[slot];
+            *digital_kind = kind;
+            digital.clear();
+            let last = last.min(filtered.len().saturating_sub(1));
+            digital.extend(
+                filtered[first.min(last)..=last]
+                    .iter()
+                    .map(|&f| convert(f, i_bda, self.settings.bits)),
+            );
         }
     }
 }
@@ -278,35 +297,50 @@ fn paper(
     let x_extent = f * libm::tan(VIEW_HALF_WIDTH);
     let y_extent = f * libm::tan(HALF_BAND);
     let n = samples.max(1);
+    let look = renderer.look(view, eye, heading);
+    let mut tans = vec![0.0; FLAT_ROWS * n];
+    let mut samples = vec![[0.0; 3]; FLAT_ROWS * n];
     for (v, view_center) in [VIEW_HALF_WIDTH, -VIEW_HALF_WIDTH].into_iter().enumerate() {
         // Render the flat view: columns left to right (x grows to the right, azimuth falls),
-        // rows top to bottom.
+        // rows top to bottom; each sub-column is one azimuth with all its rows.
         let mut flat = vec![[0.0; 3]; FLAT_COLUMNS * FLAT_ROWS];
         for c in 0..FLAT_COLUMNS {
-            for r in 0..FLAT_ROWS {
-                let mut sum = [0.0; 3];
-                for si in 0..n {
-                    let x = x_extent
-                        * (2.0 * (c as f64 + (si as f64 + 0.5) / n as f64) / FLAT_COLUMNS as f64
-                            - 1.0);
-                    let alpha = view_center - libm::atan(x / f);
+            for si in 0..n {
+                let x = x_extent
+                    * (2.0 * (c as f64 + (si as f64 + 0.5) / n as f64) / FLAT_COLUMNS as f64 - 1.0);
+                let alpha = view_center - libm::atan(x / f);
+                let slant = (x * x + f * f).sqrt();
+                for r in 0..FLAT_ROWS {
                     for sj in 0..n {
                         let y = y_extent
                             * (1.0
                                 - 2.0 * (r as f64 + (sj as f64 + 0.5) / n as f64)
                                     / FLAT_ROWS as f64);
-                        let tan_elevation = y / (x * x + f * f).sqrt();
-                        let rgb = renderer.point(view, eye, heading, alpha, tan_elevation);
+                        tans[r * n + sj] = y / slant;
+                    }
+                }
+                renderer.flat_column(
+                    view,
+                    look.as_ref(),
+                    eye,
+                    heading,
+                    alpha,
+                    &tans,
+                    &mut samples,
+                );
+                for r in 0..FLAT_ROWS {
+                    for sj in 0..n {
+                        let rgb = samples[r * n + sj];
                         for k in 0..3 {
-                            sum[k] += rgb[k];
+                            flat[r * FLAT_COLUMNS + c][k] += rgb[k] / (n * n) as f64;
                         }
                     }
                 }
-                let mut rgb = sum.map(|s| s / (n * n) as f64);
-                if quantize {
-                    rgb = rgb.map(|channel| libm::round(channel.clamp(0.0, 1.0) * 255.0) / 255.0);
-                }
-                flat[r * FLAT_COLUMNS + c] = rgb;
+            }
+        }
+        if quantize {
+            for rgb in &mut flat {
+                *rgb = rgb.map(|channel| libm::round(channel.clamp(0.0, 1.0) * 255.0) / 255.0);
             }
         }
         let flat_luminance: Vec<f64> = flat.iter().map(|&c| luminance(c)).collect();
@@ -395,6 +429,7 @@ impl LinearCamera {
             pose.heading,
             &self.strip,
             self.rig.samples,
+            1,
             &mut self.rgb,
         );
         out.luminance.clear();

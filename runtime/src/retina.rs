@@ -131,13 +131,21 @@ fn mirrored_tail_sum(x: &[f64], a: f64, lambda: f64, reversed: bool) -> f64 {
     let get = |k: usize| if reversed { x[n - 1 - k] } else { x[k] };
     let mut sum = 0.0;
     let mut power = 1.0;
+    // Terms below 1e-18 of the first cannot change a double: stop there (short chains of
+    // small λ end early; the result is the same to the last bit or two).
     for k in 0..n {
         sum += power * get(k);
         power *= a;
+        if power < 1e-18 {
+            return sum;
+        }
     }
     for k in (0..n).rev() {
         sum += power * get(k);
         power *= a;
+        if power < 1e-18 {
+            return sum;
+        }
     }
     sum / -libm::expm1(-2.0 * n as f64 / lambda.max(1e-12))
 }
@@ -171,8 +179,15 @@ pub fn lowpass(x: &[f64], lambda: f64, out: &mut [f64]) {
         return;
     }
     let (a, one_minus_a) = decay(lambda);
-    let mut right = vec![0.0; n];
-    right_going(x, lambda, &mut right);
+    let mut stack = [0.0; 256];
+    let mut heap = Vec::new();
+    let right: &mut [f64] = if n <= stack.len() {
+        &mut stack[..n]
+    } else {
+        heap.resize(n, 0.0);
+        &mut heap
+    };
+    right_going(x, lambda, right);
     let mut next = right[n - 1];
     out[n - 1] = next;
     for i in (0..n - 1).rev() {
@@ -191,10 +206,17 @@ pub fn highpass(x: &[f64], lambda: f64, out: &mut [f64]) {
 
 /// Bandpass: `lowpass_λ1(x) − lowpass_λ2(x)`, λ1 < λ2 (a difference of exponentials).
 pub fn bandpass(x: &[f64], lambda1: f64, lambda2: f64, out: &mut [f64]) {
-    let mut wide = vec![0.0; x.len()];
+    let mut stack = [0.0; 256];
+    let mut heap = Vec::new();
+    let wide: &mut [f64] = if x.len() <= stack.len() {
+        &mut stack[..x.len()]
+    } else {
+        heap.resize(x.len(), 0.0);
+        &mut heap
+    };
     lowpass(x, lambda1, out);
-    lowpass(x, lambda2, &mut wide);
-    for (o, w) in out.iter_mut().zip(wide) {
+    lowpass(x, lambda2, wide);
+    for (o, w) in out.iter_mut().zip(wide.iter()) {
         *o -= w;
     }
 }
@@ -203,10 +225,17 @@ pub fn bandpass(x: &[f64], lambda1: f64, lambda2: f64, out: &mut [f64]) {
 /// `(1−b)·sgn(n)·b^|n|` with `b = e^(−1/λ)`: zero at the centre, zero DC gain, antisymmetric.
 /// A rising edge to the right gives a positive response just after it.
 pub fn odd(x: &[f64], lambda: f64, out: &mut [f64]) {
-    let mut left = vec![0.0; x.len()];
+    let mut stack = [0.0; 256];
+    let mut heap = Vec::new();
+    let left: &mut [f64] = if x.len() <= stack.len() {
+        &mut stack[..x.len()]
+    } else {
+        heap.resize(x.len(), 0.0);
+        &mut heap
+    };
     right_going(x, lambda, out);
-    left_going(x, lambda, &mut left);
-    for (o, l) in out.iter_mut().zip(left) {
+    left_going(x, lambda, left);
+    for (o, l) in out.iter_mut().zip(left.iter()) {
         *o -= l;
     }
 }

@@ -19,6 +19,9 @@ pub struct Args {
 
 #[derive(clap::Subcommand)]
 enum What {
+    /// Retina update time against error, for paper and exact optics at several densities,
+    /// against a converged reference. Prints a table; writes CSV and a PNG plot.
+    Retina(crate::bench_retina::Args),
     /// Parser throughput (MB/s) and peak memory (× file size) on a generated mesh world.
     Parse {
         /// Points in the generated IndexedFaceSet.
@@ -35,6 +38,7 @@ enum What {
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     match args.what {
+        What::Retina(args) => crate::bench_retina::run(args),
         What::Parse {
             points,
             runs,

@@ -2,6 +2,7 @@
 //! dispatches and maps results to exit codes (0 clean, 1 errors found, 2 usage errors).
 
 mod bench;
+mod bench_retina;
 mod check;
 mod explain;
 mod fmt;

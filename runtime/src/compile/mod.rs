@@ -362,6 +362,7 @@ impl Compiler<'_> {
                         Optics::Exact
                     },
                     samples: scene.int(node, "samples").max(1) as usize,
+                    stride: scene.int(node, "stride").max(1) as usize,
                     filters: filter_set(scene.strings(node, "filters")),
                     lambda: scene.float(node, "lambda"),
                     bandpass: (bandpass[0].min(bandpass[1]), bandpass[0].max(bandpass[1])),

@@ -82,6 +82,8 @@ pub struct PanoramicRig {
     pub height: f64,
     pub optics: Optics,
     pub samples: usize,
+    /// Exact optics: pixels between evaluated columns in edge-free runs (1 = every pixel).
+    pub stride: usize,
     pub filters: FilterSet,
     pub lambda: f64,
     pub bandpass: (f64, f64),

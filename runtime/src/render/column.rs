@@ -67,19 +67,98 @@ enum Face {
     Cap { y: f64, up: bool },
 }
 
+/// Most directional lights the fast shading path handles.
+const MAX_FAST_LIGHTS: usize = 8;
+
+/// VRML97 radiance when it depends on the normal alone: `base + Σ cᵢ·max(0, n·lᵢ)`, with the
+/// emissive and ambient terms in `base` (the same model as [`shade`], regrouped).
+#[derive(Clone, Copy, Debug)]
+struct FastShade {
+    base: [f64; 3],
+    lights: [([f64; 3], DVec3); MAX_FAST_LIGHTS],
+    count: usize,
+}
+
+impl FastShade {
+    fn new(material: &crate::compile::graph::Material, lights: &[WorldLight]) -> FastShade {
+        let mut fast = FastShade {
+            base: material.emissive,
+            lights: [([0.0; 3], DVec3::ZERO); MAX_FAST_LIGHTS],
+            count: 0,
+        };
+        if material.unlit {
+            return fast;
+        }
+        for light in lights {
+            let LightKind::Directional { direction } = light.kind else {
+                continue;
+            };
+            let mut coefficient = [0.0; 3];
+            for k in 0..3 {
+                fast.base[k] += light.color[k]
+                    * light.ambient_intensity
+                    * material.diffuse[k]
+                    * material.ambient_intensity;
+                coefficient[k] = light.color[k] * light.intensity * material.diffuse[k];
+            }
+            fast.lights[fast.count] = (coefficient, -direction);
+            fast.count += 1;
+        }
+        fast
+    }
+
+    #[inline]
+    fn radiance(&self, normal: DVec3) -> [f64; 3] {
+        let mut out = self.base;
+        for (coefficient, to_light) in &self.lights[..self.count] {
+            let n_dot_l = normal.dot(*to_light).max(0.0);
+            for k in 0..3 {
+                out[k] += coefficient[k] * n_dot_l;
+            }
+        }
+        out
+    }
+}
+
 /// The upright objects of a graph, with robot parts placed per frame.
 pub struct ColumnScene<'g> {
     graph: &'g RenderGraph,
     statics: Vec<Upright>,
+    /// Whether each primitive is in the plan's visible set.
+    visible: Vec<bool>,
+    /// Primitives attached to robots.
+    robot_parts: Vec<usize>,
+    /// Lights and the static objects' shading, when no light moves.
+    cached: Option<(Vec<WorldLight>, Vec<Option<FastShade>>)>,
+}
+
+/// The fast shading of each object, where it applies.
+fn fast_shades(
+    graph: &RenderGraph,
+    objects: &[Upright],
+    lights: &[WorldLight],
+) -> Vec<Option<FastShade>> {
+    let point_independent = lights
+        .iter()
+        .all(|l| matches!(l.kind, LightKind::Directional { .. }) && !l.shadows)
+        && lights.len() <= MAX_FAST_LIGHTS;
+    objects
+        .iter()
+        .map(|o| {
+            let material = &graph.materials[graph.primitives[o.primitive].material];
+            (point_independent && material.specular.iter().all(|&c| c == 0.0))
+                .then(|| FastShade::new(material, lights))
+        })
+        .collect()
 }
 
 /// One frame for one viewer.
 pub struct ColumnFrame {
     objects: Vec<Upright>,
     lights: Vec<WorldLight>,
-    /// Light-independent radiance cache: per (object, face) when shading does not depend on
-    /// the point (directional lights only, no specular), else NaN.
-    flat: Vec<[[f64; 3]; 3]>,
+    /// Per object, when its radiance depends on the normal alone (directional lights only, no
+    /// specular, no shadows): that dependence, precomputed.
+    flat: Vec<Option<FastShade>>,
 }
 
 fn upright_of(
@@ -199,20 +278,43 @@ impl Strip {
 
 impl<'g> ColumnScene<'g> {
     pub fn new(graph: &'g RenderGraph, plan: &Plan) -> ColumnScene<'g> {
-        let statics = plan
+        let statics: Vec<Upright> = plan
             .visible
             .iter()
             .filter(|&&p| graph.primitives[p].owner == Owner::Static)
             .filter_map(|&p| upright_of(graph, p, &graph.primitives[p].frame))
             .collect();
-        ColumnScene { graph, statics }
+        let mut visible = vec![false; graph.primitives.len()];
+        for &p in &plan.visible {
+            visible[p] = true;
+        }
+        let robot_parts = (0..graph.primitives.len())
+            .filter(|&p| graph.primitives[p].owner != Owner::Static)
+            .collect();
+        // With every light static, lighting is the same each frame: shade the static objects once.
+        let static_lights = plan
+            .lights
+            .iter()
+            .all(|&l| graph.lights[l].owner == Owner::Static);
+        let cached = static_lights.then(|| {
+            let lights = world_lights(graph, plan, &Poses::default());
+            let flat = fast_shades(graph, &statics, &lights);
+            (lights, flat)
+        });
+        ColumnScene {
+            graph,
+            statics,
+            visible,
+            robot_parts,
+            cached,
+        }
     }
 
     /// Places other robots' visible parts and the viewer's own visible parts.
     pub fn prepare(&self, plan: &Plan, poses: &Poses, viewer: Option<usize>) -> ColumnFrame {
         let mut objects = self.statics.clone();
-        let visible: std::collections::BTreeSet<usize> = plan.visible.iter().copied().collect();
-        for (index, primitive) in self.graph.primitives.iter().enumerate() {
+        for &index in &self.robot_parts {
+            let primitive = &self.graph.primitives[index];
             let Owner::Robot(robot) = primitive.owner else {
                 continue;
             };
@@ -224,7 +326,7 @@ impl<'g> ColumnScene<'g> {
                     .get(robot)
                     .is_some_and(|v| v.contains(&index))
             } else {
-                visible.contains(&index)
+                self.visible[index]
             };
             if wanted {
                 let frame = poses.frame(robot).then(&primitive.frame);
@@ -233,48 +335,102 @@ impl<'g> ColumnScene<'g> {
                 }
             }
         }
-        let lights = world_lights(self.graph, plan, poses);
-        let point_independent = lights
-            .iter()
-            .all(|l| matches!(l.kind, LightKind::Directional { .. }) && !l.shadows);
-        let flat = objects
-            .iter()
-            .map(|o| {
-                let material = &self.graph.materials[self.graph.primitives[o.primitive].material];
-                if point_independent && material.specular.iter().all(|&c| c == 0.0) {
-                    let mut none = |_: DVec3, _: &LightKind| false;
-                    let top = shade(
-                        material,
-                        None,
-                        DVec3::ZERO,
-                        DVec3::Y,
-                        DVec3::Y,
-                        &lights,
-                        &mut none,
-                    );
-                    let bottom = shade(
-                        material,
-                        None,
-                        DVec3::ZERO,
-                        DVec3::NEG_Y,
-                        DVec3::NEG_Y,
-                        &lights,
-                        &mut none,
-                    );
-                    [top, bottom, [f64::NAN; 3]]
-                } else {
-                    [[f64::NAN; 3]; 3]
+        match &self.cached {
+            Some((lights, static_flat)) => {
+                let mut flat = static_flat.clone();
+                flat.extend(fast_shades(
+                    self.graph,
+                    &objects[self.statics.len()..],
+                    lights,
+                ));
+                ColumnFrame {
+                    objects,
+                    lights: lights.clone(),
+                    flat,
                 }
-            })
-            .collect();
-        ColumnFrame {
+            }
+            None => {
+                let lights = world_lights(self.graph, plan, poses);
+                let flat = fast_shades(self.graph, &objects, &lights);
+                ColumnFrame {
+                    objects,
+                    lights,
+                    flat,
+                }
+            }
+        }
+    }
+
+    /// What depends on the eye alone: each object's azimuth interval and its footprint
+    /// relative to the eye, computed once per update.
+    pub fn look(&self, frame: &ColumnFrame, eye: DVec3, heading: f64) -> Look {
+        let eye2 = DVec2::new(eye.x, eye.z);
+        let mut objects = Vec::with_capacity(frame.objects.len());
+        let mut breaks = Vec::with_capacity(frame.objects.len() * 2);
+        for object in &frame.objects {
+            let interval = azimuth_interval(object, eye2, heading);
+            if let Some((lo, hi)) = interval {
+                breaks.push(lo);
+                breaks.push(hi);
+            }
+            let (lo, hi) = interval.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+            let relative = match object.footprint {
+                Footprint::Circle { center, radius } => {
+                    let oc = eye2 - center;
+                    Relative::Circle {
+                        oc,
+                        c: oc.length_squared() - radius * radius,
+                        radius,
+                    }
+                }
+                Footprint::Rect {
+                    center,
+                    u,
+                    v,
+                    half_u,
+                    half_v,
+                } => {
+                    let oc = eye2 - center;
+                    Relative::Rect {
+                        pu: oc.dot(u),
+                        pv: oc.dot(v),
+                        u,
+                        v,
+                        half_u,
+                        half_v,
+                    }
+                }
+            };
+            objects.push(EyeObject {
+                lo,
+                hi,
+                relative,
+                y0: object.y0 - eye.y,
+                y1: object.y1 - eye.y,
+                side: object.side,
+                top: object.top,
+                bottom: object.bottom,
+            });
+        }
+        breaks.sort_by(f64::total_cmp);
+        // A lamp on its buoy shares the buoy's silhouette: one edge is enough.
+        breaks.dedup();
+        Look {
+            eye,
+            heading,
+            cos_h: libm::cos(heading),
+            sin_h: libm::sin(heading),
             objects,
-            lights,
-            flat,
+            breaks,
         }
     }
 
     /// Mean linear RGB over each pixel of `strip`, seen from `eye` facing `heading`.
+    ///
+    /// `stride` > 1 saves work where it is safe: in a run of pixels whose windows hold no
+    /// silhouette edge the column integrand is smooth, so only every `stride`-th pixel (and
+    /// each run's ends) is evaluated and the pixels between are interpolated linearly.
+    #[allow(clippy::too_many_arguments)]
     pub fn integrate(
         &self,
         frame: &ColumnFrame,
@@ -282,70 +438,205 @@ impl<'g> ColumnScene<'g> {
         heading: f64,
         strip: &Strip,
         samples: usize,
+        stride: usize,
         out: &mut [[f64; 3]],
     ) {
         let samples = samples.max(1);
-        let eye2 = DVec2::new(eye.x, eye.z);
-        // Each object's azimuth interval relative to the heading; objects around the eye
-        // cover everything.
-        let mut intervals: Vec<(f64, f64)> = Vec::with_capacity(frame.objects.len());
-        let mut breaks: Vec<f64> = Vec::with_capacity(frame.objects.len() * 2);
-        for object in &frame.objects {
-            let interval = azimuth_interval(object, eye2, heading);
-            if let Some((lo, hi)) = interval {
-                breaks.push(lo);
-                breaks.push(hi);
-            }
-            intervals.push(interval.unwrap_or((f64::NEG_INFINITY, f64::INFINITY)));
-        }
-        breaks.sort_by(f64::total_cmp);
-        let (cos_h, sin_h) = (libm::cos(heading), libm::sin(heading));
-        let mut segments: Vec<Segment> = Vec::with_capacity(16);
+        let stride = stride.max(1);
+        let look = self.look(frame, eye, heading);
         let half = strip.width / 2.0;
-        for (pixel, rgb_out) in out.iter_mut().enumerate().take(strip.centers.len()) {
+        let band = 2.0 * band_atan(strip.tan_half_band);
+        let sky = self.background(1.0);
+        let ground = self.background(-1.0);
+        let mut scratch = Scratch {
+            segments: Segments::new(),
+            free: Free::new(0.0, 0.0),
+        };
+        let pixels = strip.centers.len().min(out.len());
+        let evaluate = |alpha: f64, pixel: usize, scratch: &mut Scratch| {
+            let (cos_c, sin_c) = strip.directions[pixel];
+            let (ca, sa) = rotate_small(cos_c, sin_c, alpha - strip.centers[pixel]);
+            // World direction of azimuth heading + alpha: (cos, −sin) in (x, z).
+            let (cw, sw) = (
+                look.cos_h * ca - look.sin_h * sa,
+                look.sin_h * ca + look.cos_h * sa,
+            );
+            self.column(
+                frame,
+                &look,
+                DVec2::new(cw, -sw),
+                alpha,
+                strip.tan_half_band,
+                band,
+                sky,
+                ground,
+                scratch,
+            )
+        };
+        if stride > 1 {
+            self.integrate_regions(
+                &look,
+                frame,
+                strip,
+                stride,
+                band,
+                sky,
+                ground,
+                &mut scratch,
+                out,
+            );
+            return;
+        }
+        for pixel in 0..pixels {
+            // Pieces of the window between silhouette edges, `samples` midpoints each.
             let center = strip.centers[pixel];
             let (lo, hi) = (center - half, center + half);
-            // Pieces of the window between silhouette edges.
-            let mut cuts: smallvec_lite::Cuts = smallvec_lite::Cuts::new(lo);
-            let start = breaks.partition_point(|&b| b <= lo);
-            for &b in &breaks[start..] {
-                if b >= hi {
-                    break;
-                }
-                cuts.push(b);
-            }
-            cuts.push(hi);
-            let (cos_c, sin_c) = strip.directions[pixel];
             let mut sum = [0.0; 3];
-            for piece in 0..cuts.len() - 1 {
-                let (p0, p1) = (cuts.get(piece), cuts.get(piece + 1));
+            let mut p0 = lo;
+            let mut next_break = look.breaks.partition_point(|&b| b <= lo);
+            loop {
+                let p1 = match look.breaks.get(next_break) {
+                    Some(&b) if b < hi => {
+                        next_break += 1;
+                        b
+                    }
+                    _ => hi,
+                };
                 let width = p1 - p0;
-                if width <= 0.0 {
-                    continue;
-                }
-                for s in 0..samples {
-                    let alpha = p0 + (s as f64 + 0.5) / samples as f64 * width;
-                    let (ca, sa) = rotate_small(cos_c, sin_c, alpha - center);
-                    // World direction of azimuth heading + alpha: (cos, −sin) in (x, z).
-                    let (cw, sw) = (cos_h * ca - sin_h * sa, sin_h * ca + cos_h * sa);
-                    let direction = DVec2::new(cw, -sw);
-                    let rgb = self.column(
-                        frame,
-                        &intervals,
-                        eye,
-                        eye2,
-                        direction,
-                        alpha,
-                        strip.tan_half_band,
-                        &mut segments,
-                    );
-                    let weight = width / samples as f64;
-                    for k in 0..3 {
-                        sum[k] += rgb[k] * weight;
+                if width > 0.0 {
+                    for s in 0..samples {
+                        let alpha = p0 + (s as f64 + 0.5) / samples as f64 * width;
+                        let rgb = evaluate(alpha, pixel, &mut scratch);
+                        let weight = width / samples as f64;
+                        for k in 0..3 {
+                            sum[k] += rgb[k] * weight;
+                        }
                     }
                 }
+                if p1 >= hi {
+                    break;
+                }
+                p0 = p1;
             }
-            *rgb_out = sum.map(|v| v / strip.width);
+            out[pixel] = sum.map(|v| v / strip.width);
+        }
+    }
+
+    /// The strip cut into smooth regions at silhouette edges; each region sampled at about one
+    /// column per `stride` pixels (at least once), the integrand modelled as piecewise linear
+    /// between samples, and each pixel window integrated over the regions it overlaps.
+    #[allow(clippy::too_many_arguments)]
+    fn integrate_regions(
+        &self,
+        look: &Look,
+        frame: &ColumnFrame,
+        strip: &Strip,
+        stride: usize,
+        band: f64,
+        sky: [f64; 3],
+        ground: [f64; 3],
+        scratch: &mut Scratch,
+        out: &mut [[f64; 3]],
+    ) {
+        let pixels = strip.centers.len().min(out.len());
+        if pixels == 0 {
+            return;
+        }
+        let width = strip.width;
+        let top = strip.centers[0];
+        let extent_hi = top + width / 2.0;
+        let extent_lo = strip.centers[pixels - 1] - width / 2.0;
+        // Region bounds, ascending.
+        let mut bounds: Vec<f64> = Vec::with_capacity(look.breaks.len() + 2);
+        bounds.push(extent_lo);
+        bounds.extend(
+            look.breaks
+                .iter()
+                .copied()
+                .filter(|&b| b > extent_lo && b < extent_hi),
+        );
+        bounds.push(extent_hi);
+        let step = width * stride as f64;
+        // Samples of every region, with (start, count) per region.
+        let mut positions: Vec<f64> = Vec::with_capacity(bounds.len() + pixels);
+        let mut values: Vec<[f64; 3]> = Vec::with_capacity(bounds.len() + pixels);
+        let mut regions: Vec<(usize, usize)> = Vec::with_capacity(bounds.len());
+        for pair in bounds.windows(2) {
+            let (r0, r1) = (pair[0], pair[1]);
+            let span = r1 - r0;
+            let count = if span <= width {
+                1
+            } else {
+                1 + (span / step) as usize
+            };
+            regions.push((positions.len(), count));
+            for i in 0..count {
+                let alpha = r0 + (i as f64 + 0.5) * span / count as f64;
+                // The nearest pixel's direction, turned by the small remainder.
+                let pixel = (((top - alpha) / width).round().max(0.0) as usize).min(pixels - 1);
+                let (cos_c, sin_c) = strip.directions[pixel];
+                let (ca, sa) = rotate_small(cos_c, sin_c, alpha - strip.centers[pixel]);
+                let (cw, sw) = (
+                    look.cos_h * ca - look.sin_h * sa,
+                    look.sin_h * ca + look.cos_h * sa,
+                );
+                positions.push(alpha);
+                values.push(self.column(
+                    frame,
+                    look,
+                    DVec2::new(cw, -sw),
+                    alpha,
+                    strip.tan_half_band,
+                    band,
+                    sky,
+                    ground,
+                    scratch,
+                ));
+            }
+        }
+        // Walk the pixels by rising azimuth, so that the region and each region's sample
+        // cursor only move forward.
+        let mut cursors: Vec<usize> = regions.iter().map(|&(start, _)| start).collect();
+        let mut first_region = 0;
+        for pixel in (0..pixels).rev() {
+            let (lo, hi) = (
+                strip.centers[pixel] - width / 2.0,
+                strip.centers[pixel] + width / 2.0,
+            );
+            while first_region + 1 < regions.len() && bounds[first_region + 1] <= lo {
+                first_region += 1;
+            }
+            let mut sum = [0.0; 3];
+            let mut region = first_region;
+            while region < regions.len() && bounds[region] < hi {
+                let (a, b) = (bounds[region].max(lo), bounds[region + 1].min(hi));
+                if b > a {
+                    let at = 0.5 * (a + b);
+                    let (start, count) = regions[region];
+                    let value = if count == 1 {
+                        values[start]
+                    } else {
+                        let end = start + count;
+                        let cursor = &mut cursors[region];
+                        while *cursor + 2 < end && positions[*cursor + 1] <= at {
+                            *cursor += 1;
+                        }
+                        let i = (*cursor).min(end - 2);
+                        let f = (at - positions[i]) / (positions[i + 1] - positions[i]);
+                        let (v0, v1) = (values[i], values[i + 1]);
+                        [
+                            v0[0] + (v1[0] - v0[0]) * f,
+                            v0[1] + (v1[1] - v0[1]) * f,
+                            v0[2] + (v1[2] - v0[2]) * f,
+                        ]
+                    };
+                    for k in 0..3 {
+                        sum[k] += value[k] * (b - a);
+                    }
+                }
+                region += 1;
+            }
+            out[pixel] = sum.map(|v| v / width);
         }
     }
 
@@ -353,34 +644,21 @@ impl<'g> ColumnScene<'g> {
     pub fn sample_column(
         &self,
         frame: &ColumnFrame,
-        eye: DVec3,
+        look: &Look,
         direction: DVec2,
         alpha: f64,
-        heading: f64,
         tans: &[f64],
         out: &mut [[f64; 3]],
     ) {
-        let eye2 = DVec2::new(eye.x, eye.z);
-        let intervals: Vec<(f64, f64)> = frame
-            .objects
-            .iter()
-            .map(|o| {
-                azimuth_interval(o, eye2, heading).unwrap_or((f64::NEG_INFINITY, f64::INFINITY))
-            })
-            .collect();
-        let mut segments = Vec::with_capacity(16);
-        self.collect_segments(
-            frame,
-            &intervals,
-            eye,
-            eye2,
-            direction,
-            alpha,
-            &mut segments,
-        );
+        let mut segments = Segments::new();
+        self.collect_segments(look, direction, alpha, &mut segments);
         for (t, rgb) in tans.iter().zip(out.iter_mut()) {
-            *rgb = match segments.iter().find(|s| s.t0 <= *t && *t <= s.t1) {
-                Some(segment) => self.shade_segment(frame, segment, eye, direction, *t),
+            *rgb = match segments
+                .as_slice()
+                .iter()
+                .find(|s| s.t0 <= *t && *t <= s.t1)
+            {
+                Some(segment) => self.shade_segment(frame, segment, look.eye, direction, *t),
                 None => self.background(*t),
             };
         }
@@ -393,86 +671,75 @@ impl<'g> ColumnScene<'g> {
         }
     }
 
-    /// Segments of one column, sorted front to back.
-    #[allow(clippy::too_many_arguments)]
-    fn collect_segments(
-        &self,
-        frame: &ColumnFrame,
-        intervals: &[(f64, f64)],
-        eye: DVec3,
-        eye2: DVec2,
-        direction: DVec2,
-        alpha: f64,
-        segments: &mut Vec<Segment>,
-    ) {
-        segments.clear();
-        let h = eye.y;
-        for (index, object) in frame.objects.iter().enumerate() {
-            let (lo, hi) = intervals[index];
-            if alpha < lo || alpha > hi {
+    /// Segments of one column, sorted front to back (ties by object order: deterministic).
+    fn collect_segments(&self, look: &Look, direction: DVec2, alpha: f64, segments: &mut Segments) {
+        for (index, object) in look.objects.iter().enumerate() {
+            if alpha < object.lo || alpha > object.hi {
                 continue;
             }
-            let Some((t_in, t_out, normal)) = cross(&object.footprint, eye2, direction) else {
+            let Some((t_in, t_out, normal)) = object.relative.cross(direction) else {
                 continue;
             };
-            let object_index = index as u16;
+            let id = index as u16;
+            let (y0, y1) = (object.y0, object.y1);
             if t_in > 0.0 {
+                let inv_in = 1.0 / t_in;
                 if object.side {
-                    segments.push(Segment {
+                    segments.insert(Segment {
                         depth: t_in,
-                        t0: (object.y0 - h) / t_in,
-                        t1: (object.y1 - h) / t_in,
-                        object: object_index,
+                        t0: y0 * inv_in,
+                        t1: y1 * inv_in,
+                        object: id,
                         face: Face::Side(normal),
                     });
                 }
-                if object.top && h > object.y1 {
-                    segments.push(Segment {
+                if object.top && y1 < 0.0 {
+                    segments.insert(Segment {
                         depth: t_in,
-                        t0: (object.y1 - h) / t_in,
-                        t1: (object.y1 - h) / t_out,
-                        object: object_index,
+                        t0: y1 * inv_in,
+                        t1: y1 / t_out,
+                        object: id,
                         face: Face::Cap {
-                            y: object.y1,
+                            y: y1 + look.eye.y,
                             up: true,
                         },
                     });
                 }
-                if object.bottom && h < object.y0 {
-                    segments.push(Segment {
+                if object.bottom && y0 > 0.0 {
+                    segments.insert(Segment {
                         depth: t_in,
-                        t0: (object.y0 - h) / t_out,
-                        t1: (object.y0 - h) / t_in,
-                        object: object_index,
+                        t0: y0 / t_out,
+                        t1: y0 * inv_in,
+                        object: id,
                         face: Face::Cap {
-                            y: object.y0,
+                            y: y0 + look.eye.y,
                             up: false,
                         },
                     });
                 }
-            } else if h > object.y1 {
+            } else if y1 < 0.0 {
                 // Standing over it (a floor): its top fills everything below its far edge.
                 if object.top {
-                    segments.push(Segment {
+                    segments.insert(Segment {
                         depth: 0.0,
                         t0: f64::NEG_INFINITY,
-                        t1: (object.y1 - h) / t_out,
-                        object: object_index,
+                        t1: y1 / t_out,
+                        object: id,
                         face: Face::Cap {
-                            y: object.y1,
+                            y: y1 + look.eye.y,
                             up: true,
                         },
                     });
                 }
-            } else if h < object.y0 {
+            } else if y0 > 0.0 {
                 if object.bottom {
-                    segments.push(Segment {
+                    segments.insert(Segment {
                         depth: 0.0,
-                        t0: (object.y0 - h) / t_out,
+                        t0: y0 / t_out,
                         t1: f64::INFINITY,
-                        object: object_index,
+                        object: id,
                         face: Face::Cap {
-                            y: object.y0,
+                            y: y0 + look.eye.y,
                             up: false,
                         },
                     });
@@ -480,44 +747,42 @@ impl<'g> ColumnScene<'g> {
             } else {
                 // Inside it (a round arena, a room): its inner faces, as the ray caster sees
                 // them, at the exit distance.
-                let inward = -exit_normal(&object.footprint, eye2 + direction * t_out);
+                let inward = -object.relative.exit_normal(direction, t_out);
                 if object.side {
-                    segments.push(Segment {
+                    segments.insert(Segment {
                         depth: t_out,
-                        t0: (object.y0 - h) / t_out,
-                        t1: (object.y1 - h) / t_out,
-                        object: object_index,
+                        t0: y0 / t_out,
+                        t1: y1 / t_out,
+                        object: id,
                         face: Face::Side(inward),
                     });
                 }
                 if object.top {
-                    segments.push(Segment {
+                    segments.insert(Segment {
                         depth: t_out,
-                        t0: (object.y1 - h) / t_out,
+                        t0: y1 / t_out,
                         t1: f64::INFINITY,
-                        object: object_index,
+                        object: id,
                         face: Face::Cap {
-                            y: object.y1,
+                            y: y1 + look.eye.y,
                             up: false,
                         },
                     });
                 }
                 if object.bottom {
-                    segments.push(Segment {
+                    segments.insert(Segment {
                         depth: t_out,
                         t0: f64::NEG_INFINITY,
-                        t1: (object.y0 - h) / t_out,
-                        object: object_index,
+                        t1: y0 / t_out,
+                        object: id,
                         face: Face::Cap {
-                            y: object.y0,
+                            y: y0 + look.eye.y,
                             up: true,
                         },
                     });
                 }
             }
         }
-        // Front to back; ties broken by object order so the result is deterministic.
-        segments.sort_by(|a, b| a.depth.total_cmp(&b.depth).then(a.object.cmp(&b.object)));
     }
 
     /// Mean RGB over the band `[-T, T]` of one column, integrated exactly in angle.
@@ -525,20 +790,21 @@ impl<'g> ColumnScene<'g> {
     fn column(
         &self,
         frame: &ColumnFrame,
-        intervals: &[(f64, f64)],
-        eye: DVec3,
-        eye2: DVec2,
+        look: &Look,
         direction: DVec2,
         alpha: f64,
         tan_half: f64,
-        segments: &mut Vec<Segment>,
+        band: f64,
+        sky: [f64; 3],
+        ground: [f64; 3],
+        scratch: &mut Scratch,
     ) -> [f64; 3] {
-        self.collect_segments(frame, intervals, eye, eye2, direction, alpha, segments);
-        let band = 2.0 * band_atan(tan_half);
-        // Uncovered parts of the band, as a sorted list of free tan-intervals.
-        let mut free: smallvec_lite::Free = smallvec_lite::Free::new(-tan_half, tan_half);
+        let Scratch { segments, free } = scratch;
+        segments.len = 0;
+        self.collect_segments(look, direction, alpha, segments);
+        free.reset(-tan_half, tan_half);
         let mut sum = [0.0; 3];
-        for segment in segments.iter() {
+        for segment in segments.as_slice() {
             if free.is_empty() {
                 break;
             }
@@ -546,30 +812,29 @@ impl<'g> ColumnScene<'g> {
             if a >= b {
                 continue;
             }
+            let mut covered = 0.0;
+            let mut middle = 0.0;
             free.take(a, b, |x0, x1| {
                 let weight = band_atan(x1) - band_atan(x0);
-                let rgb = self.shade_segment(frame, segment, eye, direction, 0.5 * (x0 + x1));
-                for k in 0..3 {
-                    sum[k] += rgb[k] * weight;
-                }
+                middle += 0.5 * (x0 + x1) * weight;
+                covered += weight;
             });
-        }
-        free.for_each(|x0, x1| {
-            let weight = band_atan(x1) - band_atan(x0);
-            // Sky above the horizon, ground (if any) below.
-            if x1 <= 0.0 || x0 >= 0.0 {
-                let rgb = self.background(0.5 * (x0 + x1));
+            if covered > 0.0 {
+                // One radiance per visible part of a face, at its weighted middle.
+                let rgb = self.shade_segment(frame, segment, look.eye, direction, middle / covered);
                 for k in 0..3 {
-                    sum[k] += rgb[k] * weight;
-                }
-            } else {
-                let (below, above) = (band_atan(0.0) - band_atan(x0), band_atan(x1));
-                let (g, s) = (self.background(-1.0), self.background(1.0));
-                for k in 0..3 {
-                    sum[k] += g[k] * below + s[k] * above;
+                    sum[k] += rgb[k] * covered;
                 }
             }
-        });
+        }
+        for &(x0, x1) in free.as_slice() {
+            // Sky above the horizon, ground (if any) below.
+            let below = (band_atan(x1.min(0.0)) - band_atan(x0.min(0.0))).max(0.0);
+            let above = (band_atan(x1.max(0.0)) - band_atan(x0.max(0.0))).max(0.0);
+            for k in 0..3 {
+                sum[k] += ground[k] * below + sky[k] * above;
+            }
+        }
         sum.map(|v| v / band)
     }
 
@@ -583,7 +848,13 @@ impl<'g> ColumnScene<'g> {
         t: f64,
     ) -> [f64; 3] {
         let object = &frame.objects[segment.object as usize];
-        let cached = &frame.flat[segment.object as usize];
+        if let Some(fast) = &frame.flat[segment.object as usize] {
+            return match segment.face {
+                Face::Side(n) => fast.radiance(DVec3::new(n.x, 0.0, n.y)),
+                Face::Cap { up: true, .. } => fast.radiance(DVec3::Y),
+                Face::Cap { up: false, .. } => fast.radiance(DVec3::NEG_Y),
+            };
+        }
         let (point, normal) = match segment.face {
             Face::Side(n) => {
                 let d = segment.depth;
@@ -597,10 +868,6 @@ impl<'g> ColumnScene<'g> {
                 )
             }
             Face::Cap { y, up } => {
-                let cache = if up { cached[0] } else { cached[1] };
-                if !cache[0].is_nan() {
-                    return cache;
-                }
                 let d = if t != 0.0 {
                     ((y - eye.y) / t).abs()
                 } else {
@@ -616,83 +883,6 @@ impl<'g> ColumnScene<'g> {
         let material = &self.graph.materials[self.graph.primitives[object.primitive].material];
         let mut none = |_: DVec3, _: &LightKind| false;
         shade(material, None, point, normal, eye, &frame.lights, &mut none)
-    }
-}
-
-/// Entry and exit distances of a horizontal ray through a footprint, with the entry normal.
-fn cross(footprint: &Footprint, eye: DVec2, direction: DVec2) -> Option<(f64, f64, DVec2)> {
-    match *footprint {
-        Footprint::Circle { center, radius } => {
-            let oc = eye - center;
-            let b = oc.dot(direction);
-            let c = oc.length_squared() - radius * radius;
-            let disc = b * b - c;
-            if disc < 0.0 {
-                return None;
-            }
-            let sq = disc.sqrt();
-            let (t0, t1) = (-b - sq, -b + sq);
-            if t1 <= 0.0 {
-                return None;
-            }
-            let normal = (eye + direction * t0 - center) / radius;
-            Some((t0.max(0.0), t1, normal))
-        }
-        Footprint::Rect {
-            center,
-            u,
-            v,
-            half_u,
-            half_v,
-        } => {
-            let oc = eye - center;
-            let (pu, pv) = (oc.dot(u), oc.dot(v));
-            let (du, dv) = (direction.dot(u), direction.dot(v));
-            let mut t_in = f64::NEG_INFINITY;
-            let mut t_out = f64::INFINITY;
-            let mut normal = DVec2::ZERO;
-            for (p, d, h, axis) in [(pu, du, half_u, u), (pv, dv, half_v, v)] {
-                if d.abs() < 1e-300 {
-                    if p.abs() > h {
-                        return None;
-                    }
-                    continue;
-                }
-                let (a, b) = ((-h - p) / d, (h - p) / d);
-                let (near, far) = if a < b { (a, b) } else { (b, a) };
-                if near > t_in {
-                    t_in = near;
-                    normal = if d > 0.0 { -axis } else { axis };
-                }
-                t_out = t_out.min(far);
-            }
-            if t_in > t_out || t_out <= 0.0 {
-                return None;
-            }
-            Some((t_in.max(0.0), t_out, normal))
-        }
-    }
-}
-
-/// The outward normal of a footprint's boundary at `point`.
-fn exit_normal(footprint: &Footprint, point: DVec2) -> DVec2 {
-    match *footprint {
-        Footprint::Circle { center, .. } => (point - center).normalize_or_zero(),
-        Footprint::Rect {
-            center,
-            u,
-            v,
-            half_u,
-            half_v,
-        } => {
-            let offset = point - center;
-            let (pu, pv) = (offset.dot(u) / half_u, offset.dot(v) / half_v);
-            if pu.abs() >= pv.abs() {
-                u * pu.signum()
-            } else {
-                v * pv.signum()
-            }
-        }
     }
 }
 
@@ -736,81 +926,263 @@ fn azimuth_interval(object: &Upright, eye: DVec2, heading: f64) -> Option<(f64, 
     }
 }
 
-/// Tiny fixed-capacity helpers, so the per-column loops allocate nothing.
-mod smallvec_lite {
-    /// Cut points of a pixel window.
-    pub struct Cuts {
-        items: [f64; 64],
-        len: usize,
-    }
+/// An object as seen from one eye.
+#[derive(Clone, Copy, Debug)]
+pub struct EyeObject {
+    lo: f64,
+    hi: f64,
+    relative: Relative,
+    /// Heights relative to the eye.
+    y0: f64,
+    y1: f64,
+    side: bool,
+    top: bool,
+    bottom: bool,
+}
 
-    impl Cuts {
-        pub fn new(first: f64) -> Cuts {
-            let mut items = [0.0; 64];
-            items[0] = first;
-            Cuts { items, len: 1 }
-        }
-        pub fn push(&mut self, value: f64) {
-            if self.len < self.items.len() {
-                self.items[self.len] = value;
-                self.len += 1;
-            } else {
-                // More edges than slots: merge into the last piece (coverage stays exact
-                // in elevation; only the azimuth split gets coarser).
-                self.items[self.len - 1] = value;
+/// A footprint relative to the eye, with what does not depend on the direction precomputed.
+#[derive(Clone, Copy, Debug)]
+enum Relative {
+    Circle {
+        oc: DVec2,
+        c: f64,
+        radius: f64,
+    },
+    Rect {
+        pu: f64,
+        pv: f64,
+        u: DVec2,
+        v: DVec2,
+        half_u: f64,
+        half_v: f64,
+    },
+}
+
+impl Relative {
+    /// Entry and exit distances of the horizontal ray, with the entry normal.
+    #[inline]
+    fn cross(&self, direction: DVec2) -> Option<(f64, f64, DVec2)> {
+        match *self {
+            Relative::Circle { oc, c, radius, .. } => {
+                let b = oc.dot(direction);
+                let disc = b * b - c;
+                if disc < 0.0 {
+                    return None;
+                }
+                let sq = disc.sqrt();
+                let (t0, t1) = (-b - sq, -b + sq);
+                if t1 <= 0.0 {
+                    return None;
+                }
+                Some((t0.max(0.0), t1, (oc + direction * t0) / radius))
+            }
+            Relative::Rect {
+                pu,
+                pv,
+                u,
+                v,
+                half_u,
+                half_v,
+            } => {
+                let (du, dv) = (direction.dot(u), direction.dot(v));
+                let mut t_in = f64::NEG_INFINITY;
+                let mut t_out = f64::INFINITY;
+                let mut normal = DVec2::ZERO;
+                for (p, d, h, axis) in [(pu, du, half_u, u), (pv, dv, half_v, v)] {
+                    if d.abs() < 1e-300 {
+                        if p.abs() > h {
+                            return None;
+                        }
+                        continue;
+                    }
+                    let inverse = 1.0 / d;
+                    let (a, b) = ((-h - p) * inverse, (h - p) * inverse);
+                    let (near, far) = if a < b { (a, b) } else { (b, a) };
+                    if near > t_in {
+                        t_in = near;
+                        normal = if d > 0.0 { -axis } else { axis };
+                    }
+                    t_out = t_out.min(far);
+                }
+                if t_in > t_out || t_out <= 0.0 {
+                    return None;
+                }
+                Some((t_in.max(0.0), t_out, normal))
             }
         }
-        pub fn len(&self) -> usize {
-            self.len
-        }
-        pub fn get(&self, i: usize) -> f64 {
-            self.items[i]
-        }
     }
 
-    /// Free (uncovered) intervals of a band, sorted and disjoint.
-    pub struct Free {
-        items: [(f64, f64); 32],
-        len: usize,
-    }
-
-    impl Free {
-        pub fn new(lo: f64, hi: f64) -> Free {
-            let mut items = [(0.0, 0.0); 32];
-            items[0] = (lo, hi);
-            Free { items, len: 1 }
-        }
-
-        pub fn is_empty(&self) -> bool {
-            self.len == 0
-        }
-
-        /// Removes `[a, b]`, calling `visit` on each free part it covered.
-        pub fn take(&mut self, a: f64, b: f64, mut visit: impl FnMut(f64, f64)) {
-            let mut out = [(0.0, 0.0); 32];
-            let mut n = 0;
-            for &(x0, x1) in &self.items[..self.len] {
-                let (c0, c1) = (x0.max(a), x1.min(b));
-                if c0 < c1 {
-                    visit(c0, c1);
-                    for piece in [(x0, c0), (c1, x1)] {
-                        if piece.0 < piece.1 && n < out.len() {
-                            out[n] = piece;
-                            n += 1;
-                        }
-                    }
-                } else if n < out.len() {
-                    out[n] = (x0, x1);
-                    n += 1;
+    /// The outward normal where the ray leaves, at distance `t`.
+    fn exit_normal(&self, direction: DVec2, t: f64) -> DVec2 {
+        match *self {
+            Relative::Circle { oc, radius, .. } => (oc + direction * t) / radius,
+            Relative::Rect {
+                pu,
+                pv,
+                u,
+                v,
+                half_u,
+                half_v,
+            } => {
+                let (qu, qv) = (
+                    (pu + direction.dot(u) * t) / half_u,
+                    (pv + direction.dot(v) * t) / half_v,
+                );
+                if qu.abs() >= qv.abs() {
+                    u * qu.signum()
+                } else {
+                    v * qv.signum()
                 }
             }
-            self.items = out;
-            self.len = n;
         }
+    }
+}
 
-        pub fn for_each(&self, mut visit: impl FnMut(f64, f64)) {
-            for &(x0, x1) in &self.items[..self.len] {
-                visit(x0, x1);
+/// Everything about one eye, for one update.
+pub struct Look {
+    eye: DVec3,
+    #[allow(dead_code)]
+    heading: f64,
+    cos_h: f64,
+    sin_h: f64,
+    objects: Vec<EyeObject>,
+    /// Silhouette edges (relative azimuths), sorted.
+    breaks: Vec<f64>,
+}
+
+impl Look {
+    /// The world direction (x, z) of relative azimuth `alpha`.
+    pub fn direction(&self, alpha: f64) -> DVec2 {
+        let (ca, sa) = (libm::cos(alpha), libm::sin(alpha));
+        let (cw, sw) = (
+            self.cos_h * ca - self.sin_h * sa,
+            self.sin_h * ca + self.cos_h * sa,
+        );
+        DVec2::new(cw, -sw)
+    }
+}
+
+/// Most segments one column keeps; beyond, the farthest are dropped (they are the most
+/// likely hidden).
+const MAX_SEGMENTS: usize = 32;
+
+/// A column's segments, kept sorted by depth on insertion, on the stack.
+struct Segments {
+    items: [Segment; MAX_SEGMENTS],
+    len: usize,
+}
+
+impl Segments {
+    fn new() -> Segments {
+        Segments {
+            items: [Segment {
+                depth: 0.0,
+                t0: 0.0,
+                t1: 0.0,
+                object: 0,
+                face: Face::Cap { y: 0.0, up: true },
+            }; MAX_SEGMENTS],
+            len: 0,
+        }
+    }
+
+    #[inline]
+    fn insert(&mut self, segment: Segment) {
+        let mut i = self.len;
+        while i > 0
+            && (self.items[i - 1].depth > segment.depth
+                || (self.items[i - 1].depth == segment.depth
+                    && self.items[i - 1].object > segment.object))
+        {
+            i -= 1;
+        }
+        if i >= MAX_SEGMENTS {
+            return;
+        }
+        let end = self.len.min(MAX_SEGMENTS - 1);
+        self.items.copy_within(i..end, i + 1);
+        self.items[i] = segment;
+        self.len = (self.len + 1).min(MAX_SEGMENTS);
+    }
+
+    fn as_slice(&self) -> &[Segment] {
+        &self.items[..self.len]
+    }
+}
+
+/// Per-column buffers, allocated once per strip.
+struct Scratch {
+    segments: Segments,
+    free: Free,
+}
+
+/// Free (uncovered) tan-intervals of a band, sorted and disjoint, on the stack. Each segment
+/// splits at most one interval, so MAX_SEGMENTS + 1 always suffices.
+struct Free {
+    items: [(f64, f64); MAX_SEGMENTS + 1],
+    len: usize,
+}
+
+impl Free {
+    fn new(lo: f64, hi: f64) -> Free {
+        let mut items = [(0.0, 0.0); MAX_SEGMENTS + 1];
+        items[0] = (lo, hi);
+        Free { items, len: 1 }
+    }
+
+    fn reset(&mut self, lo: f64, hi: f64) {
+        self.items[0] = (lo, hi);
+        self.len = 1;
+    }
+
+    fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    fn as_slice(&self) -> &[(f64, f64)] {
+        &self.items[..self.len]
+    }
+
+    /// Removes `[a, b]`, calling `visit` on each free part it covered.
+    #[inline]
+    fn take(&mut self, a: f64, b: f64, mut visit: impl FnMut(f64, f64)) {
+        let mut i = 0;
+        while i < self.len {
+            let (x0, x1) = self.items[i];
+            if x1 <= a {
+                i += 1;
+                continue;
+            }
+            if x0 >= b {
+                break;
+            }
+            let (c0, c1) = (x0.max(a), x1.min(b));
+            visit(c0, c1);
+            match (x0 < c0, c1 < x1) {
+                (true, true) => {
+                    // Split in two.
+                    if self.len < self.items.len() {
+                        self.items.copy_within(i + 1..self.len, i + 2);
+                        self.items[i] = (x0, c0);
+                        self.items[i + 1] = (c1, x1);
+                        self.len += 1;
+                    } else {
+                        self.items[i] = (x0, c0);
+                    }
+                    return;
+                }
+                (true, false) => {
+                    self.items[i] = (x0, c0);
+                    i += 1;
+                }
+                (false, true) => {
+                    self.items[i] = (c1, x1);
+                    return;
+                }
+                (false, false) => {
+                    self.items.copy_within(i + 1..self.len, i);
+                    self.len -= 1;
+                }
             }
         }
     }

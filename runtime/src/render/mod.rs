@@ -37,7 +37,7 @@ impl Poses {
 
 /// A light resolved to world space for one frame.
 #[derive(Clone, Debug)]
-pub(crate) struct WorldLight {
+pub struct WorldLight {
     kind: LightKind,
     color: [f64; 3],
     intensity: f64,
