@@ -100,3 +100,11 @@ fn z_up_worlds_are_turned_to_y_up() {
         "{center}"
     );
 }
+
+#[test]
+fn lights_with_shadows_make_the_plan_cast_rays() {
+    let world = "#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" }\nArena { }\n\
+        PointLight { location 0 0.3 0 castShadows TRUE }\n\
+        Khepera { turret PanoramicTurret { } }\n";
+    assert_eq!(compile_text(world).plan.renderer, RendererChoice::Rays);
+}

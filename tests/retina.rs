@@ -1,3 +1,4 @@
+#![allow(clippy::needless_range_loop)]
 //! The EDI retina's stages against what `retina.md` and the paper say.
 
 use regatta_runtime::retina::{

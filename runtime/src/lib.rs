@@ -5,6 +5,9 @@
 //! [`optics::Panoramic`] / [`optics::LinearCamera`] → [`retina`] stages. Geometric queries live
 //! apart in [`geometry`].
 
+// Channel loops (`for k in 0..3`) read as the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
 pub mod compile;
 pub mod geometry;
 pub mod optics;

@@ -21,8 +21,8 @@ use crate::render::column::{ColumnFrame, ColumnScene, Look, Strip};
 use crate::render::raycast::{Prepared, RayCaster};
 use crate::render::Poses;
 use crate::retina::{
-    self, calibrate_i_bda, convert, luminance, normalize, FilterKind, FilterSettings, HALF_BAND,
-    PIXELS, PIXEL_WIDTH,
+    self, calibrate_i_bda, convert_scaled, luminance, normalize, FilterKind, FilterSettings,
+    HALF_BAND, PIXELS, PIXEL_WIDTH,
 };
 
 /// Flat-view geometry of paper optics.
@@ -272,10 +272,12 @@ impl Panoramic {
             *digital_kind = kind;
             digital.clear();
             let last = last.min(filtered.len().saturating_sub(1));
+            let top = ((1u32 << self.settings.bits) - 1) as f64;
+            let (half, gain) = (top / 2.0, top / 2.0 / i_bda);
             digital.extend(
                 filtered[first.min(last)..=last]
                     .iter()
-                    .map(|&f| convert(f, i_bda, self.settings.bits)),
+                    .map(|&f| convert_scaled(f, half, gain, top)),
             );
         }
     }

@@ -98,21 +98,19 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
         analog.iter_mut().for_each(|a| *a = 0.0);
         return false;
     }
+    let inverse_peak = 1.0 / peak;
     let mean = y
         .iter()
-        .map(|&v| if v.is_finite() { v / peak } else { 0.0 })
+        .map(|&v| if v.is_finite() { v * inverse_peak } else { 0.0 })
         .sum::<f64>()
         / n;
     if mean <= 0.0 {
         analog.iter_mut().for_each(|a| *a = 0.0);
         return false;
     }
+    let scale = inverse_peak / mean;
     for (a, &v) in analog.iter_mut().zip(y) {
-        *a = if v.is_finite() {
-            (v / peak) / mean
-        } else {
-            0.0
-        };
+        *a = if v.is_finite() { v * scale } else { 0.0 };
     }
     true
 }
@@ -356,12 +354,22 @@ pub fn calibrate_i_bda(kind: FilterKind, settings: &FilterSettings, pixels: usiz
 /// bit is exactly the sign of `filtered`: set when `filtered ≥ 0`), clamped to 0…2^b − 1.
 pub fn convert(filtered: f64, i_bda: f64, bits: u32) -> u16 {
     let top = ((1u32 << bits) - 1) as f64;
-    let value = top / 2.0 * (1.0 + filtered / i_bda);
-    let rounded = libm::floor(value + 0.5);
-    if rounded.is_nan() {
-        return 0;
+    convert_scaled(filtered, top / 2.0, top / 2.0 / i_bda, top)
+}
+
+/// [`convert`] with its constants hoisted: `half + filtered·gain`, `gain = half / I_bda`.
+/// Rounding is `floor(x + ½)` (by truncation of a non-negative value: exact everywhere).
+#[inline]
+pub fn convert_scaled(filtered: f64, half: f64, gain: f64, top: f64) -> u16 {
+    let value = half + filtered * gain + 0.5;
+    // NaN fails both tests and reads 0; for values in [0, top] truncation is floor.
+    if value.is_nan() || value < 1.0 {
+        0
+    } else if value >= top {
+        top as u16
+    } else {
+        value as u16
     }
-    rounded.clamp(0.0, top) as u16
 }
 
 #[cfg(test)]

@@ -99,6 +99,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let mut configurations: Vec<(Optics, usize, usize, bool)> = Vec::new();
     if upright {
         for (samples, stride) in [
+            (1, 16),
+            (1, 12),
             (1, 8),
             (1, 6),
             (1, 4),
@@ -143,7 +145,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         let default = optics == base.optics
             && samples == base.samples
             && (stride == base.stride || optics == Optics::Paper)
-            && rays == !upright;
+            && rays != upright;
         let name = if default { format!("{name} *") } else { name };
         rows.push(Row {
             name,

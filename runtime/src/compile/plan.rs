@@ -29,9 +29,10 @@ pub struct Skipped {
 pub enum RendererChoice {
     /// Nothing to render.
     None,
-    /// Every visible primitive is upright: the analytic column renderer.
+    /// Every visible primitive is upright and no light casts shadows: the analytic column
+    /// renderer.
     Columns,
-    /// Some visible primitive is not: ray casting (exact intersections, BVH).
+    /// Otherwise: ray casting (exact intersections, BVH, shadow rays).
     Rays,
 }
 
@@ -189,6 +190,14 @@ impl Plan {
                 None => lights.push(index),
             }
         }
+        // The column renderer casts no shadows: a light that asks for them needs rays.
+        let renderer = if renderer == RendererChoice::Columns
+            && lights.iter().any(|&l| graph.lights[l].shadows)
+        {
+            RendererChoice::Rays
+        } else {
+            renderer
+        };
         Plan {
             renderer,
             visible,

@@ -130,6 +130,18 @@ pub struct ColumnScene<'g> {
     robot_parts: Vec<usize>,
     /// Lights and the static objects' shading, when no light moves.
     cached: Option<(Vec<WorldLight>, Vec<Option<FastShade>>)>,
+    /// Buffers reused from update to update (a scene renders one view at a time).
+    buffers: std::cell::RefCell<RegionBuffers>,
+}
+
+/// The region sampler's buffers.
+#[derive(Default)]
+struct RegionBuffers {
+    bounds: Vec<f64>,
+    positions: Vec<f64>,
+    values: Vec<[f64; 3]>,
+    regions: Vec<(usize, usize)>,
+    cursors: Vec<usize>,
 }
 
 /// The fast shading of each object, where it applies.
@@ -224,17 +236,28 @@ fn band_atan(t: f64) -> f64 {
     if t.abs() > 0.2 {
         return libm::atan(t);
     }
+    // Reciprocals as constants: multiplications, no division on the hot path.
+    const C3: f64 = 1.0 / 3.0;
+    const C5: f64 = 1.0 / 5.0;
+    const C7: f64 = 1.0 / 7.0;
+    const C9: f64 = 1.0 / 9.0;
+    const C11: f64 = 1.0 / 11.0;
     let t2 = t * t;
-    t * (1.0
-        - t2 * (1.0 / 3.0 - t2 * (1.0 / 5.0 - t2 * (1.0 / 7.0 - t2 * (1.0 / 9.0 - t2 / 11.0)))))
+    t * (1.0 - t2 * (C3 - t2 * (C5 - t2 * (C7 - t2 * (C9 - t2 * C11)))))
 }
 
 /// `(cos, sin)` of `base + delta` from those of `base`, for small `delta` (|δ| ≤ a pixel).
 #[inline]
 fn rotate_small(cos_base: f64, sin_base: f64, delta: f64) -> (f64, f64) {
+    const HALF: f64 = 0.5;
+    const TWELFTH: f64 = 1.0 / 12.0;
+    const THIRTIETH: f64 = 1.0 / 30.0;
+    const SIXTH: f64 = 1.0 / 6.0;
+    const TWENTIETH: f64 = 1.0 / 20.0;
+    const FORTY_SECOND: f64 = 1.0 / 42.0;
     let d2 = delta * delta;
-    let c = 1.0 - d2 / 2.0 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0));
-    let s = delta * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0)));
+    let c = 1.0 - d2 * HALF * (1.0 - d2 * TWELFTH * (1.0 - d2 * THIRTIETH));
+    let s = delta * (1.0 - d2 * SIXTH * (1.0 - d2 * TWENTIETH * (1.0 - d2 * FORTY_SECOND)));
     (cos_base * c - sin_base * s, sin_base * c + cos_base * s)
 }
 
@@ -307,6 +330,7 @@ impl<'g> ColumnScene<'g> {
             visible,
             robot_parts,
             cached,
+            buffers: Default::default(),
         }
     }
 
@@ -546,8 +570,16 @@ impl<'g> ColumnScene<'g> {
         let top = strip.centers[0];
         let extent_hi = top + width / 2.0;
         let extent_lo = strip.centers[pixels - 1] - width / 2.0;
+        let mut buffers = self.buffers.borrow_mut();
+        let RegionBuffers {
+            bounds,
+            positions,
+            values,
+            regions,
+            cursors,
+        } = &mut *buffers;
         // Region bounds, ascending.
-        let mut bounds: Vec<f64> = Vec::with_capacity(look.breaks.len() + 2);
+        bounds.clear();
         bounds.push(extent_lo);
         bounds.extend(
             look.breaks
@@ -558,9 +590,9 @@ impl<'g> ColumnScene<'g> {
         bounds.push(extent_hi);
         let step = width * stride as f64;
         // Samples of every region, with (start, count) per region.
-        let mut positions: Vec<f64> = Vec::with_capacity(bounds.len() + pixels);
-        let mut values: Vec<[f64; 3]> = Vec::with_capacity(bounds.len() + pixels);
-        let mut regions: Vec<(usize, usize)> = Vec::with_capacity(bounds.len());
+        positions.clear();
+        values.clear();
+        regions.clear();
         for pair in bounds.windows(2) {
             let (r0, r1) = (pair[0], pair[1]);
             let span = r1 - r0;
@@ -596,7 +628,9 @@ impl<'g> ColumnScene<'g> {
         }
         // Walk the pixels by rising azimuth, so that the region and each region's sample
         // cursor only move forward.
-        let mut cursors: Vec<usize> = regions.iter().map(|&(start, _)| start).collect();
+        let inverse_width = 1.0 / width;
+        cursors.clear();
+        cursors.extend(regions.iter().map(|&(start, _)| start));
         let mut first_region = 0;
         for pixel in (0..pixels).rev() {
             let (lo, hi) = (
@@ -636,7 +670,7 @@ impl<'g> ColumnScene<'g> {
                 }
                 region += 1;
             }
-            out[pixel] = sum.map(|v| v / width);
+            out[pixel] = sum.map(|v| v * inverse_width);
         }
     }
 
@@ -835,7 +869,8 @@ impl<'g> ColumnScene<'g> {
                 sum[k] += ground[k] * below + sky[k] * above;
             }
         }
-        sum.map(|v| v / band)
+        let inverse_band = 1.0 / band;
+        sum.map(|v| v * inverse_band)
     }
 
     /// Radiance of a segment's face at tan-elevation `t`.
@@ -912,14 +947,40 @@ fn azimuth_interval(object: &Upright, eye: DVec2, heading: f64) -> Option<(f64, 
                 return None;
             }
             let middle = libm::atan2(-offset.y, offset.x);
-            let mut lo = f64::INFINITY;
-            let mut hi = f64::NEG_INFINITY;
-            for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+            // Corners as (x, −z) so that angles grow counter-clockwise; relative to the middle
+            // direction m an angle is atan(cross/dot) while every corner is in front of it,
+            // so only the two extreme corners need a transcendental.
+            let m = DVec2::new(offset.x, -offset.y);
+            let mut ratios = [0.0; 4];
+            let mut in_front = true;
+            for (k, (su, sv)) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .into_iter()
+                .enumerate()
+            {
                 let corner = center + u * (su * half_u) + v * (sv * half_v) - eye;
-                let angle = wrap(libm::atan2(-corner.y, corner.x) - middle);
-                lo = lo.min(angle);
-                hi = hi.max(angle);
+                let c = DVec2::new(corner.x, -corner.y);
+                let dot = m.dot(c);
+                in_front &= dot > 0.0;
+                ratios[k] = m.perp_dot(c) / dot;
             }
+            let (lo, hi) = if in_front {
+                let (min, max) = ratios
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &r| {
+                        (a.min(r), b.max(r))
+                    });
+                (libm::atan(min), libm::atan(max))
+            } else {
+                let mut lo = f64::INFINITY;
+                let mut hi = f64::NEG_INFINITY;
+                for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                    let corner = center + u * (su * half_u) + v * (sv * half_v) - eye;
+                    let angle = wrap(libm::atan2(-corner.y, corner.x) - middle);
+                    lo = lo.min(angle);
+                    hi = hi.max(angle);
+                }
+                (lo, hi)
+            };
             let middle = wrap(middle - heading);
             Some((middle + lo, middle + hi))
         }
