@@ -9,9 +9,12 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod compile;
+pub mod controllers;
 pub mod geometry;
+pub mod khepera;
 pub mod optics;
 pub mod render;
 pub mod retina;
+pub mod sim;
 
 pub use compile::{compile, Compiled};

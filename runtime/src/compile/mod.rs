@@ -33,6 +33,16 @@ pub struct WorldSettings {
     pub seed: u64,
 }
 
+/// A landmark a run reports on: a `Buoy` instance, with the centre and radius of its
+/// footprint.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Landmark {
+    pub name: String,
+    /// (x, z) of its centre.
+    pub center: glam::DVec2,
+    pub radius: f64,
+}
+
 /// Everything a run needs, compiled from one scene.
 #[derive(Clone, Debug)]
 pub struct Compiled {
@@ -40,6 +50,8 @@ pub struct Compiled {
     pub rig: SensorRig,
     pub plan: Plan,
     pub settings: WorldSettings,
+    /// The buoys, in file order.
+    pub landmarks: Vec<Landmark>,
     /// Things the compiler noticed and worked around (a tilted robot, a device outside a robot).
     pub warnings: Vec<String>,
 }
@@ -60,6 +72,7 @@ pub fn compile(scene: &Scene) -> Compiled {
         rig: SensorRig::default(),
         warnings: Vec::new(),
         materials: Vec::new(),
+        landmarks: Vec::new(),
     };
     let root = scene.root_rotation();
     let root_frame = Frame {
@@ -77,6 +90,7 @@ pub fn compile(scene: &Scene) -> Compiled {
         rig: compiler.rig,
         plan,
         settings,
+        landmarks: compiler.landmarks,
         warnings: compiler.warnings,
     }
 }
@@ -103,6 +117,7 @@ struct Compiler<'s> {
     warnings: Vec<String>,
     /// Material nodes already converted, to share entries.
     materials: Vec<(Option<NodeId>, usize)>,
+    landmarks: Vec<Landmark>,
 }
 
 const MAX_WALK_DEPTH: usize = 256;
@@ -112,6 +127,25 @@ impl Compiler<'_> {
         if depth > MAX_WALK_DEPTH {
             return;
         }
+        let scene = self.scene;
+        if owner == Owner::Static && scene.node(node).proto_names.iter().any(|n| n == "Buoy") {
+            let first = self.graph.primitives.len();
+            self.walk_inner(node, frame, owner, depth);
+            let bounds = self.graph.primitives[first..].iter().fold(crate::geometry::Aabb::EMPTY, |b, p| b.union(p.bounds));
+            if !bounds.is_empty() {
+                let number = self.landmarks.len() + 1;
+                self.landmarks.push(Landmark {
+                    name: format!("buoy {number}"),
+                    center: glam::DVec2::new((bounds.min.x + bounds.max.x) / 2.0, (bounds.min.z + bounds.max.z) / 2.0),
+                    radius: (bounds.max.x - bounds.min.x).max(bounds.max.z - bounds.min.z) / 2.0,
+                });
+            }
+            return;
+        }
+        self.walk_inner(node, frame, owner, depth);
+    }
+
+    fn walk_inner(&mut self, node: NodeId, frame: &Frame, owner: Owner, depth: usize) {
         let scene = self.scene;
         match scene.type_name(node) {
             "Transform" | "Solid" => {

@@ -1,0 +1,209 @@
+//! The built-in controllers, chosen by a world's `controller` field and tuned by
+//! `controllerArgs` (`"key=value"` strings).
+//!
+//! - `none`: does nothing.
+//! - `braitenberg`: Mondada's obstacle avoider, the feed-forward network of the Khepera BIOS:
+//!   `speed = bias + irGain · Σ proximity[i]·w[i] / 400` per wheel, K-Team's weights.
+//! - `regatta`: the paper's controller: the Braitenberg network plus light seeking. The odd
+//!   filter's output is scanned for light-intensity maxima (a negative lobe followed by a
+//!   positive one, both beyond `minContrast` LSB); the maximum nearest the centre of the retina
+//!   steers the robot by `lightGain` pulses/10 ms per pixel of distance from the centre, added
+//!   to the network's output.
+
+use crate::khepera::{Controller, Khepera, KheperaError};
+use crate::retina::FilterKind;
+
+/// K-Team's weights, sensors 0…7 (khepera.md).
+pub const LEFT_WEIGHTS: [f64; 8] = [4.0, 4.0, 6.0, -18.0, -15.0, -5.0, 5.0, 3.0];
+pub const RIGHT_WEIGHTS: [f64; 8] = [-5.0, -15.0, -18.0, 6.0, 4.0, 4.0, 3.0, 5.0];
+
+/// Why a controller could not be built from a world's fields.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ControllerError {
+    #[error("unknown controller \"{0}\"; built in: none, braitenberg, regatta")]
+    Unknown(String),
+    #[error("controller argument \"{0}\" is not key=value")]
+    Malformed(String),
+    #[error("controller {controller} has no parameter \"{key}\"; it takes {known}")]
+    UnknownKey { controller: String, key: String, known: String },
+    #[error("controller argument {key}={value} is not a finite number")]
+    NotANumber { key: String, value: String },
+}
+
+/// Parameters of the built-in controllers, with their defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Parameters {
+    /// Multiplies the IR network (the paper doubled it in simulation).
+    pub ir_gain: f64,
+    /// The bias neurons' forward speed (pulses per 10 ms).
+    pub bias: f64,
+    /// Steering per pixel of light offset (pulses per 10 ms per pixel).
+    pub light_gain: f64,
+    /// Least odd-filter lobe, in LSB, that counts as a light edge.
+    pub min_contrast: f64,
+}
+
+impl Default for Parameters {
+    fn default() -> Parameters {
+        Parameters { ir_gain: 1.0, bias: 10.0, light_gain: 0.3, min_contrast: 1.5 }
+    }
+}
+
+const KEYS: &[&str] = &["irGain", "bias", "lightGain", "minContrast"];
+
+impl Parameters {
+    /// Reads `key=value` strings (each string may hold several, separated by spaces or commas).
+    pub fn parse(controller: &str, args: &[String]) -> Result<Parameters, ControllerError> {
+        let mut parameters = Parameters::default();
+        for arg in args.iter().flat_map(|a| a.split([' ', ',', ';'])).filter(|a| !a.is_empty()) {
+            let (key, value) = arg.split_once('=').ok_or_else(|| ControllerError::Malformed(arg.to_owned()))?;
+            let number: f64 = value.trim().parse().ok().filter(|v: &f64| v.is_finite()).ok_or_else(|| ControllerError::NotANumber { key: key.to_owned(), value: value.to_owned() })?;
+            match key.trim() {
+                "irGain" => parameters.ir_gain = number,
+                "bias" => parameters.bias = number,
+                "lightGain" => parameters.light_gain = number,
+                "minContrast" => parameters.min_contrast = number,
+                other => {
+                    return Err(ControllerError::UnknownKey { controller: controller.to_owned(), key: other.to_owned(), known: KEYS.join(", ") });
+                }
+            }
+        }
+        Ok(parameters)
+    }
+}
+
+/// Builds a built-in controller.
+pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, ControllerError> {
+    match name {
+        "none" | "" | "<none>" => Ok(Box::new(Idle)),
+        "braitenberg" => Ok(Box::new(Braitenberg { parameters: Parameters::parse(name, args)? })),
+        "regatta" => Ok(Box::new(Regatta { parameters: Parameters::parse(name, args)?, enabled: false })),
+        other => Err(ControllerError::Unknown(other.to_owned())),
+    }
+}
+
+/// Does nothing: the robot stays where it is.
+pub struct Idle;
+
+impl Controller for Idle {
+    fn step(&mut self, _robot: &mut dyn Khepera) -> Result<(), KheperaError> {
+        Ok(())
+    }
+}
+
+/// The IR network's wheel commands (pulses per 10 ms, unrounded).
+pub fn braitenberg_speeds(proximity: &[u16; 8], parameters: &Parameters) -> (f64, f64) {
+    let mut left = 0.0;
+    let mut right = 0.0;
+    for i in 0..8 {
+        left += proximity[i] as f64 * LEFT_WEIGHTS[i];
+        right += proximity[i] as f64 * RIGHT_WEIGHTS[i];
+    }
+    (parameters.bias + parameters.ir_gain * left / 400.0, parameters.bias + parameters.ir_gain * right / 400.0)
+}
+
+fn to_command(speed: f64) -> i32 {
+    libm::round(speed).clamp(-127.0, 127.0) as i32
+}
+
+/// Mondada's Braitenberg obstacle avoider.
+pub struct Braitenberg {
+    pub parameters: Parameters,
+}
+
+impl Controller for Braitenberg {
+    fn step(&mut self, robot: &mut dyn Khepera) -> Result<(), KheperaError> {
+        let proximity = robot.proximity()?;
+        let (left, right) = braitenberg_speeds(&proximity, &self.parameters);
+        robot.set_speed(to_command(left), to_command(right))
+    }
+}
+
+/// Light-intensity maxima in an odd-filter output (digital, `bits` bits): positions in pixels
+/// (between pixel i and i + 1 is i + 1.0, pixel edges counted from the region's first pixel).
+pub fn light_maxima(odd: &[u16], bits: u32, lambda: f64, min_contrast: f64) -> Vec<f64> {
+    let zero = ((1u32 << bits) - 1) as f64 / 2.0;
+    let signed: Vec<f64> = odd.iter().map(|&d| d as f64 - zero).collect();
+    let reach = (libm::ceil(3.0 * lambda) as usize).max(1);
+    let mut maxima = Vec::new();
+    for i in 0..signed.len().saturating_sub(1) {
+        if !(signed[i] < 0.0 && signed[i + 1] > 0.0) {
+            continue;
+        }
+        let before = signed[i.saturating_sub(reach - 1)..=i].iter().fold(f64::INFINITY, |m, &v| m.min(v));
+        let after = signed[i + 1..(i + 1 + reach).min(signed.len())].iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+        if before <= -min_contrast && after >= min_contrast {
+            maxima.push(i as f64 + 1.0);
+        }
+    }
+    maxima
+}
+
+/// The paper's regatta controller.
+pub struct Regatta {
+    pub parameters: Parameters,
+    enabled: bool,
+}
+
+impl Controller for Regatta {
+    fn step(&mut self, robot: &mut dyn Khepera) -> Result<(), KheperaError> {
+        let proximity = robot.proximity()?;
+        let (mut left, mut right) = braitenberg_speeds(&proximity, &self.parameters);
+        let turret = robot.panoramic().ok_or(KheperaError::NoDevice("Panoramic turret (the regatta controller needs one)"))?;
+        if !self.enabled {
+            turret.enable_filter(FilterKind::Odd)?;
+            self.enabled = true;
+        }
+        let odd = turret.read(FilterKind::Odd)?;
+        let (first, _) = turret.region_of_interest()?;
+        let bits = turret.bits()?;
+        let lambda = turret.lambda()?;
+        let centre = crate::retina::PIXELS as f64 / 2.0;
+        let nearest = light_maxima(&odd, bits, lambda, self.parameters.min_contrast)
+            .into_iter()
+            .map(|p| p + first as f64 - centre)
+            .min_by(|a, b| a.abs().total_cmp(&b.abs()));
+        if let Some(offset) = nearest {
+            // Right of centre (positive) turns right: left wheel faster.
+            left += self.parameters.light_gain * offset;
+            right -= self.parameters.light_gain * offset;
+        }
+        robot.set_speed(to_command(left), to_command(right))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn arguments_parse_and_reject_nonsense() {
+        let p = Parameters::parse("regatta", &["irGain=2".to_owned(), "bias=12 lightGain=0.5".to_owned()]).unwrap();
+        assert_eq!((p.ir_gain, p.bias, p.light_gain), (2.0, 12.0, 0.5));
+        assert!(matches!(Parameters::parse("regatta", &["gain=2".to_owned()]), Err(ControllerError::UnknownKey { .. })));
+        assert!(matches!(Parameters::parse("regatta", &["irGain".to_owned()]), Err(ControllerError::Malformed(_))));
+        assert!(matches!(Parameters::parse("regatta", &["irGain=NaN".to_owned()]), Err(ControllerError::NotANumber { .. })));
+        assert!(matches!(build("wander", &[]), Err(ControllerError::Unknown(_))));
+    }
+
+    #[test]
+    fn an_obstacle_on_the_left_turns_the_robot_right() {
+        let mut proximity = [0u16; 8];
+        proximity[1] = 800;
+        let (left, right) = braitenberg_speeds(&proximity, &Parameters::default());
+        assert!(left > right, "left {left} right {right}");
+    }
+
+    #[test]
+    fn a_bright_blob_is_found_between_its_lobes() {
+        // Negative lobe then positive lobe around pixel edge 40.
+        let mut odd = vec![32u16; 150];
+        for (i, v) in [(37, 30), (38, 28), (39, 25), (40, 40), (41, 36), (42, 34)] {
+            odd[i] = v;
+        }
+        assert_eq!(light_maxima(&odd, 6, 2.0, 1.5), vec![40.0]);
+        // Flicker between 31 and 32 is not a light.
+        let flicker: Vec<u16> = (0..150).map(|i| if i % 2 == 0 { 31 } else { 32 }).collect();
+        assert!(light_maxima(&flicker, 6, 2.0, 1.5).is_empty());
+    }
+}

@@ -1,0 +1,507 @@
+//! The runtime loop: fixed steps of `WorldInfo.basicTimeStep`. In each step, sensors that are
+//! due update (each at its own period), controllers read them and set wheel speeds, then
+//! kinematics and collisions run. All randomness comes from the run's seed, one stream per
+//! robot and per sensor; robots are visited in file order; nothing depends on wall time.
+
+pub mod kinematics;
+pub mod noise;
+pub mod sensors;
+pub mod world2d;
+
+use glam::DVec2;
+
+use crate::compile::rig::{Pose2, RobotRig, TurretRig};
+use crate::compile::Compiled;
+use crate::controllers;
+use crate::khepera::{Controller, Khepera, KheperaError, LedAction, LinearCameraTurret, PanoramicTurret};
+use crate::optics::{LinearCamera, LinearCameraOutput, Panoramic, Renderer, RetinaOutput};
+use crate::render::Poses;
+use crate::retina::FilterKind;
+use noise::{kind, Stream};
+use world2d::{Shape2, Slab};
+
+/// Why a simulation could not start.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SimError {
+    #[error("robot '{robot}': {source}")]
+    Controller {
+        robot: String,
+        #[source]
+        source: controllers::ControllerError,
+    },
+    #[error("the world's time step must be positive, found {0} s")]
+    TimeStep(f64),
+}
+
+/// Largest penetration left after a step's collision handling (m).
+pub const PENETRATION_TOLERANCE: f64 = 1e-9;
+
+/// Contact bookkeeping of one robot.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Contacts {
+    /// Times a contact began.
+    pub events: u64,
+    /// Steps that ended in contact.
+    pub steps: u64,
+    /// Longest unbroken contact (s).
+    pub longest: f64,
+    current: f64,
+    /// Contact events per obstacle (static obstacles, then robots).
+    pub per_obstacle: Vec<u64>,
+    touching: Vec<bool>,
+}
+
+/// Visits to the world's landmarks (buoys).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Visits {
+    /// Landmark indices in the order they were entered.
+    pub sequence: Vec<usize>,
+    inside: Vec<bool>,
+}
+
+/// The Panoramic turret of a simulated robot.
+pub struct PanoramicState {
+    pub model: Panoramic,
+    pub output: RetinaOutput,
+    due: f64,
+}
+
+/// The K213 of a simulated robot.
+pub struct LinearCameraState {
+    pub model: LinearCamera,
+    pub output: LinearCameraOutput,
+    due: f64,
+}
+
+/// One simulated robot.
+pub struct RobotState {
+    pub name: String,
+    pub pose: Pose2,
+    /// Wheel speed commands (pulses per 10 ms).
+    pub command: (i32, i32),
+    /// Wheel travel since the start (m), from which the encoders count.
+    pub travel: (f64, f64),
+    counter_offset: (i64, i64),
+    pub leds: [bool; 2],
+    pub proximity: [u16; 8],
+    pub ambient: [u16; 8],
+    ir_due: Vec<f64>,
+    ambient_due: Vec<f64>,
+    ir_streams: Vec<Stream>,
+    ambient_streams: Vec<Stream>,
+    wheel_stream: Stream,
+    pub panoramic: Option<PanoramicState>,
+    pub linear_camera: Option<LinearCameraState>,
+    controller: Option<Box<dyn Controller>>,
+    /// Controller calls that returned an error, and the last message.
+    pub controller_errors: u64,
+    pub last_controller_error: Option<String>,
+    pub contacts: Contacts,
+    pub visits: Visits,
+}
+
+impl RobotState {
+    /// The encoder counters (pulses), as the robot reports them.
+    pub fn counters(&self, rig: &RobotRig) -> (i32, i32) {
+        let pulses = |travel: f64, offset: i64| ((libm::floor(travel * rig.encoder_resolution) as i64) - offset) as i32;
+        (pulses(self.travel.0, self.counter_offset.0), pulses(self.travel.1, self.counter_offset.1))
+    }
+}
+
+/// A running world.
+pub struct Simulation<'c> {
+    pub compiled: &'c Compiled,
+    renderer: Option<Renderer<'c>>,
+    pub slab: Slab,
+    pub robots: Vec<RobotState>,
+    /// Simulated time (s) and steps done.
+    pub time: f64,
+    pub steps: u64,
+    pub time_step: f64,
+    pub seed: u64,
+}
+
+impl<'c> Simulation<'c> {
+    /// Starts a world with its built-in controllers; `seed` overrides the world's.
+    pub fn new(compiled: &'c Compiled, seed: Option<u64>) -> Result<Simulation<'c>, SimError> {
+        let time_step = compiled.settings.time_step;
+        if !(time_step > 0.0 && time_step.is_finite()) {
+            return Err(SimError::TimeStep(time_step));
+        }
+        let seed = seed.unwrap_or(compiled.settings.seed);
+        let slab = Slab::new(&compiled.graph, &compiled.rig);
+        let renderer = (compiled.plan.renderer != crate::compile::plan::RendererChoice::None).then(|| Renderer::new(&compiled.graph, &compiled.plan, false));
+        let landmarks = compiled.landmarks.len();
+        let obstacles = slab.obstacles.len() + compiled.rig.robots.len();
+        let mut robots = Vec::with_capacity(compiled.rig.robots.len());
+        for (index, rig) in compiled.rig.robots.iter().enumerate() {
+            let controller = controllers::build(&rig.controller, &rig.controller_args).map_err(|source| SimError::Controller { robot: rig.name.clone(), source })?;
+            robots.push(RobotState {
+                name: rig.name.clone(),
+                pose: rig.start,
+                command: (0, 0),
+                travel: (0.0, 0.0),
+                counter_offset: (0, 0),
+                leds: [false; 2],
+                proximity: [0; 8],
+                ambient: [0; 8],
+                ir_due: vec![0.0; rig.distance_sensors.len()],
+                ambient_due: vec![0.0; rig.light_sensors.len()],
+                ir_streams: (0..rig.distance_sensors.len()).map(|s| Stream::new(seed, index, kind::PROXIMITY, s)).collect(),
+                ambient_streams: (0..rig.light_sensors.len()).map(|s| Stream::new(seed, index, kind::AMBIENT, s)).collect(),
+                wheel_stream: Stream::new(seed, index, kind::WHEELS, 0),
+                panoramic: match &rig.turret {
+                    Some(TurretRig::Panoramic(p)) => Some(PanoramicState { model: Panoramic::new(p), output: RetinaOutput::default(), due: 0.0 }),
+                    _ => None,
+                },
+                linear_camera: match &rig.turret {
+                    Some(TurretRig::Linear(c)) => Some(LinearCameraState { model: LinearCamera::new(c), output: LinearCameraOutput::default(), due: 0.0 }),
+                    _ => None,
+                },
+                controller: Some(controller),
+                controller_errors: 0,
+                last_controller_error: None,
+                contacts: Contacts { per_obstacle: vec![0; obstacles], touching: vec![false; obstacles], ..Contacts::default() },
+                visits: Visits { sequence: Vec::new(), inside: vec![false; landmarks] },
+            });
+        }
+        let mut simulation = Simulation { compiled, renderer, slab, robots, time: 0.0, steps: 0, time_step, seed };
+        simulation.track_visits();
+        Ok(simulation)
+    }
+
+    /// Replaces a robot's controller (a library user's own).
+    pub fn set_controller(&mut self, robot: usize, controller: Box<dyn Controller>) {
+        self.robots[robot].controller = Some(controller);
+    }
+
+    fn poses(&self) -> Poses {
+        Poses { poses: self.robots.iter().map(|r| r.pose).collect(), floor_y: self.compiled.rig.robots.iter().map(|r| r.floor_y).collect() }
+    }
+
+    /// Advances the world by one step.
+    pub fn step(&mut self) {
+        let t = self.time;
+        self.update_sensors(t);
+        let rigs = &self.compiled.rig.robots;
+        for (index, robot) in self.robots.iter_mut().enumerate() {
+            let Some(mut controller) = robot.controller.take() else { continue };
+            let mut io = SimulatedKhepera { robot, rig: &rigs[index] };
+            if let Err(error) = controller.step(&mut io) {
+                robot.controller_errors += 1;
+                robot.last_controller_error = Some(error.to_string());
+            }
+            robot.controller = Some(controller);
+        }
+        self.move_robots();
+        self.steps += 1;
+        self.time = self.steps as f64 * self.time_step;
+        self.track_visits();
+    }
+
+    /// Runs `steps` steps.
+    pub fn run(&mut self, steps: u64) {
+        for _ in 0..steps {
+            self.step();
+        }
+    }
+
+    fn update_sensors(&mut self, t: f64) {
+        let compiled = self.compiled;
+        let poses = self.poses();
+        for (index, robot) in self.robots.iter_mut().enumerate() {
+            let rig = &compiled.rig.robots[index];
+            for (s, sensor) in rig.distance_sensors.iter().enumerate().take(8) {
+                if due(&mut robot.ir_due[s], t, sensor.period) {
+                    robot.proximity[s] = sensors::proximity(&self.slab, &poses, index, &compiled.rig.robots, sensor, &mut robot.ir_streams[s]);
+                }
+            }
+            for (s, sensor) in rig.light_sensors.iter().enumerate().take(8) {
+                if due(&mut robot.ambient_due[s], t, sensor.period) {
+                    robot.ambient[s] = sensors::ambient(compiled, &self.slab, &poses, index, sensor, &mut robot.ambient_streams[s]);
+                }
+            }
+            if let Some(renderer) = &self.renderer {
+                if let Some(turret) = &mut robot.panoramic {
+                    if due(&mut turret.due, t, turret.model.rig.period) {
+                        let view = renderer.view(&compiled.plan, &poses, index);
+                        turret.model.update(renderer, &view, robot.pose, rig.floor_y, &mut turret.output);
+                    }
+                }
+                if let Some(camera) = &mut robot.linear_camera {
+                    if due(&mut camera.due, t, camera.model.rig.period) {
+                        let view = renderer.view(&compiled.plan, &poses, index);
+                        camera.model.update(renderer, &view, robot.pose, rig.floor_y, &mut camera.output);
+                    }
+                }
+            }
+        }
+    }
+
+    fn move_robots(&mut self) {
+        let dt = self.time_step;
+        let rigs = &self.compiled.rig.robots;
+        // Wheel speeds (m/s) of every robot for this step.
+        let speeds: Vec<(f64, f64)> = self
+            .robots
+            .iter_mut()
+            .zip(rigs)
+            .map(|(robot, rig)| {
+                let to_metres = 100.0 / rig.encoder_resolution;
+                let clamp = |command: i32| (command as f64 * to_metres).clamp(-rig.max_speed, rig.max_speed);
+                let (mut left, mut right) = (clamp(robot.command.0), clamp(robot.command.1));
+                if rig.wheel_speed_noise > 0.0 {
+                    left *= 1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian();
+                    right *= 1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian();
+                }
+                (left, right)
+            })
+            .collect();
+        // Sub-steps short enough that no body crosses half its radius in one: no tunnelling.
+        let sub_steps = speeds
+            .iter()
+            .zip(rigs)
+            .map(|(&(l, r), rig)| libm::ceil(l.abs().max(r.abs()) * dt / (0.5 * rig.body_radius)) as usize)
+            .max()
+            .unwrap_or(1)
+            .clamp(1, 256);
+        let h = dt / sub_steps as f64;
+        let mut touched = vec![vec![false; self.slab.obstacles.len() + rigs.len()]; self.robots.len()];
+        for _ in 0..sub_steps {
+            for ((robot, rig), &(left, right)) in self.robots.iter_mut().zip(rigs).zip(&speeds) {
+                robot.pose = kinematics::advance(robot.pose, left, right, rig.axle_length, h);
+                robot.travel.0 += left * h;
+                robot.travel.1 += right * h;
+            }
+            self.resolve_collisions(&mut touched);
+        }
+        for (robot, touched) in self.robots.iter_mut().zip(touched) {
+            let contacts = &mut robot.contacts;
+            let any = touched.iter().any(|&t| t);
+            for (k, &now) in touched.iter().enumerate() {
+                if now && !contacts.touching[k] {
+                    contacts.per_obstacle[k] += 1;
+                }
+            }
+            if any && !contacts.touching.iter().any(|&t| t) {
+                contacts.events += 1;
+            }
+            if any {
+                contacts.steps += 1;
+                contacts.current += dt;
+                contacts.longest = contacts.longest.max(contacts.current);
+            } else {
+                contacts.current = 0.0;
+            }
+            contacts.touching = touched;
+        }
+    }
+
+    /// Pushes bodies out of obstacles and out of each other.
+    fn resolve_collisions(&mut self, touched: &mut [Vec<bool>]) {
+        let rigs = &self.compiled.rig.robots;
+        let statics = self.slab.obstacles.len();
+        for _ in 0..3 {
+            for (index, robot) in self.robots.iter_mut().enumerate() {
+                let rig = &rigs[index];
+                let (floor, top) = (rig.floor_y, rig.floor_y + rig.body_height);
+                for (k, obstacle) in self.slab.obstacles.iter().enumerate() {
+                    if obstacle.y1 <= floor + 1e-6 || obstacle.y0 >= top {
+                        continue;
+                    }
+                    let center = DVec2::new(robot.pose.x, robot.pose.z);
+                    if let Some((depth, normal)) = obstacle.shape.penetration(center, rig.body_radius) {
+                        let moved = center + normal * depth;
+                        robot.pose.x = moved.x;
+                        robot.pose.z = moved.y;
+                        touched[index][k] = true;
+                    } else if obstacle.shape.penetration(center, rig.body_radius + 1e-6).is_some() {
+                        touched[index][k] = true;
+                    }
+                }
+            }
+            for a in 0..self.robots.len() {
+                for b in a + 1..self.robots.len() {
+                    let (ra, rb) = (rigs[a].body_radius, rigs[b].body_radius);
+                    let ca = DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z);
+                    let cb = DVec2::new(self.robots[b].pose.x, self.robots[b].pose.z);
+                    if let Some((depth, normal)) = (Shape2::Circle { center: cb, radius: rb }).penetration(ca, ra) {
+                        let half = normal * (0.5 * depth);
+                        self.robots[a].pose.x += half.x;
+                        self.robots[a].pose.z += half.y;
+                        self.robots[b].pose.x -= half.x;
+                        self.robots[b].pose.z -= half.y;
+                        touched[a][statics + b] = true;
+                        touched[b][statics + a] = true;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Counts entries into each landmark's visit disc (its radius plus two body diameters).
+    fn track_visits(&mut self) {
+        let compiled = self.compiled;
+        for (robot, rig) in self.robots.iter_mut().zip(&compiled.rig.robots) {
+            for (k, landmark) in compiled.landmarks.iter().enumerate() {
+                let distance = DVec2::new(robot.pose.x - landmark.center.x, robot.pose.z - landmark.center.y).length();
+                let inside = distance <= landmark.radius + 4.0 * rig.body_radius;
+                if inside && !robot.visits.inside[k] {
+                    robot.visits.sequence.push(k);
+                }
+                robot.visits.inside[k] = inside;
+            }
+        }
+    }
+}
+
+/// Whether a sensor with `period` is due at `t`; moves its next due time on a regular grid.
+fn due(next: &mut f64, t: f64, period: f64) -> bool {
+    if period <= 0.0 {
+        return true;
+    }
+    if t + 1e-12 < *next {
+        return false;
+    }
+    *next = (libm::floor(t / period + 1e-9) + 1.0) * period;
+    true
+}
+
+/// The simulated robot behind the Khepera API.
+struct SimulatedKhepera<'a> {
+    robot: &'a mut RobotState,
+    rig: &'a RobotRig,
+}
+
+impl Khepera for SimulatedKhepera<'_> {
+    fn set_speed(&mut self, left: i32, right: i32) -> Result<(), KheperaError> {
+        for value in [left, right] {
+            if !(-127..=127).contains(&value) {
+                return Err(KheperaError::OutOfRange { what: "wheel speed", value: value as i64, range: "-127…127" });
+            }
+        }
+        self.robot.command = (left, right);
+        Ok(())
+    }
+
+    fn speed(&mut self) -> Result<(i32, i32), KheperaError> {
+        Ok(self.robot.command)
+    }
+
+    fn position(&mut self) -> Result<(i32, i32), KheperaError> {
+        Ok(self.robot.counters(self.rig))
+    }
+
+    fn set_position(&mut self, left: i32, right: i32) -> Result<(), KheperaError> {
+        let raw = |travel: f64| libm::floor(travel * self.rig.encoder_resolution) as i64;
+        self.robot.counter_offset = (raw(self.robot.travel.0) - left as i64, raw(self.robot.travel.1) - right as i64);
+        Ok(())
+    }
+
+    fn proximity(&mut self) -> Result<[u16; 8], KheperaError> {
+        Ok(self.robot.proximity)
+    }
+
+    fn ambient(&mut self) -> Result<[u16; 8], KheperaError> {
+        Ok(self.robot.ambient)
+    }
+
+    fn set_led(&mut self, led: u8, action: LedAction) -> Result<(), KheperaError> {
+        let slot = self.robot.leds.get_mut(led as usize).ok_or(KheperaError::OutOfRange { what: "LED", value: led as i64, range: "0…1" })?;
+        *slot = match action {
+            LedAction::Off => false,
+            LedAction::On => true,
+            LedAction::Toggle => !*slot,
+        };
+        Ok(())
+    }
+
+    fn panoramic(&mut self) -> Option<&mut dyn PanoramicTurret> {
+        self.robot.panoramic.as_mut().map(|p| p as &mut dyn PanoramicTurret)
+    }
+
+    fn linear_camera(&mut self) -> Option<&mut dyn LinearCameraTurret> {
+        self.robot.linear_camera.as_mut().map(|c| c as &mut dyn LinearCameraTurret)
+    }
+}
+
+impl PanoramicState {
+    fn reconfigure(&mut self, change: impl FnOnce(&mut crate::compile::rig::PanoramicRig)) {
+        let mut rig = self.model.rig.clone();
+        change(&mut rig);
+        self.model.reconfigure(rig);
+        // Filters depend on analog[] alone: recompute them now rather than at the next update.
+        if !self.output.luminance.is_empty() {
+            self.model.process(&mut self.output);
+        }
+    }
+}
+
+impl PanoramicTurret for PanoramicState {
+    fn enable_filter(&mut self, filter: FilterKind) -> Result<(), KheperaError> {
+        if !self.model.rig.filters.contains(filter) {
+            self.reconfigure(|rig| rig.filters.insert(filter));
+        }
+        Ok(())
+    }
+
+    fn disable_filter(&mut self, filter: FilterKind) -> Result<(), KheperaError> {
+        if self.model.rig.filters.contains(filter) {
+            self.reconfigure(|rig| rig.filters.remove(filter));
+        }
+        Ok(())
+    }
+
+    fn read(&mut self, filter: FilterKind) -> Result<Vec<u16>, KheperaError> {
+        if !self.model.rig.filters.contains(filter) {
+            return Err(KheperaError::FilterNotEnabled(filter.name()));
+        }
+        Ok(self.output.digital.iter().find(|(k, _)| *k == filter).map(|(_, d)| d.clone()).unwrap_or_default())
+    }
+
+    fn set_lambda(&mut self, lambda: f64) -> Result<(), KheperaError> {
+        if !(lambda > 0.0 && lambda.is_finite()) {
+            return Err(KheperaError::OutOfRange { what: "λ (×1000)", value: (lambda * 1000.0) as i64, range: "> 0" });
+        }
+        self.reconfigure(|rig| rig.lambda = lambda);
+        Ok(())
+    }
+
+    fn set_bits(&mut self, bits: u32) -> Result<(), KheperaError> {
+        if !(1..=16).contains(&bits) {
+            return Err(KheperaError::OutOfRange { what: "bits", value: bits as i64, range: "1…16" });
+        }
+        self.reconfigure(|rig| rig.bits = bits);
+        Ok(())
+    }
+
+    fn set_region_of_interest(&mut self, first: usize, last: usize) -> Result<(), KheperaError> {
+        if first > last || last >= crate::retina::PIXELS {
+            return Err(KheperaError::OutOfRange { what: "region of interest end", value: last as i64, range: "first ≤ last ≤ 149" });
+        }
+        self.reconfigure(|rig| rig.roi = (first, last));
+        Ok(())
+    }
+
+    fn region_of_interest(&mut self) -> Result<(usize, usize), KheperaError> {
+        Ok(self.model.rig.roi)
+    }
+
+    fn bits(&mut self) -> Result<u32, KheperaError> {
+        Ok(self.model.rig.bits)
+    }
+
+    fn lambda(&mut self) -> Result<f64, KheperaError> {
+        Ok(self.model.rig.lambda)
+    }
+}
+
+impl LinearCameraTurret for LinearCameraState {
+    fn pixels(&mut self) -> Result<Vec<u16>, KheperaError> {
+        Ok(self.output.digital.clone())
+    }
+
+    fn light_level(&mut self) -> Result<u16, KheperaError> {
+        Ok(self.output.light_level)
+    }
+}

@@ -1,0 +1,192 @@
+//! The Khepera's IR proximity and ambient light sensors.
+//!
+//! IR model: a sensor casts `numberOfRays` horizontal rays spread evenly over its aperture
+//! (the extreme rays at ±aperture/2). Each ray's distance to the first obstacle at the
+//! sensor's height gives a value from the lookup table (linear between rows, the last row's
+//! value beyond), scaled by the obstacle's `irReflectance`. The rays are averaged with weights
+//! cos(offset), so a flat wall square ahead gives the table's value and a thin cylinder, which
+//! only the central rays hit, gives less — the small IR cross-section of the paper's buoys.
+//! Noise: the table's third column is a relative standard deviation, applied once per
+//! reading from the sensor's own seeded stream. Values are rounded and clamped to 0…1023.
+//!
+//! Ambient model: the irradiance at the sensor is Σ over lights of
+//! `colour luminance × attenuation × spot × (intensity·max(0, n·l) + ambientIntensity)`
+//! (VRML97's terms without a surface colour), n the sensor's looking direction; with
+//! `occlusion TRUE` a point or spot light hidden by an obstacle at the sensor's height gives
+//! nothing. The lookup table maps irradiance to the value (about 500 in the dark, less when
+//! bright), noise as for IR.
+
+use glam::{DVec2, DVec3};
+
+use super::noise::Stream;
+use super::world2d::{Shape2, Slab};
+use crate::compile::graph::{LightKind, Owner};
+use crate::compile::rig::{DistanceSensorRig, LightSensorRig, RobotRig};
+use crate::compile::Compiled;
+use crate::render::Poses;
+use crate::retina::luminance;
+
+/// Value and relative noise of a lookup table at `x` (rows sorted by their first column).
+pub fn lookup(table: &[[f64; 3]], x: f64) -> (f64, f64) {
+    let Some(first) = table.first() else { return (0.0, 0.0) };
+    if x <= first[0] {
+        return (first[1], first[2]);
+    }
+    for pair in table.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        if x <= b[0] {
+            let span = b[0] - a[0];
+            let f = if span > 0.0 { (x - a[0]) / span } else { 1.0 };
+            return (a[1] + (b[1] - a[1]) * f, a[2] + (b[2] - a[2]) * f);
+        }
+    }
+    let last = table[table.len() - 1];
+    (last[1], last[2])
+}
+
+fn rotate(v: DVec2, angle: f64) -> DVec2 {
+    // Counter-clockwise seen from above, in (x, z): the same sense as headings.
+    let (s, c) = (libm::sin(angle), libm::cos(angle));
+    DVec2::new(c * v.x + s * v.y, -s * v.x + c * v.y)
+}
+
+/// One proximity reading, 0…1023.
+pub fn proximity(slab: &Slab, poses: &Poses, robot: usize, rigs: &[RobotRig], sensor: &DistanceSensorRig, stream: &mut Stream) -> u16 {
+    let pose = poses.poses[robot];
+    let origin = pose.to_world(sensor.position, poses.floor_y[robot]);
+    let height = origin.y;
+    let origin2 = DVec2::new(origin.x, origin.z);
+    let looking = pose.direction_to_world(sensor.direction);
+    let direction = DVec2::new(looking.x, looking.z).normalize_or(DVec2::X);
+    let rays = sensor.rays.max(1);
+    let (mut value_sum, mut noise_sum, mut weight_sum) = (0.0, 0.0, 0.0);
+    for i in 0..rays {
+        let offset = if rays == 1 { 0.0 } else { -0.5 * sensor.aperture + sensor.aperture * i as f64 / (rays - 1) as f64 };
+        let weight = libm::cos(offset);
+        let ray = rotate(direction, offset);
+        let mut nearest = sensor.range;
+        let mut reflectance = 0.0;
+        for obstacle in &slab.obstacles {
+            if height < obstacle.y0 || height > obstacle.y1 {
+                continue;
+            }
+            if let Some(t) = obstacle.shape.ray(origin2, ray) {
+                if t < nearest {
+                    nearest = t;
+                    reflectance = obstacle.ir_reflectance;
+                }
+            }
+        }
+        for (other, pose) in poses.poses.iter().enumerate() {
+            if other == robot {
+                continue;
+            }
+            let floor = poses.floor_y[other];
+            if height < floor || height > floor + rigs[other].body_height {
+                continue;
+            }
+            let body = Shape2::Circle { center: DVec2::new(pose.x, pose.z), radius: rigs[other].body_radius };
+            if let Some(t) = body.ray(origin2, ray) {
+                if t < nearest {
+                    nearest = t;
+                    reflectance = slab.robot_reflectance.get(other).copied().unwrap_or(1.0);
+                }
+            }
+        }
+        let (value, noise) = if nearest < sensor.range { lookup(&sensor.lookup, nearest) } else { lookup(&sensor.lookup, f64::INFINITY) };
+        let value = if nearest < sensor.range { value * reflectance } else { value };
+        value_sum += weight * value;
+        noise_sum += weight * noise * value;
+        weight_sum += weight;
+    }
+    let mean = value_sum / weight_sum;
+    let spread = noise_sum / weight_sum;
+    let reading = mean + spread * stream.gaussian();
+    libm::round(reading).clamp(0.0, 1023.0) as u16
+}
+
+/// One ambient light reading, 0…1023.
+pub fn ambient(compiled: &Compiled, slab: &Slab, poses: &Poses, robot: usize, sensor: &LightSensorRig, stream: &mut Stream) -> u16 {
+    let pose = poses.poses[robot];
+    let position = pose.to_world(sensor.position, poses.floor_y[robot]);
+    let normal = pose.direction_to_world(sensor.direction).normalize_or(DVec3::X);
+    let mut irradiance = 0.0;
+    for &index in &compiled.plan.lights {
+        let light = &compiled.graph.lights[index];
+        let frame = match light.owner {
+            Owner::Robot(owner) if owner < poses.poses.len() => Some(poses.frame(owner)),
+            _ => None,
+        };
+        let place = |p: DVec3| frame.map_or(p, |f| f.apply(p));
+        let turn = |v: DVec3| frame.map_or(v, |f| f.apply_vector(v));
+        let colour = luminance(light.color);
+        let (to_light, attenuation, spot, location) = match &light.kind {
+            LightKind::Directional { direction } => (-turn(*direction).normalize_or_zero(), 1.0, 1.0, None),
+            LightKind::Point { location, radius, attenuation } => {
+                let location = place(*location);
+                let offset = location - position;
+                let distance = offset.length();
+                if distance > *radius {
+                    continue;
+                }
+                (offset / distance.max(1e-300), attenuate(*attenuation, distance), 1.0, Some(location))
+            }
+            LightKind::Spot { location, direction, radius, attenuation, beam_width, cut_off } => {
+                let location = place(*location);
+                let offset = location - position;
+                let distance = offset.length();
+                if distance > *radius {
+                    continue;
+                }
+                let to_light = offset / distance.max(1e-300);
+                let angle = libm::acos((-to_light).dot(turn(*direction).normalize_or_zero()).clamp(-1.0, 1.0));
+                let spot = if angle >= *cut_off {
+                    0.0
+                } else if angle <= *beam_width {
+                    1.0
+                } else {
+                    (angle - cut_off) / (beam_width - cut_off)
+                };
+                (to_light, attenuate(*attenuation, distance), spot, Some(location))
+            }
+        };
+        if let (true, Some(location)) = (sensor.occlusion, location) {
+            if blocked(slab, position, location) {
+                continue;
+            }
+        }
+        irradiance += colour * attenuation * spot * (light.intensity * normal.dot(to_light).max(0.0) + light.ambient_intensity);
+    }
+    let (value, noise) = lookup(&sensor.lookup, irradiance);
+    let reading = value * (1.0 + noise * stream.gaussian());
+    libm::round(reading).clamp(0.0, 1023.0) as u16
+}
+
+fn attenuate(coefficients: DVec3, distance: f64) -> f64 {
+    1.0 / (coefficients.x + coefficients.y * distance + coefficients.z * distance * distance).max(1.0)
+}
+
+/// Whether an obstacle at the sensor's height stands between the sensor and a light.
+fn blocked(slab: &Slab, from: DVec3, to: DVec3) -> bool {
+    let origin = DVec2::new(from.x, from.z);
+    let offset = DVec2::new(to.x - from.x, to.z - from.z);
+    let distance = offset.length();
+    if distance == 0.0 {
+        return false;
+    }
+    let direction = offset / distance;
+    slab.obstacles.iter().any(|o| from.y >= o.y0 && from.y <= o.y1 && o.shape.ray(origin, direction).is_some_and(|t| t > 1e-9 && t < distance))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lookup_interpolates_and_clamps() {
+        let table = [[0.0, 1023.0, 0.0], [0.02, 1023.0, 0.01], [0.04, 0.0, 0.0]];
+        assert_eq!(lookup(&table, -1.0).0, 1023.0);
+        assert!((lookup(&table, 0.03).0 - 511.5).abs() < 1e-9);
+        assert_eq!(lookup(&table, 1.0).0, 0.0);
+    }
+}
