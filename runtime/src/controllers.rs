@@ -25,7 +25,11 @@ pub enum ControllerError {
     #[error("controller argument \"{0}\" is not key=value")]
     Malformed(String),
     #[error("controller {controller} has no parameter \"{key}\"; it takes {known}")]
-    UnknownKey { controller: String, key: String, known: String },
+    UnknownKey {
+        controller: String,
+        key: String,
+        known: String,
+    },
     #[error("controller argument {key}={value} is not a finite number")]
     NotANumber { key: String, value: String },
 }
@@ -45,7 +49,12 @@ pub struct Parameters {
 
 impl Default for Parameters {
     fn default() -> Parameters {
-        Parameters { ir_gain: 1.0, bias: 10.0, light_gain: 0.3, min_contrast: 1.5 }
+        Parameters {
+            ir_gain: 1.0,
+            bias: 10.0,
+            light_gain: 0.1,
+            min_contrast: 1.5,
+        }
     }
 }
 
@@ -55,16 +64,34 @@ impl Parameters {
     /// Reads `key=value` strings (each string may hold several, separated by spaces or commas).
     pub fn parse(controller: &str, args: &[String]) -> Result<Parameters, ControllerError> {
         let mut parameters = Parameters::default();
-        for arg in args.iter().flat_map(|a| a.split([' ', ',', ';'])).filter(|a| !a.is_empty()) {
-            let (key, value) = arg.split_once('=').ok_or_else(|| ControllerError::Malformed(arg.to_owned()))?;
-            let number: f64 = value.trim().parse().ok().filter(|v: &f64| v.is_finite()).ok_or_else(|| ControllerError::NotANumber { key: key.to_owned(), value: value.to_owned() })?;
+        for arg in args
+            .iter()
+            .flat_map(|a| a.split([' ', ',', ';']))
+            .filter(|a| !a.is_empty())
+        {
+            let (key, value) = arg
+                .split_once('=')
+                .ok_or_else(|| ControllerError::Malformed(arg.to_owned()))?;
+            let number: f64 = value
+                .trim()
+                .parse()
+                .ok()
+                .filter(|v: &f64| v.is_finite())
+                .ok_or_else(|| ControllerError::NotANumber {
+                    key: key.to_owned(),
+                    value: value.to_owned(),
+                })?;
             match key.trim() {
                 "irGain" => parameters.ir_gain = number,
                 "bias" => parameters.bias = number,
                 "lightGain" => parameters.light_gain = number,
                 "minContrast" => parameters.min_contrast = number,
                 other => {
-                    return Err(ControllerError::UnknownKey { controller: controller.to_owned(), key: other.to_owned(), known: KEYS.join(", ") });
+                    return Err(ControllerError::UnknownKey {
+                        controller: controller.to_owned(),
+                        key: other.to_owned(),
+                        known: KEYS.join(", "),
+                    });
                 }
             }
         }
@@ -76,8 +103,13 @@ impl Parameters {
 pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, ControllerError> {
     match name {
         "none" | "" | "<none>" => Ok(Box::new(Idle)),
-        "braitenberg" => Ok(Box::new(Braitenberg { parameters: Parameters::parse(name, args)? })),
-        "regatta" => Ok(Box::new(Regatta { parameters: Parameters::parse(name, args)?, enabled: false })),
+        "braitenberg" => Ok(Box::new(Braitenberg {
+            parameters: Parameters::parse(name, args)?,
+        })),
+        "regatta" => Ok(Box::new(Regatta {
+            parameters: Parameters::parse(name, args)?,
+            enabled: false,
+        })),
         other => Err(ControllerError::Unknown(other.to_owned())),
     }
 }
@@ -99,7 +131,10 @@ pub fn braitenberg_speeds(proximity: &[u16; 8], parameters: &Parameters) -> (f64
         left += proximity[i] as f64 * LEFT_WEIGHTS[i];
         right += proximity[i] as f64 * RIGHT_WEIGHTS[i];
     }
-    (parameters.bias + parameters.ir_gain * left / 400.0, parameters.bias + parameters.ir_gain * right / 400.0)
+    (
+        parameters.bias + parameters.ir_gain * left / 400.0,
+        parameters.bias + parameters.ir_gain * right / 400.0,
+    )
 }
 
 fn to_command(speed: f64) -> i32 {
@@ -119,24 +154,39 @@ impl Controller for Braitenberg {
     }
 }
 
-/// Light-intensity maxima in an odd-filter output (digital, `bits` bits): positions in pixels
-/// (between pixel i and i + 1 is i + 1.0, pixel edges counted from the region's first pixel).
-pub fn light_maxima(odd: &[u16], bits: u32, lambda: f64, min_contrast: f64) -> Vec<f64> {
+/// Light-intensity maxima in an odd-filter output (digital, `bits` bits).
+///
+/// The odd filter answers a bright patch with a negative lobe at its left edge and a positive
+/// lobe at its right edge (pixel index grows clockwise). Lobes are runs beyond `min_contrast`
+/// LSB from zero; a negative lobe followed directly by a positive one is a maximum, placed
+/// midway between them (in pixel-edge units from the region's first pixel), however wide the
+/// patch is.
+pub fn light_maxima(odd: &[u16], bits: u32, min_contrast: f64) -> Vec<f64> {
     let zero = ((1u32 << bits) - 1) as f64 / 2.0;
-    let signed: Vec<f64> = odd.iter().map(|&d| d as f64 - zero).collect();
-    let reach = (libm::ceil(3.0 * lambda) as usize).max(1);
-    let mut maxima = Vec::new();
-    for i in 0..signed.len().saturating_sub(1) {
-        if !(signed[i] < 0.0 && signed[i + 1] > 0.0) {
+    // Lobes as (sign, first index, last index).
+    let mut lobes: Vec<(i8, usize, usize)> = Vec::new();
+    for (i, &d) in odd.iter().enumerate() {
+        let value = d as f64 - zero;
+        let sign = if value <= -min_contrast {
+            -1
+        } else if value >= min_contrast {
+            1
+        } else {
+            0
+        };
+        if sign == 0 {
             continue;
         }
-        let before = signed[i.saturating_sub(reach - 1)..=i].iter().fold(f64::INFINITY, |m, &v| m.min(v));
-        let after = signed[i + 1..(i + 1 + reach).min(signed.len())].iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
-        if before <= -min_contrast && after >= min_contrast {
-            maxima.push(i as f64 + 1.0);
+        match lobes.last_mut() {
+            Some((s, _, last)) if *s == sign && *last + 1 == i => *last = i,
+            _ => lobes.push((sign, i, i)),
         }
     }
-    maxima
+    lobes
+        .windows(2)
+        .filter(|pair| pair[0].0 < 0 && pair[1].0 > 0)
+        .map(|pair| (pair[0].2 as f64 + 1.0 + pair[1].1 as f64) / 2.0)
+        .collect()
 }
 
 /// The paper's regatta controller.
@@ -149,7 +199,9 @@ impl Controller for Regatta {
     fn step(&mut self, robot: &mut dyn Khepera) -> Result<(), KheperaError> {
         let proximity = robot.proximity()?;
         let (mut left, mut right) = braitenberg_speeds(&proximity, &self.parameters);
-        let turret = robot.panoramic().ok_or(KheperaError::NoDevice("Panoramic turret (the regatta controller needs one)"))?;
+        let turret = robot.panoramic().ok_or(KheperaError::NoDevice(
+            "Panoramic turret (the regatta controller needs one)",
+        ))?;
         if !self.enabled {
             turret.enable_filter(FilterKind::Odd)?;
             self.enabled = true;
@@ -157,9 +209,8 @@ impl Controller for Regatta {
         let odd = turret.read(FilterKind::Odd)?;
         let (first, _) = turret.region_of_interest()?;
         let bits = turret.bits()?;
-        let lambda = turret.lambda()?;
         let centre = crate::retina::PIXELS as f64 / 2.0;
-        let nearest = light_maxima(&odd, bits, lambda, self.parameters.min_contrast)
+        let nearest = light_maxima(&odd, bits, self.parameters.min_contrast)
             .into_iter()
             .map(|p| p + first as f64 - centre)
             .min_by(|a, b| a.abs().total_cmp(&b.abs()));
@@ -178,12 +229,28 @@ mod tests {
 
     #[test]
     fn arguments_parse_and_reject_nonsense() {
-        let p = Parameters::parse("regatta", &["irGain=2".to_owned(), "bias=12 lightGain=0.5".to_owned()]).unwrap();
+        let p = Parameters::parse(
+            "regatta",
+            &["irGain=2".to_owned(), "bias=12 lightGain=0.5".to_owned()],
+        )
+        .unwrap();
         assert_eq!((p.ir_gain, p.bias, p.light_gain), (2.0, 12.0, 0.5));
-        assert!(matches!(Parameters::parse("regatta", &["gain=2".to_owned()]), Err(ControllerError::UnknownKey { .. })));
-        assert!(matches!(Parameters::parse("regatta", &["irGain".to_owned()]), Err(ControllerError::Malformed(_))));
-        assert!(matches!(Parameters::parse("regatta", &["irGain=NaN".to_owned()]), Err(ControllerError::NotANumber { .. })));
-        assert!(matches!(build("wander", &[]), Err(ControllerError::Unknown(_))));
+        assert!(matches!(
+            Parameters::parse("regatta", &["gain=2".to_owned()]),
+            Err(ControllerError::UnknownKey { .. })
+        ));
+        assert!(matches!(
+            Parameters::parse("regatta", &["irGain".to_owned()]),
+            Err(ControllerError::Malformed(_))
+        ));
+        assert!(matches!(
+            Parameters::parse("regatta", &["irGain=NaN".to_owned()]),
+            Err(ControllerError::NotANumber { .. })
+        ));
+        assert!(matches!(
+            build("wander", &[]),
+            Err(ControllerError::Unknown(_))
+        ));
     }
 
     #[test]
@@ -201,9 +268,15 @@ mod tests {
         for (i, v) in [(37, 30), (38, 28), (39, 25), (40, 40), (41, 36), (42, 34)] {
             odd[i] = v;
         }
-        assert_eq!(light_maxima(&odd, 6, 2.0, 1.5), vec![40.0]);
+        assert_eq!(light_maxima(&odd, 6, 1.5), vec![40.0]);
+        // A wide patch: lobes at its edges only, the maximum in its middle.
+        let mut wide = vec![32u16; 150];
+        for (i, v) in [(60, 28), (61, 29), (90, 36), (91, 35)] {
+            wide[i] = v;
+        }
+        assert_eq!(light_maxima(&wide, 6, 1.5), vec![76.0]);
         // Flicker between 31 and 32 is not a light.
         let flicker: Vec<u16> = (0..150).map(|i| if i % 2 == 0 { 31 } else { 32 }).collect();
-        assert!(light_maxima(&flicker, 6, 2.0, 1.5).is_empty());
+        assert!(light_maxima(&flicker, 6, 1.5).is_empty());
     }
 }

@@ -15,7 +15,11 @@ pub enum KheperaError {
     #[error("filter {0} is not enabled; enable it before reading it")]
     FilterNotEnabled(&'static str),
     #[error("{what} {value} is out of range ({range})")]
-    OutOfRange { what: &'static str, value: i64, range: &'static str },
+    OutOfRange {
+        what: &'static str,
+        value: i64,
+        range: &'static str,
+    },
     #[error("link to the robot failed: {0}")]
     Link(String),
     #[error("the robot answered {got:?} to {command:?}")]

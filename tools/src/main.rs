@@ -7,6 +7,7 @@ mod check;
 mod explain;
 mod fmt;
 mod render;
+mod run;
 mod schema;
 mod world;
 
@@ -47,6 +48,8 @@ enum Command {
     Explain(explain::Args),
     /// Render what each robot's vision device sees, stage by stage (PNG or JSON).
     Render(render::Args),
+    /// Step a world and print a summary: time, speed, contacts, buoy visits.
+    Run(run::Args),
 }
 
 /// What a subcommand reports back.
@@ -81,6 +84,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(args),
         Command::Explain(args) => explain::run(args, color),
         Command::Render(args) => render::run(args, color),
+        Command::Run(args) => run::run(args, color),
     };
     match result {
         Ok(Outcome::Clean) => ExitCode::SUCCESS,

@@ -131,12 +131,17 @@ impl Compiler<'_> {
         if owner == Owner::Static && scene.node(node).proto_names.iter().any(|n| n == "Buoy") {
             let first = self.graph.primitives.len();
             self.walk_inner(node, frame, owner, depth);
-            let bounds = self.graph.primitives[first..].iter().fold(crate::geometry::Aabb::EMPTY, |b, p| b.union(p.bounds));
+            let bounds = self.graph.primitives[first..]
+                .iter()
+                .fold(crate::geometry::Aabb::EMPTY, |b, p| b.union(p.bounds));
             if !bounds.is_empty() {
                 let number = self.landmarks.len() + 1;
                 self.landmarks.push(Landmark {
                     name: format!("buoy {number}"),
-                    center: glam::DVec2::new((bounds.min.x + bounds.max.x) / 2.0, (bounds.min.z + bounds.max.z) / 2.0),
+                    center: glam::DVec2::new(
+                        (bounds.min.x + bounds.max.x) / 2.0,
+                        (bounds.min.z + bounds.max.z) / 2.0,
+                    ),
                     radius: (bounds.max.x - bounds.min.x).max(bounds.max.z - bounds.min.z) / 2.0,
                 });
             }

@@ -50,7 +50,11 @@ mod tests {
 
     #[test]
     fn straight_and_turning_on_the_spot() {
-        let start = Pose2 { x: 0.0, z: 0.0, heading: 0.0 };
+        let start = Pose2 {
+            x: 0.0,
+            z: 0.0,
+            heading: 0.0,
+        };
         let moved = advance(start, 0.1, 0.1, 0.053, 1.0);
         assert!((moved.x - 0.1).abs() < 1e-15 && moved.z.abs() < 1e-15);
         let spun = advance(start, -0.01, 0.01, 0.053, 1.0);
@@ -60,7 +64,17 @@ mod tests {
 
     #[test]
     fn left_wheel_slower_turns_left_counter_clockwise() {
-        let pose = advance(Pose2 { x: 0.0, z: 0.0, heading: 0.0 }, 0.05, 0.1, 0.053, 0.5);
+        let pose = advance(
+            Pose2 {
+                x: 0.0,
+                z: 0.0,
+                heading: 0.0,
+            },
+            0.05,
+            0.1,
+            0.053,
+            0.5,
+        );
         assert!(pose.heading > 0.0, "counter-clockwise");
         assert!(pose.z < 0.0, "towards −z, the robot's left");
     }

@@ -13,7 +13,9 @@ use glam::DVec2;
 use crate::compile::rig::{Pose2, RobotRig, TurretRig};
 use crate::compile::Compiled;
 use crate::controllers;
-use crate::khepera::{Controller, Khepera, KheperaError, LedAction, LinearCameraTurret, PanoramicTurret};
+use crate::khepera::{
+    Controller, Khepera, KheperaError, LedAction, LinearCameraTurret, PanoramicTurret,
+};
 use crate::optics::{LinearCamera, LinearCameraOutput, Panoramic, Renderer, RetinaOutput};
 use crate::render::Poses;
 use crate::retina::FilterKind;
@@ -103,8 +105,13 @@ pub struct RobotState {
 impl RobotState {
     /// The encoder counters (pulses), as the robot reports them.
     pub fn counters(&self, rig: &RobotRig) -> (i32, i32) {
-        let pulses = |travel: f64, offset: i64| ((libm::floor(travel * rig.encoder_resolution) as i64) - offset) as i32;
-        (pulses(self.travel.0, self.counter_offset.0), pulses(self.travel.1, self.counter_offset.1))
+        let pulses = |travel: f64, offset: i64| {
+            ((libm::floor(travel * rig.encoder_resolution) as i64) - offset) as i32
+        };
+        (
+            pulses(self.travel.0, self.counter_offset.0),
+            pulses(self.travel.1, self.counter_offset.1),
+        )
     }
 }
 
@@ -130,12 +137,19 @@ impl<'c> Simulation<'c> {
         }
         let seed = seed.unwrap_or(compiled.settings.seed);
         let slab = Slab::new(&compiled.graph, &compiled.rig);
-        let renderer = (compiled.plan.renderer != crate::compile::plan::RendererChoice::None).then(|| Renderer::new(&compiled.graph, &compiled.plan, false));
+        let renderer = (compiled.plan.renderer != crate::compile::plan::RendererChoice::None)
+            .then(|| Renderer::new(&compiled.graph, &compiled.plan, false));
         let landmarks = compiled.landmarks.len();
         let obstacles = slab.obstacles.len() + compiled.rig.robots.len();
         let mut robots = Vec::with_capacity(compiled.rig.robots.len());
         for (index, rig) in compiled.rig.robots.iter().enumerate() {
-            let controller = controllers::build(&rig.controller, &rig.controller_args).map_err(|source| SimError::Controller { robot: rig.name.clone(), source })?;
+            let controller =
+                controllers::build(&rig.controller, &rig.controller_args).map_err(|source| {
+                    SimError::Controller {
+                        robot: rig.name.clone(),
+                        source,
+                    }
+                })?;
             robots.push(RobotState {
                 name: rig.name.clone(),
                 pose: rig.start,
@@ -147,25 +161,53 @@ impl<'c> Simulation<'c> {
                 ambient: [0; 8],
                 ir_due: vec![0.0; rig.distance_sensors.len()],
                 ambient_due: vec![0.0; rig.light_sensors.len()],
-                ir_streams: (0..rig.distance_sensors.len()).map(|s| Stream::new(seed, index, kind::PROXIMITY, s)).collect(),
-                ambient_streams: (0..rig.light_sensors.len()).map(|s| Stream::new(seed, index, kind::AMBIENT, s)).collect(),
+                ir_streams: (0..rig.distance_sensors.len())
+                    .map(|s| Stream::new(seed, index, kind::PROXIMITY, s))
+                    .collect(),
+                ambient_streams: (0..rig.light_sensors.len())
+                    .map(|s| Stream::new(seed, index, kind::AMBIENT, s))
+                    .collect(),
                 wheel_stream: Stream::new(seed, index, kind::WHEELS, 0),
                 panoramic: match &rig.turret {
-                    Some(TurretRig::Panoramic(p)) => Some(PanoramicState { model: Panoramic::new(p), output: RetinaOutput::default(), due: 0.0 }),
+                    Some(TurretRig::Panoramic(p)) => Some(PanoramicState {
+                        model: Panoramic::new(p),
+                        output: RetinaOutput::default(),
+                        due: 0.0,
+                    }),
                     _ => None,
                 },
                 linear_camera: match &rig.turret {
-                    Some(TurretRig::Linear(c)) => Some(LinearCameraState { model: LinearCamera::new(c), output: LinearCameraOutput::default(), due: 0.0 }),
+                    Some(TurretRig::Linear(c)) => Some(LinearCameraState {
+                        model: LinearCamera::new(c),
+                        output: LinearCameraOutput::default(),
+                        due: 0.0,
+                    }),
                     _ => None,
                 },
                 controller: Some(controller),
                 controller_errors: 0,
                 last_controller_error: None,
-                contacts: Contacts { per_obstacle: vec![0; obstacles], touching: vec![false; obstacles], ..Contacts::default() },
-                visits: Visits { sequence: Vec::new(), inside: vec![false; landmarks] },
+                contacts: Contacts {
+                    per_obstacle: vec![0; obstacles],
+                    touching: vec![false; obstacles],
+                    ..Contacts::default()
+                },
+                visits: Visits {
+                    sequence: Vec::new(),
+                    inside: vec![false; landmarks],
+                },
             });
         }
-        let mut simulation = Simulation { compiled, renderer, slab, robots, time: 0.0, steps: 0, time_step, seed };
+        let mut simulation = Simulation {
+            compiled,
+            renderer,
+            slab,
+            robots,
+            time: 0.0,
+            steps: 0,
+            time_step,
+            seed,
+        };
         simulation.track_visits();
         Ok(simulation)
     }
@@ -176,7 +218,10 @@ impl<'c> Simulation<'c> {
     }
 
     fn poses(&self) -> Poses {
-        Poses { poses: self.robots.iter().map(|r| r.pose).collect(), floor_y: self.compiled.rig.robots.iter().map(|r| r.floor_y).collect() }
+        Poses {
+            poses: self.robots.iter().map(|r| r.pose).collect(),
+            floor_y: self.compiled.rig.robots.iter().map(|r| r.floor_y).collect(),
+        }
     }
 
     /// Advances the world by one step.
@@ -185,8 +230,13 @@ impl<'c> Simulation<'c> {
         self.update_sensors(t);
         let rigs = &self.compiled.rig.robots;
         for (index, robot) in self.robots.iter_mut().enumerate() {
-            let Some(mut controller) = robot.controller.take() else { continue };
-            let mut io = SimulatedKhepera { robot, rig: &rigs[index] };
+            let Some(mut controller) = robot.controller.take() else {
+                continue;
+            };
+            let mut io = SimulatedKhepera {
+                robot,
+                rig: &rigs[index],
+            };
             if let Err(error) = controller.step(&mut io) {
                 robot.controller_errors += 1;
                 robot.last_controller_error = Some(error.to_string());
@@ -213,25 +263,51 @@ impl<'c> Simulation<'c> {
             let rig = &compiled.rig.robots[index];
             for (s, sensor) in rig.distance_sensors.iter().enumerate().take(8) {
                 if due(&mut robot.ir_due[s], t, sensor.period) {
-                    robot.proximity[s] = sensors::proximity(&self.slab, &poses, index, &compiled.rig.robots, sensor, &mut robot.ir_streams[s]);
+                    robot.proximity[s] = sensors::proximity(
+                        &self.slab,
+                        &poses,
+                        index,
+                        &compiled.rig.robots,
+                        sensor,
+                        &mut robot.ir_streams[s],
+                    );
                 }
             }
             for (s, sensor) in rig.light_sensors.iter().enumerate().take(8) {
                 if due(&mut robot.ambient_due[s], t, sensor.period) {
-                    robot.ambient[s] = sensors::ambient(compiled, &self.slab, &poses, index, sensor, &mut robot.ambient_streams[s]);
+                    robot.ambient[s] = sensors::ambient(
+                        compiled,
+                        &self.slab,
+                        &poses,
+                        index,
+                        sensor,
+                        &mut robot.ambient_streams[s],
+                    );
                 }
             }
             if let Some(renderer) = &self.renderer {
                 if let Some(turret) = &mut robot.panoramic {
                     if due(&mut turret.due, t, turret.model.rig.period) {
                         let view = renderer.view(&compiled.plan, &poses, index);
-                        turret.model.update(renderer, &view, robot.pose, rig.floor_y, &mut turret.output);
+                        turret.model.update(
+                            renderer,
+                            &view,
+                            robot.pose,
+                            rig.floor_y,
+                            &mut turret.output,
+                        );
                     }
                 }
                 if let Some(camera) = &mut robot.linear_camera {
                     if due(&mut camera.due, t, camera.model.rig.period) {
                         let view = renderer.view(&compiled.plan, &poses, index);
-                        camera.model.update(renderer, &view, robot.pose, rig.floor_y, &mut camera.output);
+                        camera.model.update(
+                            renderer,
+                            &view,
+                            robot.pose,
+                            rig.floor_y,
+                            &mut camera.output,
+                        );
                     }
                 }
             }
@@ -248,7 +324,9 @@ impl<'c> Simulation<'c> {
             .zip(rigs)
             .map(|(robot, rig)| {
                 let to_metres = 100.0 / rig.encoder_resolution;
-                let clamp = |command: i32| (command as f64 * to_metres).clamp(-rig.max_speed, rig.max_speed);
+                let clamp = |command: i32| {
+                    (command as f64 * to_metres).clamp(-rig.max_speed, rig.max_speed)
+                };
                 let (mut left, mut right) = (clamp(robot.command.0), clamp(robot.command.1));
                 if rig.wheel_speed_noise > 0.0 {
                     left *= 1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian();
@@ -261,12 +339,15 @@ impl<'c> Simulation<'c> {
         let sub_steps = speeds
             .iter()
             .zip(rigs)
-            .map(|(&(l, r), rig)| libm::ceil(l.abs().max(r.abs()) * dt / (0.5 * rig.body_radius)) as usize)
+            .map(|(&(l, r), rig)| {
+                libm::ceil(l.abs().max(r.abs()) * dt / (0.5 * rig.body_radius)) as usize
+            })
             .max()
             .unwrap_or(1)
             .clamp(1, 256);
         let h = dt / sub_steps as f64;
-        let mut touched = vec![vec![false; self.slab.obstacles.len() + rigs.len()]; self.robots.len()];
+        let mut touched =
+            vec![vec![false; self.slab.obstacles.len() + rigs.len()]; self.robots.len()];
         for _ in 0..sub_steps {
             for ((robot, rig), &(left, right)) in self.robots.iter_mut().zip(rigs).zip(&speeds) {
                 robot.pose = kinematics::advance(robot.pose, left, right, rig.axle_length, h);
@@ -310,12 +391,18 @@ impl<'c> Simulation<'c> {
                         continue;
                     }
                     let center = DVec2::new(robot.pose.x, robot.pose.z);
-                    if let Some((depth, normal)) = obstacle.shape.penetration(center, rig.body_radius) {
+                    if let Some((depth, normal)) =
+                        obstacle.shape.penetration(center, rig.body_radius)
+                    {
                         let moved = center + normal * depth;
                         robot.pose.x = moved.x;
                         robot.pose.z = moved.y;
                         touched[index][k] = true;
-                    } else if obstacle.shape.penetration(center, rig.body_radius + 1e-6).is_some() {
+                    } else if obstacle
+                        .shape
+                        .penetration(center, rig.body_radius + 1e-6)
+                        .is_some()
+                    {
                         touched[index][k] = true;
                     }
                 }
@@ -325,7 +412,12 @@ impl<'c> Simulation<'c> {
                     let (ra, rb) = (rigs[a].body_radius, rigs[b].body_radius);
                     let ca = DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z);
                     let cb = DVec2::new(self.robots[b].pose.x, self.robots[b].pose.z);
-                    if let Some((depth, normal)) = (Shape2::Circle { center: cb, radius: rb }).penetration(ca, ra) {
+                    if let Some((depth, normal)) = (Shape2::Circle {
+                        center: cb,
+                        radius: rb,
+                    })
+                    .penetration(ca, ra)
+                    {
                         let half = normal * (0.5 * depth);
                         self.robots[a].pose.x += half.x;
                         self.robots[a].pose.z += half.y;
@@ -344,7 +436,11 @@ impl<'c> Simulation<'c> {
         let compiled = self.compiled;
         for (robot, rig) in self.robots.iter_mut().zip(&compiled.rig.robots) {
             for (k, landmark) in compiled.landmarks.iter().enumerate() {
-                let distance = DVec2::new(robot.pose.x - landmark.center.x, robot.pose.z - landmark.center.y).length();
+                let distance = DVec2::new(
+                    robot.pose.x - landmark.center.x,
+                    robot.pose.z - landmark.center.y,
+                )
+                .length();
                 let inside = distance <= landmark.radius + 4.0 * rig.body_radius;
                 if inside && !robot.visits.inside[k] {
                     robot.visits.sequence.push(k);
@@ -377,7 +473,11 @@ impl Khepera for SimulatedKhepera<'_> {
     fn set_speed(&mut self, left: i32, right: i32) -> Result<(), KheperaError> {
         for value in [left, right] {
             if !(-127..=127).contains(&value) {
-                return Err(KheperaError::OutOfRange { what: "wheel speed", value: value as i64, range: "-127…127" });
+                return Err(KheperaError::OutOfRange {
+                    what: "wheel speed",
+                    value: value as i64,
+                    range: "-127…127",
+                });
             }
         }
         self.robot.command = (left, right);
@@ -394,7 +494,10 @@ impl Khepera for SimulatedKhepera<'_> {
 
     fn set_position(&mut self, left: i32, right: i32) -> Result<(), KheperaError> {
         let raw = |travel: f64| libm::floor(travel * self.rig.encoder_resolution) as i64;
-        self.robot.counter_offset = (raw(self.robot.travel.0) - left as i64, raw(self.robot.travel.1) - right as i64);
+        self.robot.counter_offset = (
+            raw(self.robot.travel.0) - left as i64,
+            raw(self.robot.travel.1) - right as i64,
+        );
         Ok(())
     }
 
@@ -407,7 +510,15 @@ impl Khepera for SimulatedKhepera<'_> {
     }
 
     fn set_led(&mut self, led: u8, action: LedAction) -> Result<(), KheperaError> {
-        let slot = self.robot.leds.get_mut(led as usize).ok_or(KheperaError::OutOfRange { what: "LED", value: led as i64, range: "0…1" })?;
+        let slot = self
+            .robot
+            .leds
+            .get_mut(led as usize)
+            .ok_or(KheperaError::OutOfRange {
+                what: "LED",
+                value: led as i64,
+                range: "0…1",
+            })?;
         *slot = match action {
             LedAction::Off => false,
             LedAction::On => true,
@@ -417,11 +528,17 @@ impl Khepera for SimulatedKhepera<'_> {
     }
 
     fn panoramic(&mut self) -> Option<&mut dyn PanoramicTurret> {
-        self.robot.panoramic.as_mut().map(|p| p as &mut dyn PanoramicTurret)
+        self.robot
+            .panoramic
+            .as_mut()
+            .map(|p| p as &mut dyn PanoramicTurret)
     }
 
     fn linear_camera(&mut self) -> Option<&mut dyn LinearCameraTurret> {
-        self.robot.linear_camera.as_mut().map(|c| c as &mut dyn LinearCameraTurret)
+        self.robot
+            .linear_camera
+            .as_mut()
+            .map(|c| c as &mut dyn LinearCameraTurret)
     }
 }
 
@@ -456,12 +573,22 @@ impl PanoramicTurret for PanoramicState {
         if !self.model.rig.filters.contains(filter) {
             return Err(KheperaError::FilterNotEnabled(filter.name()));
         }
-        Ok(self.output.digital.iter().find(|(k, _)| *k == filter).map(|(_, d)| d.clone()).unwrap_or_default())
+        Ok(self
+            .output
+            .digital
+            .iter()
+            .find(|(k, _)| *k == filter)
+            .map(|(_, d)| d.clone())
+            .unwrap_or_default())
     }
 
     fn set_lambda(&mut self, lambda: f64) -> Result<(), KheperaError> {
         if !(lambda > 0.0 && lambda.is_finite()) {
-            return Err(KheperaError::OutOfRange { what: "λ (×1000)", value: (lambda * 1000.0) as i64, range: "> 0" });
+            return Err(KheperaError::OutOfRange {
+                what: "λ (×1000)",
+                value: (lambda * 1000.0) as i64,
+                range: "> 0",
+            });
         }
         self.reconfigure(|rig| rig.lambda = lambda);
         Ok(())
@@ -469,7 +596,11 @@ impl PanoramicTurret for PanoramicState {
 
     fn set_bits(&mut self, bits: u32) -> Result<(), KheperaError> {
         if !(1..=16).contains(&bits) {
-            return Err(KheperaError::OutOfRange { what: "bits", value: bits as i64, range: "1…16" });
+            return Err(KheperaError::OutOfRange {
+                what: "bits",
+                value: bits as i64,
+                range: "1…16",
+            });
         }
         self.reconfigure(|rig| rig.bits = bits);
         Ok(())
@@ -477,7 +608,11 @@ impl PanoramicTurret for PanoramicState {
 
     fn set_region_of_interest(&mut self, first: usize, last: usize) -> Result<(), KheperaError> {
         if first > last || last >= crate::retina::PIXELS {
-            return Err(KheperaError::OutOfRange { what: "region of interest end", value: last as i64, range: "first ≤ last ≤ 149" });
+            return Err(KheperaError::OutOfRange {
+                what: "region of interest end",
+                value: last as i64,
+                range: "first ≤ last ≤ 149",
+            });
         }
         self.reconfigure(|rig| rig.roi = (first, last));
         Ok(())

@@ -40,7 +40,13 @@ pub mod kind {
 impl Stream {
     /// The stream of `kind` for robot `robot`, device `device`, under `seed`.
     pub fn new(seed: u64, robot: usize, kind: u64, device: usize) -> Stream {
-        Stream { rng: Xoshiro256StarStar::seed_from_u64(derive(seed, &[robot as u64, kind, device as u64])), spare: None }
+        Stream {
+            rng: Xoshiro256StarStar::seed_from_u64(derive(
+                seed,
+                &[robot as u64, kind, device as u64],
+            )),
+            spare: None,
+        }
     }
 
     /// Uniform in [0, 1), 53 bits.
@@ -81,6 +87,9 @@ mod tests {
         let samples: Vec<f64> = (0..n).map(|_| d.gaussian()).collect();
         let mean = samples.iter().sum::<f64>() / n as f64;
         let variance = samples.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n as f64;
-        assert!(mean.abs() < 0.03 && (variance - 1.0).abs() < 0.05, "{mean} {variance}");
+        assert!(
+            mean.abs() < 0.03 && (variance - 1.0).abs() < 0.05,
+            "{mean} {variance}"
+        );
     }
 }

@@ -28,7 +28,9 @@ use crate::retina::luminance;
 
 /// Value and relative noise of a lookup table at `x` (rows sorted by their first column).
 pub fn lookup(table: &[[f64; 3]], x: f64) -> (f64, f64) {
-    let Some(first) = table.first() else { return (0.0, 0.0) };
+    let Some(first) = table.first() else {
+        return (0.0, 0.0);
+    };
     if x <= first[0] {
         return (first[1], first[2]);
     }
@@ -51,7 +53,14 @@ fn rotate(v: DVec2, angle: f64) -> DVec2 {
 }
 
 /// One proximity reading, 0…1023.
-pub fn proximity(slab: &Slab, poses: &Poses, robot: usize, rigs: &[RobotRig], sensor: &DistanceSensorRig, stream: &mut Stream) -> u16 {
+pub fn proximity(
+    slab: &Slab,
+    poses: &Poses,
+    robot: usize,
+    rigs: &[RobotRig],
+    sensor: &DistanceSensorRig,
+    stream: &mut Stream,
+) -> u16 {
     let pose = poses.poses[robot];
     let origin = pose.to_world(sensor.position, poses.floor_y[robot]);
     let height = origin.y;
@@ -61,7 +70,11 @@ pub fn proximity(slab: &Slab, poses: &Poses, robot: usize, rigs: &[RobotRig], se
     let rays = sensor.rays.max(1);
     let (mut value_sum, mut noise_sum, mut weight_sum) = (0.0, 0.0, 0.0);
     for i in 0..rays {
-        let offset = if rays == 1 { 0.0 } else { -0.5 * sensor.aperture + sensor.aperture * i as f64 / (rays - 1) as f64 };
+        let offset = if rays == 1 {
+            0.0
+        } else {
+            -0.5 * sensor.aperture + sensor.aperture * i as f64 / (rays - 1) as f64
+        };
         let weight = libm::cos(offset);
         let ray = rotate(direction, offset);
         let mut nearest = sensor.range;
@@ -85,7 +98,10 @@ pub fn proximity(slab: &Slab, poses: &Poses, robot: usize, rigs: &[RobotRig], se
             if height < floor || height > floor + rigs[other].body_height {
                 continue;
             }
-            let body = Shape2::Circle { center: DVec2::new(pose.x, pose.z), radius: rigs[other].body_radius };
+            let body = Shape2::Circle {
+                center: DVec2::new(pose.x, pose.z),
+                radius: rigs[other].body_radius,
+            };
             if let Some(t) = body.ray(origin2, ray) {
                 if t < nearest {
                     nearest = t;
@@ -93,8 +109,16 @@ pub fn proximity(slab: &Slab, poses: &Poses, robot: usize, rigs: &[RobotRig], se
                 }
             }
         }
-        let (value, noise) = if nearest < sensor.range { lookup(&sensor.lookup, nearest) } else { lookup(&sensor.lookup, f64::INFINITY) };
-        let value = if nearest < sensor.range { value * reflectance } else { value };
+        let (value, noise) = if nearest < sensor.range {
+            lookup(&sensor.lookup, nearest)
+        } else {
+            lookup(&sensor.lookup, f64::INFINITY)
+        };
+        let value = if nearest < sensor.range {
+            value * reflectance
+        } else {
+            value
+        };
         value_sum += weight * value;
         noise_sum += weight * noise * value;
         weight_sum += weight;
@@ -106,10 +130,19 @@ pub fn proximity(slab: &Slab, poses: &Poses, robot: usize, rigs: &[RobotRig], se
 }
 
 /// One ambient light reading, 0…1023.
-pub fn ambient(compiled: &Compiled, slab: &Slab, poses: &Poses, robot: usize, sensor: &LightSensorRig, stream: &mut Stream) -> u16 {
+pub fn ambient(
+    compiled: &Compiled,
+    slab: &Slab,
+    poses: &Poses,
+    robot: usize,
+    sensor: &LightSensorRig,
+    stream: &mut Stream,
+) -> u16 {
     let pose = poses.poses[robot];
     let position = pose.to_world(sensor.position, poses.floor_y[robot]);
-    let normal = pose.direction_to_world(sensor.direction).normalize_or(DVec3::X);
+    let normal = pose
+        .direction_to_world(sensor.direction)
+        .normalize_or(DVec3::X);
     let mut irradiance = 0.0;
     for &index in &compiled.plan.lights {
         let light = &compiled.graph.lights[index];
@@ -121,17 +154,35 @@ pub fn ambient(compiled: &Compiled, slab: &Slab, poses: &Poses, robot: usize, se
         let turn = |v: DVec3| frame.map_or(v, |f| f.apply_vector(v));
         let colour = luminance(light.color);
         let (to_light, attenuation, spot, location) = match &light.kind {
-            LightKind::Directional { direction } => (-turn(*direction).normalize_or_zero(), 1.0, 1.0, None),
-            LightKind::Point { location, radius, attenuation } => {
+            LightKind::Directional { direction } => {
+                (-turn(*direction).normalize_or_zero(), 1.0, 1.0, None)
+            }
+            LightKind::Point {
+                location,
+                radius,
+                attenuation,
+            } => {
                 let location = place(*location);
                 let offset = location - position;
                 let distance = offset.length();
                 if distance > *radius {
                     continue;
                 }
-                (offset / distance.max(1e-300), attenuate(*attenuation, distance), 1.0, Some(location))
+                (
+                    offset / distance.max(1e-300),
+                    attenuate(*attenuation, distance),
+                    1.0,
+                    Some(location),
+                )
             }
-            LightKind::Spot { location, direction, radius, attenuation, beam_width, cut_off } => {
+            LightKind::Spot {
+                location,
+                direction,
+                radius,
+                attenuation,
+                beam_width,
+                cut_off,
+            } => {
                 let location = place(*location);
                 let offset = location - position;
                 let distance = offset.length();
@@ -139,7 +190,11 @@ pub fn ambient(compiled: &Compiled, slab: &Slab, poses: &Poses, robot: usize, se
                     continue;
                 }
                 let to_light = offset / distance.max(1e-300);
-                let angle = libm::acos((-to_light).dot(turn(*direction).normalize_or_zero()).clamp(-1.0, 1.0));
+                let angle = libm::acos(
+                    (-to_light)
+                        .dot(turn(*direction).normalize_or_zero())
+                        .clamp(-1.0, 1.0),
+                );
                 let spot = if angle >= *cut_off {
                     0.0
                 } else if angle <= *beam_width {
@@ -147,7 +202,12 @@ pub fn ambient(compiled: &Compiled, slab: &Slab, poses: &Poses, robot: usize, se
                 } else {
                     (angle - cut_off) / (beam_width - cut_off)
                 };
-                (to_light, attenuate(*attenuation, distance), spot, Some(location))
+                (
+                    to_light,
+                    attenuate(*attenuation, distance),
+                    spot,
+                    Some(location),
+                )
             }
         };
         if let (true, Some(location)) = (sensor.occlusion, location) {
@@ -155,7 +215,10 @@ pub fn ambient(compiled: &Compiled, slab: &Slab, poses: &Poses, robot: usize, se
                 continue;
             }
         }
-        irradiance += colour * attenuation * spot * (light.intensity * normal.dot(to_light).max(0.0) + light.ambient_intensity);
+        irradiance += colour
+            * attenuation
+            * spot
+            * (light.intensity * normal.dot(to_light).max(0.0) + light.ambient_intensity);
     }
     let (value, noise) = lookup(&sensor.lookup, irradiance);
     let reading = value * (1.0 + noise * stream.gaussian());
@@ -163,7 +226,8 @@ pub fn ambient(compiled: &Compiled, slab: &Slab, poses: &Poses, robot: usize, se
 }
 
 fn attenuate(coefficients: DVec3, distance: f64) -> f64 {
-    1.0 / (coefficients.x + coefficients.y * distance + coefficients.z * distance * distance).max(1.0)
+    1.0 / (coefficients.x + coefficients.y * distance + coefficients.z * distance * distance)
+        .max(1.0)
 }
 
 /// Whether an obstacle at the sensor's height stands between the sensor and a light.
@@ -175,7 +239,13 @@ fn blocked(slab: &Slab, from: DVec3, to: DVec3) -> bool {
         return false;
     }
     let direction = offset / distance;
-    slab.obstacles.iter().any(|o| from.y >= o.y0 && from.y <= o.y1 && o.shape.ray(origin, direction).is_some_and(|t| t > 1e-9 && t < distance))
+    slab.obstacles.iter().any(|o| {
+        from.y >= o.y0
+            && from.y <= o.y1
+            && o.shape
+                .ray(origin, direction)
+                .is_some_and(|t| t > 1e-9 && t < distance)
+    })
 }
 
 #[cfg(test)]

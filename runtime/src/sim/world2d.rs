@@ -13,8 +13,17 @@ use crate::compile::rig::SensorRig;
 /// A horizontal cross-section.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape2 {
-    Circle { center: DVec2, radius: f64 },
-    Rect { center: DVec2, u: DVec2, v: DVec2, half_u: f64, half_v: f64 },
+    Circle {
+        center: DVec2,
+        radius: f64,
+    },
+    Rect {
+        center: DVec2,
+        u: DVec2,
+        v: DVec2,
+        half_u: f64,
+        half_v: f64,
+    },
 }
 
 /// Something a robot can touch or sense.
@@ -46,7 +55,13 @@ impl Shape2 {
                 }
                 Some(-b - disc.sqrt())
             }
-            Shape2::Rect { center, u, v, half_u, half_v } => {
+            Shape2::Rect {
+                center,
+                u,
+                v,
+                half_u,
+                half_v,
+            } => {
                 let oc = origin - center;
                 let (pu, pv) = (oc.dot(u), oc.dot(v));
                 let (du, dv) = (direction.dot(u), direction.dot(v));
@@ -79,17 +94,31 @@ impl Shape2 {
                 if depth <= 0.0 {
                     return None;
                 }
-                let normal = if distance > 1e-12 { offset / distance } else { DVec2::X };
+                let normal = if distance > 1e-12 {
+                    offset / distance
+                } else {
+                    DVec2::X
+                };
                 Some((depth, normal))
             }
-            Shape2::Rect { center, u, v, half_u, half_v } => {
+            Shape2::Rect {
+                center,
+                u,
+                v,
+                half_u,
+                half_v,
+            } => {
                 let offset = c - center;
                 let (pu, pv) = (offset.dot(u), offset.dot(v));
                 let (qu, qv) = (pu.clamp(-half_u, half_u), pv.clamp(-half_v, half_v));
                 if pu.abs() <= half_u && pv.abs() <= half_v {
                     // Centre inside: out through the nearest face.
                     let (exit_u, exit_v) = (half_u - pu.abs(), half_v - pv.abs());
-                    return Some(if exit_u < exit_v { (exit_u + r, u * pu.signum()) } else { (exit_v + r, v * pv.signum()) });
+                    return Some(if exit_u < exit_v {
+                        (exit_u + r, u * pu.signum())
+                    } else {
+                        (exit_v + r, v * pv.signum())
+                    });
                 }
                 let closest = center + u * qu + v * qv;
                 let away = c - closest;
@@ -111,13 +140,22 @@ pub struct Slab {
 
 impl Slab {
     pub fn new(graph: &RenderGraph, rig: &SensorRig) -> Slab {
-        let floor = rig.robots.iter().map(|r| r.floor_y).fold(f64::INFINITY, f64::min);
+        let floor = rig
+            .robots
+            .iter()
+            .map(|r| r.floor_y)
+            .fold(f64::INFINITY, f64::min);
         let floor = if floor.is_finite() { floor } else { 0.0 };
         let top = rig
             .robots
             .iter()
             .map(|r| {
-                let sensors = r.distance_sensors.iter().chain(std::iter::empty()).map(|s| s.position.y).fold(0.0f64, f64::max);
+                let sensors = r
+                    .distance_sensors
+                    .iter()
+                    .chain(std::iter::empty())
+                    .map(|s| s.position.y)
+                    .fold(0.0f64, f64::max);
                 r.floor_y + r.body_height.max(sensors)
             })
             .fold(floor, f64::max);
@@ -130,10 +168,25 @@ impl Slab {
                 continue;
             }
             let shape = footprint(primitive, &graph.meshes).unwrap_or_else(|| {
-                let center = DVec2::new((bounds.min.x + bounds.max.x) * 0.5, (bounds.min.z + bounds.max.z) * 0.5);
-                Shape2::Rect { center, u: DVec2::X, v: DVec2::Y, half_u: (bounds.max.x - bounds.min.x) * 0.5, half_v: (bounds.max.z - bounds.min.z) * 0.5 }
+                let center = DVec2::new(
+                    (bounds.min.x + bounds.max.x) * 0.5,
+                    (bounds.min.z + bounds.max.z) * 0.5,
+                );
+                Shape2::Rect {
+                    center,
+                    u: DVec2::X,
+                    v: DVec2::Y,
+                    half_u: (bounds.max.x - bounds.min.x) * 0.5,
+                    half_v: (bounds.max.z - bounds.min.z) * 0.5,
+                }
             });
-            obstacles.push(Obstacle { shape, y0: bounds.min.y, y1: bounds.max.y, ir_reflectance: graph.materials[primitive.material].ir_reflectance, primitive: index });
+            obstacles.push(Obstacle {
+                shape,
+                y0: bounds.min.y,
+                y1: bounds.max.y,
+                ir_reflectance: graph.materials[primitive.material].ir_reflectance,
+                primitive: index,
+            });
         }
         let robot_reflectance = (0..rig.robots.len())
             .map(|robot| {
@@ -142,19 +195,33 @@ impl Slab {
                     .iter()
                     .filter(|p| p.owner == Owner::Robot(robot))
                     .filter_map(|p| match p.shape {
-                        Shape::Cylinder { radius, .. } => Some((radius, graph.materials[p.material].ir_reflectance)),
+                        Shape::Cylinder { radius, .. } => {
+                            Some((radius, graph.materials[p.material].ir_reflectance))
+                        }
                         _ => None,
                     })
-                    .fold((0.0, 1.0), |best, (radius, reflectance)| if radius > best.0 { (radius, reflectance) } else { best })
+                    .fold((0.0, 1.0), |best, (radius, reflectance)| {
+                        if radius > best.0 {
+                            (radius, reflectance)
+                        } else {
+                            best
+                        }
+                    })
                     .1
             })
             .collect();
-        Slab { obstacles, robot_reflectance }
+        Slab {
+            obstacles,
+            robot_reflectance,
+        }
     }
 }
 
 /// The exact cross-section of an upright box or cylinder, in (x, z).
-fn footprint(primitive: &crate::compile::graph::Primitive, _meshes: &[crate::compile::graph::Mesh]) -> Option<Shape2> {
+fn footprint(
+    primitive: &crate::compile::graph::Primitive,
+    _meshes: &[crate::compile::graph::Mesh],
+) -> Option<Shape2> {
     if !primitive.upright {
         return None;
     }
@@ -165,9 +232,18 @@ fn footprint(primitive: &crate::compile::graph::Primitive, _meshes: &[crate::com
     match primitive.shape {
         Shape::Box { half } => {
             let (u, v) = (DVec2::new(x.x, x.z), DVec2::new(z.x, z.z));
-            Some(Shape2::Rect { center, u: u.normalize(), v: v.normalize(), half_u: half.x * u.length(), half_v: half.z * v.length() })
+            Some(Shape2::Rect {
+                center,
+                u: u.normalize(),
+                v: v.normalize(),
+                half_u: half.x * u.length(),
+                half_v: half.z * v.length(),
+            })
         }
-        Shape::Cylinder { radius, .. } => Some(Shape2::Circle { center, radius: radius * DVec2::new(x.x, x.z).length() }),
+        Shape::Cylinder { radius, .. } => Some(Shape2::Circle {
+            center,
+            radius: radius * DVec2::new(x.x, x.z).length(),
+        }),
         _ => None,
     }
 }
