@@ -1,11 +1,12 @@
 //! The Khepera's IR proximity and ambient light sensors.
 //!
 //! IR model: a sensor casts `numberOfRays` horizontal rays spread evenly over its aperture
-//! (the extreme rays at ±aperture/2). Each ray's distance to the first obstacle at the
-//! sensor's height gives a value from the lookup table (linear between rows, the last row's
-//! value beyond), scaled by the obstacle's `irReflectance`. The rays are averaged with weights
-//! cos(offset), so a flat wall square ahead gives the table's value and a thin cylinder, which
-//! only the central rays hit, gives less — the small IR cross-section of the paper's buoys.
+//! (the extreme rays at ±aperture/2). Each ray's hit, taken at its depth along the sensor's
+//! axis (distance × cos offset), gives a value from the lookup table (linear between rows, the
+//! last row's value beyond `range`), scaled by the obstacle's `irReflectance`. The rays are
+//! averaged with weights cos(offset), so a flat wall square ahead reads exactly the table's
+//! value, while a thin cylinder, which the side rays miss or meet deeper, reads less — the
+//! small IR cross-section of the paper's buoys.
 //! Noise: the table's third column is a relative standard deviation, applied once per
 //! reading from the sensor's own seeded stream. Values are rounded and clamped to 0…1023.
 //!
@@ -110,7 +111,9 @@ pub fn proximity(
             }
         }
         let (value, noise) = if nearest < sensor.range {
-            lookup(&sensor.lookup, nearest)
+            // The hit's depth along the sensor's axis: a wall square ahead is at one depth for
+            // every ray and reads the table's value.
+            lookup(&sensor.lookup, nearest * weight)
         } else {
             lookup(&sensor.lookup, f64::INFINITY)
         };

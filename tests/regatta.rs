@@ -1,0 +1,145 @@
+//! The paper's validation experiment, in simulated time: the regatta and the single buoy.
+
+use regatta_runtime::sim::Simulation;
+use regatta_tests::{compile_text, compile_world};
+
+/// Visits with consecutive repeats of the same buoy merged.
+fn merged(sequence: &[usize]) -> Vec<usize> {
+    let mut out: Vec<usize> = Vec::new();
+    for &k in sequence {
+        if out.last() != Some(&k) {
+            out.push(k);
+        }
+    }
+    out
+}
+
+/// The longest stretch of visits that follows one cyclic order of the three buoys.
+fn longest_cyclic_run(visits: &[usize]) -> usize {
+    let mut best = 0;
+    for direction in [1usize, 2] {
+        let mut run = 1;
+        for pair in visits.windows(2) {
+            if (pair[0] + direction) % 3 == pair[1] {
+                run += 1;
+                best = best.max(run);
+            } else {
+                run = 1;
+            }
+        }
+    }
+    best
+}
+
+#[test]
+fn the_robot_sails_from_buoy_to_buoy_in_cyclic_order() {
+    let compiled = compile_world("regatta.wbt");
+    assert_eq!(compiled.landmarks.len(), 3);
+    let mut simulation = Simulation::new(&compiled, None).unwrap();
+    let steps = (600.0 / simulation.time_step).ceil() as u64;
+    simulation.run(steps);
+    let robot = &simulation.robots[0];
+    let visits = merged(&robot.visits.sequence);
+    // Each buoy at least 3 times, in cyclic order: 9 consecutive visits in one rotation.
+    assert!(longest_cyclic_run(&visits) >= 9, "visits {visits:?}");
+    for buoy in 0..3 {
+        assert!(
+            visits.iter().filter(|&&k| k == buoy).count() >= 3,
+            "buoy {buoy}: {visits:?}"
+        );
+    }
+    // Never stays in contact with a buoy or a wall.
+    assert!(
+        robot.contacts.longest < 1.0,
+        "longest contact {} s",
+        robot.contacts.longest
+    );
+    assert_eq!(
+        robot.controller_errors, 0,
+        "{:?}",
+        robot.last_controller_error
+    );
+}
+
+#[test]
+fn with_one_buoy_the_robot_circles_it() {
+    let compiled = compile_world("single_buoy.wbt");
+    let buoy = compiled.landmarks[0].center;
+    let mut simulation = Simulation::new(&compiled, None).unwrap();
+    let steps_per_second = (1.0 / simulation.time_step).round() as u64;
+    // Reach the buoy and settle.
+    simulation.run(60 * steps_per_second);
+    let angle =
+        |s: &Simulation| libm::atan2(s.robots[0].pose.z - buoy.y, s.robots[0].pose.x - buoy.x);
+    let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut turned = 0.0;
+    let mut previous = angle(&simulation);
+    for _ in 0..120 * steps_per_second {
+        simulation.step();
+        let robot = &simulation.robots[0];
+        let distance = ((robot.pose.x - buoy.x).powi(2) + (robot.pose.z - buoy.y).powi(2)).sqrt();
+        low = low.min(distance);
+        high = high.max(distance);
+        let now = angle(&simulation);
+        let mut step = now - previous;
+        if step > std::f64::consts::PI {
+            step -= 2.0 * std::f64::consts::PI;
+        } else if step < -std::f64::consts::PI {
+            step += 2.0 * std::f64::consts::PI;
+        }
+        turned += step;
+        previous = now;
+    }
+    assert!(high - low < 0.02, "orbit band {low:.3}…{high:.3} m");
+    assert!(
+        low > compiled.landmarks[0].radius + 0.0275,
+        "it does not touch the buoy"
+    );
+    assert!(
+        turned.abs() > 6.0 * std::f64::consts::PI,
+        "turned {turned} rad around the buoy"
+    );
+}
+
+#[test]
+fn the_same_seed_gives_the_same_run_and_another_seed_another() {
+    let compiled = compile_world("regatta.wbt");
+    let run = |seed: u64| {
+        let mut simulation = Simulation::new(&compiled, Some(seed)).unwrap();
+        simulation.run(2000);
+        let r = &simulation.robots[0];
+        (r.pose, r.proximity, r.ambient, r.visits.sequence.clone())
+    };
+    let a = run(7);
+    let b = run(7);
+    assert_eq!(
+        format!("{a:?}"),
+        format!("{b:?}"),
+        "bit-identical for one seed"
+    );
+    let c = run(8);
+    assert_ne!(
+        format!("{:?}", a.2),
+        format!("{:?}", c.2),
+        "noise streams follow the seed"
+    );
+}
+
+#[test]
+fn an_unknown_controller_or_argument_is_a_clear_error() {
+    let world = |controller: &str, args: &str| {
+        format!("#VRML_SIM R2023b utf8\nWorldInfo {{ coordinateSystem \"NUE\" }}\nKhepera {{ controller \"{controller}\" controllerArgs \"{args}\" }}\n")
+    };
+    let compiled = compile_text(&world("wander", ""));
+    let error = Simulation::new(&compiled, None)
+        .err()
+        .expect("unknown controller")
+        .to_string();
+    assert!(error.contains("unknown controller \"wander\""), "{error}");
+    let compiled = compile_text(&world("braitenberg", "irGian=2"));
+    let error = Simulation::new(&compiled, None)
+        .err()
+        .expect("unknown key")
+        .to_string();
+    assert!(error.contains("no parameter \"irGian\""), "{error}");
+}
