@@ -22,6 +22,9 @@ enum What {
     /// Retina update time against error, for paper and exact optics at several densities,
     /// against a converged reference. Prints a table; writes CSV and a PNG plot.
     Retina(crate::bench_retina::Args),
+    /// Simulation steps per second: the regatta world, IR only, 10 robots, parallel worlds,
+    /// and the peak memory of a one-robot run.
+    Step(crate::bench_step::Args),
     /// Parser throughput (MB/s) and peak memory (× file size) on a generated mesh world.
     Parse {
         /// Points in the generated IndexedFaceSet.
@@ -39,6 +42,7 @@ enum What {
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     match args.what {
         What::Retina(args) => crate::bench_retina::run(args),
+        What::Step(args) => crate::bench_step::run(args),
         What::Parse {
             points,
             runs,
@@ -115,7 +119,7 @@ fn parse_child(path: &std::path::Path, runs: usize) -> anyhow::Result<Outcome> {
 }
 
 /// The process's peak resident set size (`VmHWM`), where the system reports it.
-fn peak_resident_bytes() -> Option<u64> {
+pub fn peak_resident_bytes() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kilobytes: u64 = line.split_whitespace().nth(1)?.parse().ok()?;

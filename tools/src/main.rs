@@ -3,6 +3,7 @@
 
 mod bench;
 mod bench_retina;
+mod bench_step;
 mod check;
 mod explain;
 mod fmt;

@@ -1,0 +1,144 @@
+//! `regatta bench step`: simulation speed, single thread unless said otherwise.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{bail, Context};
+use rayon::prelude::*;
+use regatta_runtime::compile::plan::Plan;
+use regatta_runtime::sim::Simulation;
+use regatta_runtime::Compiled;
+
+use crate::Outcome;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The world.
+    #[arg(default_value = "worlds/regatta.wbt")]
+    world: PathBuf,
+    /// Minimum time spent timing each configuration (ms).
+    #[arg(long, default_value_t = 1000)]
+    millis: u64,
+    /// Measure the peak memory of running the world (used by the child process).
+    #[arg(long, hide = true)]
+    memory_child: bool,
+}
+
+/// Steps per second of a world over at least `millis`.
+fn steps_per_second(compiled: &Compiled, millis: u64) -> anyhow::Result<f64> {
+    let mut simulation = Simulation::new(compiled, None)?;
+    simulation.run(100); // warm up
+    let started = Instant::now();
+    let budget = std::time::Duration::from_millis(millis);
+    let mut steps = 0u64;
+    while started.elapsed() < budget {
+        simulation.run(500);
+        steps += 500;
+    }
+    Ok(steps as f64 / started.elapsed().as_secs_f64())
+}
+
+fn load(path: &std::path::Path) -> anyhow::Result<Compiled> {
+    Ok(crate::world::load(path, false, false)?.compiled)
+}
+
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    if args.memory_child {
+        let compiled = load(&args.world)?;
+        let mut simulation = Simulation::new(&compiled, None)?;
+        simulation.run(20_000);
+        let peak = crate::bench::peak_resident_bytes().unwrap_or(0);
+        println!("{peak}");
+        return Ok(Outcome::Clean);
+    }
+    let compiled = load(&args.world)?;
+    if compiled.rig.robots.is_empty() {
+        bail!("{} has no robot to step", args.world.display());
+    }
+    let time_step = compiled.settings.time_step;
+    let report = |name: &str, rate: f64| {
+        println!(
+            "{name:<44} {rate:>12.0} steps/s {:>10.0}× real time",
+            rate * time_step
+        );
+    };
+    println!(
+        "step bench: {}, {} ms steps",
+        args.world.display(),
+        time_step * 1000.0
+    );
+    let full = steps_per_second(&compiled, args.millis)?;
+    report("as written (IR, ambient, vision every step)", full);
+    // IR only: the same world with the turrets taken off.
+    let mut ir_only = compiled.clone();
+    for robot in &mut ir_only.rig.robots {
+        robot.turret = None;
+    }
+    ir_only.plan = Plan::new(&ir_only.graph, &ir_only.rig);
+    report(
+        "without turrets (8 IR + 8 ambient)",
+        steps_per_second(&ir_only, args.millis)?,
+    );
+    // Ten robots: the world's robot repeated on a grid inside the world's region.
+    let text = std::fs::read_to_string(&args.world)
+        .with_context(|| format!("cannot read {}", args.world.display()))?;
+    let mut crowd = text.clone();
+    for i in 0..9 {
+        let (x, z) = (
+            -0.35 + 0.35 * (i % 3) as f64,
+            -0.42 + 0.16 * (i / 3) as f64 + if i >= 3 { 0.34 } else { 0.0 },
+        );
+        crowd.push_str(&format!(
+            "Khepera {{ translation {x:.3} 0 {z:.3} rotation 0 1 0 {:.2} name \"k{i}\" controller \"regatta\" turret PanoramicTurret {{ lambda 5 }} }}\n",
+            i as f64 * 0.7
+        ));
+    }
+    let directory = std::env::temp_dir().join(format!("regatta-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&directory)?;
+    let crowd_path = directory.join("ten.wbt");
+    std::fs::write(&crowd_path, crowd)?;
+    let ten = load(&crowd_path);
+    std::fs::remove_dir_all(&directory).ok();
+    let ten = ten?;
+    let rate = steps_per_second(&ten, args.millis)?;
+    report(&format!("{} robots", ten.rig.robots.len()), rate);
+    // Independent worlds in parallel (an evolutionary run's population).
+    let threads = rayon::current_num_threads();
+    let worlds = 2 * threads;
+    let started = Instant::now();
+    let steps: u64 = (0..worlds)
+        .into_par_iter()
+        .map(|seed| {
+            let mut simulation =
+                Simulation::new(&compiled, Some(seed as u64)).expect("the world runs");
+            let budget = std::time::Duration::from_millis(args.millis);
+            let begun = Instant::now();
+            let mut steps = 0;
+            while begun.elapsed() < budget {
+                simulation.run(500);
+                steps += 500;
+            }
+            steps
+        })
+        .sum();
+    report(
+        &format!("{worlds} worlds in parallel on {threads} threads (total)"),
+        steps as f64 / started.elapsed().as_secs_f64(),
+    );
+    // Peak memory of a one-robot run, in a fresh process.
+    let exe = std::env::current_exe()?;
+    let output = std::process::Command::new(exe)
+        .args(["bench", "step", "--memory-child"])
+        .arg(&args.world)
+        .output()?;
+    let peak: f64 = String::from_utf8_lossy(&output.stdout)
+        .trim()
+        .parse()
+        .unwrap_or(0.0);
+    println!(
+        "{:<44} {:>12.1} MB (VmHWM, 20000 steps)",
+        "peak memory of a one-robot run",
+        peak / 1e6
+    );
+    Ok(Outcome::Clean)
+}
