@@ -143,3 +143,46 @@ fn an_unknown_controller_or_argument_is_a_clear_error() {
         .to_string();
     assert!(error.contains("no parameter \"irGian\""), "{error}");
 }
+
+/// The single-buoy world with the buoy's film removed, and the controller's arguments.
+fn bare_single_buoy(controller_args: &str) -> regatta_runtime::Compiled {
+    let text =
+        std::fs::read_to_string(regatta_tests::root().join("worlds/single_buoy.wbt")).unwrap();
+    let text = text
+        .replace("irReflectance 1 #", "irReflectance 0.5 #")
+        .replace(
+            "controller \"regatta\"",
+            &format!("controller \"regatta\" controllerArgs \"{controller_args}\""),
+        );
+    compile_text(&text)
+}
+
+/// Largest distance from the buoy between 60 s and 180 s.
+fn widest_excursion(compiled: &regatta_runtime::Compiled) -> f64 {
+    let buoy = compiled.landmarks[0].center;
+    let mut simulation = Simulation::new(compiled, None).unwrap();
+    simulation.run((60.0 / simulation.time_step) as u64);
+    let mut widest: f64 = 0.0;
+    for _ in 0..(120.0 / simulation.time_step) as u64 {
+        simulation.step();
+        let pose = simulation.robots[0].pose;
+        widest = widest.max(((pose.x - buoy.x).powi(2) + (pose.z - buoy.y).powi(2)).sqrt());
+    }
+    widest
+}
+
+#[test]
+fn the_papers_ir_gain_finding_bare_buoys_need_double_ir_gain() {
+    // Without the film the buoy's IR cross-section is too small: the robot does not hold an
+    // orbit. Doubling the IR network's gain — the paper's fix — restores it, as the film does.
+    let bare = widest_excursion(&bare_single_buoy(""));
+    let doubled = widest_excursion(&bare_single_buoy("irGain=2"));
+    assert!(
+        bare > 0.2,
+        "bare buoy, gain 1: the robot wanders {bare:.3} m away"
+    );
+    assert!(
+        doubled < 0.1,
+        "bare buoy, gain 2: it orbits within {doubled:.3} m"
+    );
+}
