@@ -121,50 +121,41 @@ fn decay(lambda: f64) -> (f64, f64) {
     (libm::exp(-1.0 / lambda), -libm::expm1(-1.0 / lambda))
 }
 
-/// Σ_{k≥0} a^k s_k for the mirrored, 2n-periodic continuation `s` of `x` read from one end:
-/// x[0], x[1], …, x[n−1], x[n−1], …, x[0], x[0], … (from the right end when `reversed`).
-/// `lambda` gives `1 − a^(2n) = −expm1(−2n/λ)` without cancellation.
-fn mirrored_tail_sum(x: &[f64], a: f64, lambda: f64, reversed: bool) -> f64 {
-    let n = x.len();
-    let get = |k: usize| if reversed { x[n - 1 - k] } else { x[k] };
-    let mut sum = 0.0;
-    let mut power = 1.0;
-    // Terms below 1e-18 of the first cannot change a double: stop there (short chains of
-    // small λ end early; the result is the same to the last bit or two).
-    for k in 0..n {
-        sum += power * get(k);
-        power *= a;
-        if power < 1e-18 {
-            return sum;
-        }
+/// The mirrored continuation's weighted sums seen from each end:
+/// `Σ_{k≥0} a^k s_k` for `s` = x[0], x[1], …, x[n−1], x[n−1], …, x[0], x[0], … (left) and
+/// for its mirror image read from the right end. With `L = Σ a^j x[j]` and
+/// `R = Σ a^(n−1−j) x[j]` (two Horner passes), the 2n-periodic sums are
+/// `(L + aⁿ·R) / (1 − a²ⁿ)` and `(R + aⁿ·L) / (1 − a²ⁿ)`, aⁿ and 1 − a²ⁿ from λ directly.
+fn mirrored_tails(x: &[f64], a: f64, lambda: f64) -> (f64, f64) {
+    let n = x.len() as f64;
+    let lambda = lambda.max(1e-12);
+    // Two independent Horner chains in one loop, so that their latencies overlap.
+    let (mut from_right, mut from_left) = (0.0, 0.0);
+    for (&forward, &backward) in x.iter().zip(x.iter().rev()) {
+        from_right = a * from_right + forward;
+        from_left = a * from_left + backward;
     }
-    for k in (0..n).rev() {
-        sum += power * get(k);
-        power *= a;
-        if power < 1e-18 {
-            return sum;
-        }
-    }
-    sum / -libm::expm1(-2.0 * n as f64 / lambda.max(1e-12))
+    let a_n = libm::exp(-n / lambda);
+    let period = -libm::expm1(-2.0 * n / lambda);
+    ((from_left + a_n * from_right) / period, (from_right + a_n * from_left) / period)
 }
 
-/// Causal pass `y[i] = a·y[i−1] + (1−a)·x[i]` with the mirrored past.
-fn right_going(x: &[f64], lambda: f64, out: &mut [f64]) {
-    let (a, one_minus_a) = decay(lambda);
-    let mut previous = one_minus_a * mirrored_tail_sum(x, a, lambda, false);
+/// Causal pass `y[i] = a·y[i−1] + (1−a)·x[i]` from the mirrored past `tail`.
+fn right_going(x: &[f64], a: f64, one_minus_a: f64, tail: f64, out: &mut [f64]) {
+    let mut previous = one_minus_a * tail;
     for (o, &v) in out.iter_mut().zip(x) {
         previous = a * previous + one_minus_a * v;
         *o = previous;
     }
 }
 
-/// Anti-causal pass `y[i] = a·y[i+1] + (1−a)·x[i]` with the mirrored future.
-fn left_going(x: &[f64], lambda: f64, out: &mut [f64]) {
-    let (a, one_minus_a) = decay(lambda);
-    let mut next = one_minus_a * mirrored_tail_sum(x, a, lambda, true);
-    for (o, &v) in out.iter_mut().zip(x).rev() {
-        next = a * next + one_minus_a * v;
-        *o = next;
+/// Runs `f` with a scratch slice of `n` zeros: on the stack up to 256, else on the heap.
+fn with_scratch<R>(n: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
+    let mut stack = [0.0; 256];
+    if n <= stack.len() {
+        f(&mut stack[..n])
+    } else {
+        f(&mut vec![0.0; n])
     }
 }
 
@@ -177,24 +168,18 @@ pub fn lowpass(x: &[f64], lambda: f64, out: &mut [f64]) {
         return;
     }
     let (a, one_minus_a) = decay(lambda);
-    let mut stack = [0.0; 256];
-    let mut heap = Vec::new();
-    let right: &mut [f64] = if n <= stack.len() {
-        &mut stack[..n]
-    } else {
-        heap.resize(n, 0.0);
-        &mut heap
-    };
-    right_going(x, lambda, right);
-    let mut next = right[n - 1];
-    out[n - 1] = next;
-    for i in (0..n - 1).rev() {
-        next = a * next + one_minus_a * right[i];
-        out[i] = next;
-    }
+    let (left_tail, _) = mirrored_tails(x, a, lambda);
+    with_scratch(n, |right| {
+        right_going(x, a, one_minus_a, left_tail, right);
+        let mut next = right[n - 1];
+        out[n - 1] = next;
+        for i in (0..n - 1).rev() {
+            next = a * next + one_minus_a * right[i];
+            out[i] = next;
+        }
+    });
 }
 
-/// Highpass (edge enhancing): `x − lowpass(x)`.
 pub fn highpass(x: &[f64], lambda: f64, out: &mut [f64]) {
     lowpass(x, lambda, out);
     for (o, &v) in out.iter_mut().zip(x) {
@@ -204,38 +189,37 @@ pub fn highpass(x: &[f64], lambda: f64, out: &mut [f64]) {
 
 /// Bandpass: `lowpass_λ1(x) − lowpass_λ2(x)`, λ1 < λ2 (a difference of exponentials).
 pub fn bandpass(x: &[f64], lambda1: f64, lambda2: f64, out: &mut [f64]) {
-    let mut stack = [0.0; 256];
-    let mut heap = Vec::new();
-    let wide: &mut [f64] = if x.len() <= stack.len() {
-        &mut stack[..x.len()]
-    } else {
-        heap.resize(x.len(), 0.0);
-        &mut heap
-    };
     lowpass(x, lambda1, out);
-    lowpass(x, lambda2, wide);
-    for (o, w) in out.iter_mut().zip(wide.iter()) {
-        *o -= w;
-    }
+    with_scratch(x.len(), |wide| {
+        lowpass(x, lambda2, wide);
+        for (o, w) in out.iter_mut().zip(wide.iter()) {
+            *o -= w;
+        }
+    });
 }
 
 /// Odd (derivative): right-going minus left-going unidirectional network, kernel
 /// `(1−b)·sgn(n)·b^|n|` with `b = e^(−1/λ)`: zero at the centre, zero DC gain, antisymmetric.
 /// A rising edge to the right gives a positive response just after it.
 pub fn odd(x: &[f64], lambda: f64, out: &mut [f64]) {
-    let mut stack = [0.0; 256];
-    let mut heap = Vec::new();
-    let left: &mut [f64] = if x.len() <= stack.len() {
-        &mut stack[..x.len()]
-    } else {
-        heap.resize(x.len(), 0.0);
-        &mut heap
-    };
-    right_going(x, lambda, out);
-    left_going(x, lambda, left);
-    for (o, l) in out.iter_mut().zip(left.iter()) {
-        *o -= l;
-    }
+    let n = x.len();
+    let (b, one_minus_b) = decay(lambda);
+    let (left_tail, right_tail) = mirrored_tails(x, b, lambda);
+    with_scratch(n, |left| {
+        // Both unidirectional networks in one loop: independent chains, overlapping latencies.
+        let mut previous = one_minus_b * left_tail;
+        let mut next = one_minus_b * right_tail;
+        for i in 0..n {
+            previous = b * previous + one_minus_b * x[i];
+            out[i] = previous;
+            let j = n - 1 - i;
+            next = b * next + one_minus_b * x[j];
+            left[j] = next;
+        }
+        for (o, l) in out.iter_mut().zip(left.iter()) {
+            *o -= l;
+        }
+    });
 }
 
 /// Direct references the fast filters are tested against. They share nothing with the O(n)
