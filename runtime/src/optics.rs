@@ -66,8 +66,8 @@ impl<'g> Renderer<'g> {
         }
     }
 
-    /// Mean RGB over each pixel window of a strip (exact optics). `stride` applies to the
-    /// column renderer (see [`ColumnScene::integrate`]).
+    /// Mean luminance over each pixel window of a strip (exact optics). `stride` applies to
+    /// the column renderer (see [`ColumnScene::integrate`]).
     #[allow(clippy::too_many_arguments)]
     pub fn integrate(
         &self,
@@ -77,7 +77,7 @@ impl<'g> Renderer<'g> {
         strip: &Strip,
         samples: usize,
         stride: usize,
-        out: &mut [[f64; 3]],
+        out: &mut [f64],
     ) {
         match (self, view) {
             (Renderer::Columns(scene), View::Columns(frame)) => {
@@ -86,8 +86,8 @@ impl<'g> Renderer<'g> {
             (Renderer::Rays(caster), View::Rays(frame)) => {
                 let n = samples.max(1);
                 let half_band = libm::atan(strip.tan_half_band);
-                for (pixel, rgb_out) in out.iter_mut().enumerate().take(strip.centers.len()) {
-                    let mut sum = [0.0; 3];
+                for (pixel, pixel_out) in out.iter_mut().enumerate().take(strip.centers.len()) {
+                    let mut sum = 0.0;
                     for i in 0..n {
                         let alpha = strip.centers[pixel]
                             + ((i as f64 + 0.5) / n as f64 - 0.5) * strip.width;
@@ -96,13 +96,14 @@ impl<'g> Renderer<'g> {
                         for j in 0..n {
                             let phi = ((j as f64 + 0.5) / n as f64 * 2.0 - 1.0) * half_band;
                             let (cp, sp) = (libm::cos(phi), libm::sin(phi));
-                            let rgb = caster.rgb(frame, eye, DVec3::new(cw * cp, sp, -sw * cp));
-                            for k in 0..3 {
-                                sum[k] += rgb[k];
-                            }
+                            sum += luminance(caster.rgb(
+                                frame,
+                                eye,
+                                DVec3::new(cw * cp, sp, -sw * cp),
+                            ));
                         }
                     }
-                    *rgb_out = sum.map(|v| v / (n * n) as f64);
+                    *pixel_out = sum / (n * n) as f64;
                 }
             }
             _ => unreachable!("a view comes from its own renderer"),
@@ -174,7 +175,7 @@ pub struct Panoramic {
     strip: Strip,
     settings: FilterSettings,
     i_bda: Vec<(FilterKind, f64)>,
-    rgb: Vec<[f64; 3]>,
+    luminance: Vec<f64>,
 }
 
 impl Panoramic {
@@ -203,7 +204,7 @@ impl Panoramic {
             strip: Strip::new(centers, PIXEL_WIDTH, HALF_BAND),
             settings,
             i_bda,
-            rgb: vec![[0.0; 3]; PIXELS],
+            luminance: vec![0.0; PIXELS],
         }
     }
 
@@ -232,7 +233,7 @@ impl Panoramic {
                 &self.strip,
                 self.rig.samples,
                 self.rig.stride,
-                &mut self.rgb,
+                &mut self.luminance,
             ),
             Optics::Paper => paper(
                 renderer,
@@ -241,12 +242,12 @@ impl Panoramic {
                 pose.heading,
                 self.rig.samples,
                 self.rig.quantize_views,
-                &mut self.rgb,
+                &mut self.luminance,
                 out,
             ),
         }
         out.luminance.clear();
-        out.luminance.extend(self.rgb.iter().map(|&c| luminance(c)));
+        out.luminance.extend_from_slice(&self.luminance);
         self.process(out);
     }
 
@@ -292,7 +293,7 @@ fn paper(
     heading: f64,
     samples: usize,
     quantize: bool,
-    rgb_out: &mut [[f64; 3]],
+    luminance_out: &mut [f64],
     out: &mut RetinaOutput,
 ) {
     let f = 1.0;
@@ -362,9 +363,7 @@ fn paper(
                 warped[k * FLAT_COLUMNS + j] = value;
                 row_sum += value;
             }
-            // The row mean is luminance already; keep it as grey RGB for the common path.
-            let mean = row_sum / FLAT_ROWS as f64;
-            rgb_out[pixel] = [mean, mean, mean];
+            luminance_out[pixel] = row_sum / FLAT_ROWS as f64;
         }
         out.flat_views.push(flat);
         out.warped.push(warped);
@@ -400,7 +399,7 @@ pub struct LinearCameraOutput {
 pub struct LinearCamera {
     pub rig: LinearCameraRig,
     strip: Strip,
-    rgb: Vec<[f64; 3]>,
+    luminance: Vec<f64>,
 }
 
 impl LinearCamera {
@@ -412,7 +411,7 @@ impl LinearCamera {
         LinearCamera {
             rig: rig.clone(),
             strip: Strip::new(centers, width, rig.vertical_field_of_view / 2.0),
-            rgb: vec![[0.0; 3]; rig.pixels],
+            luminance: vec![0.0; rig.pixels],
         }
     }
 
@@ -432,10 +431,10 @@ impl LinearCamera {
             &self.strip,
             self.rig.samples,
             1,
-            &mut self.rgb,
+            &mut self.luminance,
         );
         out.luminance.clear();
-        out.luminance.extend(self.rgb.iter().map(|&c| luminance(c)));
+        out.luminance.extend_from_slice(&self.luminance);
         out.analog.resize(out.luminance.len(), 0.0);
         out.dark = !normalize(&out.luminance, &mut out.analog);
         let top = ((1u32 << self.rig.bits) - 1) as f64;

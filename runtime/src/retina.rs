@@ -137,7 +137,10 @@ fn mirrored_tails(x: &[f64], a: f64, lambda: f64) -> (f64, f64) {
     }
     let a_n = libm::exp(-n / lambda);
     let period = -libm::expm1(-2.0 * n / lambda);
-    ((from_left + a_n * from_right) / period, (from_right + a_n * from_left) / period)
+    (
+        (from_left + a_n * from_right) / period,
+        (from_right + a_n * from_left) / period,
+    )
 }
 
 /// Causal pass `y[i] = a·y[i−1] + (1−a)·x[i]` from the mirrored past `tail`.

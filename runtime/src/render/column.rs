@@ -19,6 +19,7 @@ use glam::{DVec2, DVec3};
 use super::{shade, world_lights, Poses, WorldLight};
 use crate::compile::graph::{LightKind, Owner, RenderGraph, Shape};
 use crate::compile::plan::Plan;
+use crate::retina::luminance;
 
 /// The horizontal cross-section of an upright object.
 #[derive(Clone, Copy, Debug)]
@@ -107,6 +108,16 @@ impl FastShade {
         fast
     }
 
+    /// Luminance of [`FastShade::radiance`] (linear, so it regroups the same way).
+    #[inline]
+    fn luminance(&self, normal: DVec3) -> f64 {
+        let mut out = luminance(self.base);
+        for (coefficient, to_light) in &self.lights[..self.count] {
+            out += luminance(*coefficient) * normal.dot(*to_light).max(0.0);
+        }
+        out
+    }
+
     #[inline]
     fn radiance(&self, normal: DVec3) -> [f64; 3] {
         let mut out = self.base;
@@ -139,7 +150,7 @@ pub struct ColumnScene<'g> {
 struct RegionBuffers {
     bounds: Vec<f64>,
     positions: Vec<f64>,
-    values: Vec<[f64; 3]>,
+    values: Vec<f64>,
     regions: Vec<(usize, usize)>,
     cursors: Vec<usize>,
 }
@@ -463,15 +474,15 @@ impl<'g> ColumnScene<'g> {
         strip: &Strip,
         samples: usize,
         stride: usize,
-        out: &mut [[f64; 3]],
+        out: &mut [f64],
     ) {
         let samples = samples.max(1);
         let stride = stride.max(1);
         let look = self.look(frame, eye, heading);
         let half = strip.width / 2.0;
         let band = 2.0 * band_atan(strip.tan_half_band);
-        let sky = self.background(1.0);
-        let ground = self.background(-1.0);
+        let sky = luminance(self.background(1.0));
+        let ground = luminance(self.background(-1.0));
         let mut scratch = Scratch {
             segments: Segments::new(),
             free: Free::new(0.0, 0.0),
@@ -515,7 +526,7 @@ impl<'g> ColumnScene<'g> {
             // Pieces of the window between silhouette edges, `samples` midpoints each.
             let center = strip.centers[pixel];
             let (lo, hi) = (center - half, center + half);
-            let mut sum = [0.0; 3];
+            let mut sum = 0.0;
             let mut p0 = lo;
             let mut next_break = look.breaks.partition_point(|&b| b <= lo);
             loop {
@@ -530,11 +541,7 @@ impl<'g> ColumnScene<'g> {
                 if width > 0.0 {
                     for s in 0..samples {
                         let alpha = p0 + (s as f64 + 0.5) / samples as f64 * width;
-                        let rgb = evaluate(alpha, pixel, &mut scratch);
-                        let weight = width / samples as f64;
-                        for k in 0..3 {
-                            sum[k] += rgb[k] * weight;
-                        }
+                        sum += evaluate(alpha, pixel, &mut scratch) * (width / samples as f64);
                     }
                 }
                 if p1 >= hi {
@@ -542,7 +549,7 @@ impl<'g> ColumnScene<'g> {
                 }
                 p0 = p1;
             }
-            out[pixel] = sum.map(|v| v / strip.width);
+            out[pixel] = sum / strip.width;
         }
     }
 
@@ -557,10 +564,10 @@ impl<'g> ColumnScene<'g> {
         strip: &Strip,
         stride: usize,
         band: f64,
-        sky: [f64; 3],
-        ground: [f64; 3],
+        sky: f64,
+        ground: f64,
         scratch: &mut Scratch,
-        out: &mut [[f64; 3]],
+        out: &mut [f64],
     ) {
         let pixels = strip.centers.len().min(out.len());
         if pixels == 0 {
@@ -640,7 +647,7 @@ impl<'g> ColumnScene<'g> {
             while first_region + 1 < regions.len() && bounds[first_region + 1] <= lo {
                 first_region += 1;
             }
-            let mut sum = [0.0; 3];
+            let mut sum = 0.0;
             let mut region = first_region;
             while region < regions.len() && bounds[region] < hi {
                 let (a, b) = (bounds[region].max(lo), bounds[region + 1].min(hi));
@@ -657,20 +664,13 @@ impl<'g> ColumnScene<'g> {
                         }
                         let i = (*cursor).min(end - 2);
                         let f = (at - positions[i]) / (positions[i + 1] - positions[i]);
-                        let (v0, v1) = (values[i], values[i + 1]);
-                        [
-                            v0[0] + (v1[0] - v0[0]) * f,
-                            v0[1] + (v1[1] - v0[1]) * f,
-                            v0[2] + (v1[2] - v0[2]) * f,
-                        ]
+                        values[i] + (values[i + 1] - values[i]) * f
                     };
-                    for k in 0..3 {
-                        sum[k] += value[k] * (b - a);
-                    }
+                    sum += value * (b - a);
                 }
                 region += 1;
             }
-            out[pixel] = sum.map(|v| v * inverse_width);
+            out[pixel] = sum * inverse_width;
         }
     }
 
@@ -829,15 +829,15 @@ impl<'g> ColumnScene<'g> {
         alpha: f64,
         tan_half: f64,
         band: f64,
-        sky: [f64; 3],
-        ground: [f64; 3],
+        sky: f64,
+        ground: f64,
         scratch: &mut Scratch,
-    ) -> [f64; 3] {
+    ) -> f64 {
         let Scratch { segments, free } = scratch;
         segments.len = 0;
         self.collect_segments(look, direction, alpha, segments);
         free.reset(-tan_half, tan_half);
-        let mut sum = [0.0; 3];
+        let mut sum = 0.0;
         for segment in segments.as_slice() {
             if free.is_empty() {
                 break;
@@ -855,22 +855,42 @@ impl<'g> ColumnScene<'g> {
             });
             if covered > 0.0 {
                 // One radiance per visible part of a face, at its weighted middle.
-                let rgb = self.shade_segment(frame, segment, look.eye, direction, middle / covered);
-                for k in 0..3 {
-                    sum[k] += rgb[k] * covered;
-                }
+                sum +=
+                    self.segment_luminance(frame, segment, look.eye, direction, middle / covered)
+                        * covered;
             }
         }
         for &(x0, x1) in free.as_slice() {
             // Sky above the horizon, ground (if any) below.
-            let below = (band_atan(x1.min(0.0)) - band_atan(x0.min(0.0))).max(0.0);
-            let above = (band_atan(x1.max(0.0)) - band_atan(x0.max(0.0))).max(0.0);
-            for k in 0..3 {
-                sum[k] += ground[k] * below + sky[k] * above;
+            let (a0, a1) = (band_atan(x0), band_atan(x1));
+            if x0 >= 0.0 {
+                sum += sky * (a1 - a0);
+            } else if x1 <= 0.0 {
+                sum += ground * (a1 - a0);
+            } else {
+                sum += ground * -a0 + sky * a1;
             }
         }
-        let inverse_band = 1.0 / band;
-        sum.map(|v| v * inverse_band)
+        sum / band
+    }
+
+    /// Luminance of a segment's face at tan-elevation `t` (the fast path skips RGB).
+    fn segment_luminance(
+        &self,
+        frame: &ColumnFrame,
+        segment: &Segment,
+        eye: DVec3,
+        direction: DVec2,
+        t: f64,
+    ) -> f64 {
+        if let Some(fast) = &frame.flat[segment.object as usize] {
+            return match segment.face {
+                Face::Side(n) => fast.luminance(DVec3::new(n.x, 0.0, n.y)),
+                Face::Cap { up: true, .. } => fast.luminance(DVec3::Y),
+                Face::Cap { up: false, .. } => fast.luminance(DVec3::NEG_Y),
+            };
+        }
+        luminance(self.shade_segment(frame, segment, eye, direction, t))
     }
 
     /// Radiance of a segment's face at tan-elevation `t`.
