@@ -353,6 +353,10 @@ impl Compiler<'_> {
                     aperture: scene.float(node, "aperture"),
                     range: scene.float(node, "range"),
                     period: scene.float(node, "samplingPeriod"),
+                    ray_turns: DistanceSensorRig::turns(
+                        scene.int(node, "numberOfRays").max(1) as usize,
+                        scene.float(node, "aperture"),
+                    ),
                 };
                 self.rig.robots[robot].distance_sensors.push(rig);
             }

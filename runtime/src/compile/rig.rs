@@ -30,6 +30,17 @@ impl Pose2 {
         )
     }
 
+    /// The pose with its sine and cosine computed once, for many transforms.
+    pub fn placement(&self, floor_y: f64) -> Placement {
+        Placement {
+            x: self.x,
+            z: self.z,
+            floor_y,
+            sin: libm::sin(self.heading),
+            cos: libm::cos(self.heading),
+        }
+    }
+
     /// Robot-frame direction to world.
     pub fn direction_to_world(&self, local: DVec3) -> DVec3 {
         let (s, c) = (libm::sin(self.heading), libm::cos(self.heading));
@@ -37,6 +48,34 @@ impl Pose2 {
             c * local.x + s * local.z,
             local.y,
             -s * local.x + c * local.z,
+        )
+    }
+}
+
+/// A pose ready to transform robot-frame points and directions to the world.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    pub x: f64,
+    pub z: f64,
+    pub floor_y: f64,
+    pub sin: f64,
+    pub cos: f64,
+}
+
+impl Placement {
+    pub fn to_world(&self, local: DVec3) -> DVec3 {
+        DVec3::new(
+            self.x + self.cos * local.x + self.sin * local.z,
+            self.floor_y + local.y,
+            self.z - self.sin * local.x + self.cos * local.z,
+        )
+    }
+
+    pub fn direction_to_world(&self, local: DVec3) -> DVec3 {
+        DVec3::new(
+            self.cos * local.x + self.sin * local.z,
+            local.y,
+            -self.sin * local.x + self.cos * local.z,
         )
     }
 }
@@ -53,6 +92,25 @@ pub struct DistanceSensorRig {
     pub aperture: f64,
     pub range: f64,
     pub period: f64,
+    /// (offset angle, cos, sin) of each ray, spread evenly over the aperture.
+    pub ray_turns: Vec<(f64, f64, f64)>,
+}
+
+impl DistanceSensorRig {
+    /// The rays' turns for `rays` rays over `aperture` (extreme rays at ±aperture/2).
+    pub fn turns(rays: usize, aperture: f64) -> Vec<(f64, f64, f64)> {
+        let rays = rays.max(1);
+        (0..rays)
+            .map(|i| {
+                let offset = if rays == 1 {
+                    0.0
+                } else {
+                    -0.5 * aperture + aperture * i as f64 / (rays - 1) as f64
+                };
+                (offset, libm::cos(offset), libm::sin(offset))
+            })
+            .collect()
+    }
 }
 
 /// An ambient light sensor.

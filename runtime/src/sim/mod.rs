@@ -259,13 +259,19 @@ impl<'c> Simulation<'c> {
     fn update_sensors(&mut self, t: f64) {
         let compiled = self.compiled;
         let poses = self.poses();
+        let placements: Vec<_> = poses
+            .poses
+            .iter()
+            .zip(&poses.floor_y)
+            .map(|(p, &y)| p.placement(y))
+            .collect();
         for (index, robot) in self.robots.iter_mut().enumerate() {
             let rig = &compiled.rig.robots[index];
             for (s, sensor) in rig.distance_sensors.iter().enumerate().take(8) {
                 if due(&mut robot.ir_due[s], t, sensor.period) {
                     robot.proximity[s] = sensors::proximity(
                         &self.slab,
-                        &poses,
+                        &placements,
                         index,
                         &compiled.rig.robots,
                         sensor,
@@ -279,6 +285,7 @@ impl<'c> Simulation<'c> {
                         compiled,
                         &self.slab,
                         &poses,
+                        &placements,
                         index,
                         sensor,
                         &mut robot.ambient_streams[s],

@@ -22,7 +22,7 @@ use glam::{DVec2, DVec3};
 use super::noise::Stream;
 use super::world2d::{Shape2, Slab};
 use crate::compile::graph::{LightKind, Owner};
-use crate::compile::rig::{DistanceSensorRig, LightSensorRig, RobotRig};
+use crate::compile::rig::{DistanceSensorRig, LightSensorRig, Placement, RobotRig};
 use crate::compile::Compiled;
 use crate::render::Poses;
 use crate::retina::luminance;
@@ -47,37 +47,29 @@ pub fn lookup(table: &[[f64; 3]], x: f64) -> (f64, f64) {
     (last[1], last[2])
 }
 
-fn rotate(v: DVec2, angle: f64) -> DVec2 {
-    // Counter-clockwise seen from above, in (x, z): the same sense as headings.
-    let (s, c) = (libm::sin(angle), libm::cos(angle));
-    DVec2::new(c * v.x + s * v.y, -s * v.x + c * v.y)
-}
-
 /// One proximity reading, 0…1023.
 pub fn proximity(
     slab: &Slab,
-    poses: &Poses,
+    placements: &[Placement],
     robot: usize,
     rigs: &[RobotRig],
     sensor: &DistanceSensorRig,
     stream: &mut Stream,
 ) -> u16 {
-    let pose = poses.poses[robot];
-    let origin = pose.to_world(sensor.position, poses.floor_y[robot]);
+    let placement = &placements[robot];
+    let origin = placement.to_world(sensor.position);
     let height = origin.y;
     let origin2 = DVec2::new(origin.x, origin.z);
-    let looking = pose.direction_to_world(sensor.direction);
+    let looking = placement.direction_to_world(sensor.direction);
     let direction = DVec2::new(looking.x, looking.z).normalize_or(DVec2::X);
-    let rays = sensor.rays.max(1);
     let (mut value_sum, mut noise_sum, mut weight_sum) = (0.0, 0.0, 0.0);
-    for i in 0..rays {
-        let offset = if rays == 1 {
-            0.0
-        } else {
-            -0.5 * sensor.aperture + sensor.aperture * i as f64 / (rays - 1) as f64
-        };
-        let weight = libm::cos(offset);
-        let ray = rotate(direction, offset);
+    for &(_, cos, sin) in &sensor.ray_turns {
+        // Counter-clockwise seen from above, in (x, z): the same sense as headings.
+        let ray = DVec2::new(
+            cos * direction.x + sin * direction.y,
+            -sin * direction.x + cos * direction.y,
+        );
+        let weight = cos;
         let mut nearest = sensor.range;
         let mut reflectance = 0.0;
         for obstacle in &slab.obstacles {
@@ -91,16 +83,15 @@ pub fn proximity(
                 }
             }
         }
-        for (other, pose) in poses.poses.iter().enumerate() {
+        for (other, place) in placements.iter().enumerate() {
             if other == robot {
                 continue;
             }
-            let floor = poses.floor_y[other];
-            if height < floor || height > floor + rigs[other].body_height {
+            if height < place.floor_y || height > place.floor_y + rigs[other].body_height {
                 continue;
             }
             let body = Shape2::Circle {
-                center: DVec2::new(pose.x, pose.z),
+                center: DVec2::new(place.x, place.z),
                 radius: rigs[other].body_radius,
             };
             if let Some(t) = body.ray(origin2, ray) {
@@ -110,9 +101,9 @@ pub fn proximity(
                 }
             }
         }
+        // The hit's depth along the sensor's axis: a wall square ahead is at one depth for
+        // every ray and reads the table's value.
         let (value, noise) = if nearest < sensor.range {
-            // The hit's depth along the sensor's axis: a wall square ahead is at one depth for
-            // every ray and reads the table's value.
             lookup(&sensor.lookup, nearest * weight)
         } else {
             lookup(&sensor.lookup, f64::INFINITY)
@@ -133,17 +124,19 @@ pub fn proximity(
 }
 
 /// One ambient light reading, 0…1023.
+#[allow(clippy::too_many_arguments)]
 pub fn ambient(
     compiled: &Compiled,
     slab: &Slab,
     poses: &Poses,
+    placements: &[Placement],
     robot: usize,
     sensor: &LightSensorRig,
     stream: &mut Stream,
 ) -> u16 {
-    let pose = poses.poses[robot];
-    let position = pose.to_world(sensor.position, poses.floor_y[robot]);
-    let normal = pose
+    let placement = &placements[robot];
+    let position = placement.to_world(sensor.position);
+    let normal = placement
         .direction_to_world(sensor.direction)
         .normalize_or(DVec3::X);
     let mut irradiance = 0.0;
