@@ -172,7 +172,8 @@ pub(crate) fn type_default(
 /// PROTOs visible at some point, in order of definition (later entries win).
 type ProtoTable = Rc<Vec<(String, Rc<ProtoDef>)>>;
 /// A PROTO instance's interface fields: declared type and bound value.
-pub(crate) type Bindings = BTreeMap<String, (FieldType, Option<Value>)>;
+/// Declared type, bound value, and where an instance wrote it (defaults have no origin).
+pub(crate) type Bindings = BTreeMap<String, (FieldType, Option<Value>, Option<(FileId, Span)>)>;
 
 /// A PROTO definition and the file it was read from.
 struct ProtoDef {
@@ -1019,7 +1020,7 @@ impl<'c> Lowerer<'c> {
         }
         self.check_interface_once(def);
         // Instance fields, typed in the instance's scope.
-        let mut bindings: BTreeMap<String, (FieldType, Option<Value>)> = BTreeMap::new();
+        let mut bindings: Bindings = BTreeMap::new();
         for item in items {
             let BodyItem::Field(field) = item else {
                 self.strict_or_warn(
@@ -1071,7 +1072,10 @@ impl<'c> Lowerer<'c> {
             );
             if let Some(value) = value {
                 self.check_restriction(declaration, &value, def.file, scope.file, field.name.span);
-                bindings.insert(field.name.text.clone(), (ty, Some(value)));
+                bindings.insert(
+                    field.name.text.clone(),
+                    (ty, Some(value), Some((scope.file, field.span))),
+                );
             }
         }
         // Defaults, typed in the PROTO's own file.
@@ -1109,7 +1113,7 @@ impl<'c> Lowerer<'c> {
                 }
                 None => None,
             };
-            bindings.insert(declaration.name.text.clone(), (ty, value));
+            bindings.insert(declaration.name.text.clone(), (ty, value, None));
         }
         // The body, in a scope of its own.
         self.instance_stack.push(name.clone());
@@ -1309,7 +1313,7 @@ impl<'c> Lowerer<'c> {
                     return None;
                 };
                 match interface.get(&target.text) {
-                    Some((declared, bound)) => {
+                    Some((declared, bound, origin)) => {
                         if *declared != ty {
                             self.error(
                                 file,
@@ -1321,7 +1325,12 @@ impl<'c> Lowerer<'c> {
                         }
                         let value = bound.clone()?;
                         if let Some(spec) = spec {
-                            self.check_ranges(&value, spec, file, target.span);
+                            // A value an instance passed in is blamed where the instance wrote
+                            // it; the field keeps its default.
+                            let (blamed_file, blamed_span) = origin.unwrap_or((file, target.span));
+                            if !self.check_ranges(&value, spec, blamed_file, blamed_span) {
+                                return None;
+                            }
                         }
                         Some(value)
                     }

@@ -150,7 +150,7 @@ impl ExprParser<'_> {
         let parts: Vec<&str> = word.split('.').collect();
         match parts.as_slice() {
             ["fields", name, "value" | "defaultValue", rest @ ..] => {
-                let (_, value) = self.fields.get(*name).ok_or_else(|| format!("this PROTO has no field '{name}'"))?;
+                let (_, value, _) = self.fields.get(*name).ok_or_else(|| format!("this PROTO has no field '{name}'"))?;
                 let value = value.as_ref().ok_or_else(|| format!("field '{name}' has no value"))?;
                 let base = match value {
                     Value::Float(x) => Evaluated::Number(*x),
@@ -217,8 +217,11 @@ mod tests {
             multi: false,
             base: BaseType::Vec2f,
         };
-        fields.insert("height".to_owned(), (float, Some(Value::Float(0.04))));
-        fields.insert("size".to_owned(), (vec2, Some(Value::Vec2([1.0, 2.0]))));
+        fields.insert("height".to_owned(), (float, Some(Value::Float(0.04)), None));
+        fields.insert(
+            "size".to_owned(),
+            (vec2, Some(Value::Vec2([1.0, 2.0])), None),
+        );
         let eval = |t: &str| evaluate(t, &fields).unwrap();
         assert_eq!(
             eval("%<= fields.height.value / 2 >%"),
