@@ -339,7 +339,7 @@ fn time_per_update(
 /// blue, exact rays in green, paper in red; larger dots for more samples. Grid lines at
 /// decades.
 fn plot(rows: &[Row]) -> RgbImage {
-    let (width, height, pad) = (640u32, 420u32, 40u32);
+    let (width, height, pad) = (640u32, 440u32, 48u32);
     let mut image = RgbImage::from_pixel(width, height, Rgb([255, 255, 255]));
     let (t_min, t_max) = (0.1f64, 1e6f64);
     let (e_min, e_max) = (1e-3f64, 10.0f64);
@@ -374,6 +374,59 @@ fn plot(rows: &[Row]) -> RgbImage {
     }
     for y in pad..=height - pad {
         image.put_pixel(pad, y, Rgb([0, 0, 0]));
+    }
+    // Labels: decades on both axes, axis titles, legend.
+    let ink = Rgb([40, 40, 40]);
+    let mut decade = t_min;
+    while decade <= t_max * 1.01 {
+        let label = if decade >= 1e6 {
+            "1M".to_owned()
+        } else if decade >= 1e3 {
+            format!("{}k", (decade / 1e3).round())
+        } else {
+            format!("{decade}")
+        };
+        let x = x_of(decade) as u32;
+        crate::font::draw_text(
+            &mut image,
+            x.saturating_sub(crate::font::text_width(&label, 2) / 2),
+            height - pad + 6,
+            &label,
+            2,
+            ink,
+        );
+        decade *= 10.0;
+    }
+    let mut decade = e_min;
+    while decade <= e_max * 1.01 {
+        let label = format!("{decade}");
+        let y = y_of(decade) as u32;
+        crate::font::draw_text(&mut image, 2, y.saturating_sub(5), &label, 2, ink);
+        decade *= 10.0;
+    }
+    let title = "time per update (us), log";
+    crate::font::draw_text(
+        &mut image,
+        (width - crate::font::text_width(title, 2)) / 2,
+        height - 14,
+        title,
+        2,
+        ink,
+    );
+    crate::font::draw_text(&mut image, pad, 8, "mean digital error (LSB), log", 2, ink);
+    let legend = [
+        ("exact, columns", Rgb([40, 80, 210])),
+        ("exact, rays", Rgb([40, 160, 60])),
+        ("paper", Rgb([210, 40, 40])),
+    ];
+    for (k, (name, color)) in legend.iter().enumerate() {
+        let y = pad + 8 + 16 * k as u32;
+        for dy in 0..8 {
+            for dx in 0..8 {
+                image.put_pixel(width - pad - 140 + dx, y + dy, *color);
+            }
+        }
+        crate::font::draw_text(&mut image, width - pad - 126, y, name, 2, ink);
     }
     for row in rows {
         let color = match (row.optics, row.renderer) {

@@ -129,11 +129,12 @@ pub fn explain(name: &str, loaded: &crate::world::Loaded) -> String {
                 let filters: Vec<&str> = p.filters.iter().map(|k| k.name()).collect();
                 let _ = writeln!(
                     out,
-                    "    PanoramicTurret \"{}\" at {}: {} optics, samples {}, filters [{}], λ {}, bandpass λ {}/{}, {} bits, I_bda {}, region of interest {}…{}",
+                    "    PanoramicTurret \"{}\" at {}: {} optics, samples {}, stride {}, filters [{}], λ {}, bandpass λ {}/{}, {} bits, I_bda {}, region of interest {}…{}",
                     p.name,
                     mm(p.height),
                     if p.optics == Optics::Paper { "paper" } else { "exact" },
                     p.samples,
+                    p.stride,
                     filters.join(", "),
                     p.lambda,
                     p.bandpass.0,

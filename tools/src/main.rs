@@ -7,6 +7,7 @@ mod bench_step;
 mod check;
 mod explain;
 mod fmt;
+mod font;
 mod render;
 mod run;
 mod schema;
