@@ -61,7 +61,18 @@ pub enum Outcome {
     Errors,
 }
 
+/// Piping into `head` closes our standard output early: like other Unix tools, end quietly
+/// (the default SIGPIPE action) instead of failing on a write.
+fn restore_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: setting a signal's disposition to its default before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() -> ExitCode {
+    restore_sigpipe();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(error) => {
