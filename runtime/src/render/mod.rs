@@ -38,15 +38,15 @@ impl Poses {
 /// A light resolved to world space for one frame.
 #[derive(Clone, Debug)]
 pub struct WorldLight {
-    kind: LightKind,
-    color: [f64; 3],
-    intensity: f64,
-    ambient_intensity: f64,
-    shadows: bool,
+    pub(crate) kind: LightKind,
+    pub(crate) color: [f64; 3],
+    pub(crate) intensity: f64,
+    pub(crate) ambient_intensity: f64,
+    pub(crate) shadows: bool,
 }
 
 /// The lights of the plan, with robot-carried ones moved to the robots' current poses.
-pub(crate) fn world_lights(graph: &RenderGraph, plan: &Plan, poses: &Poses) -> Vec<WorldLight> {
+pub fn world_lights(graph: &RenderGraph, plan: &Plan, poses: &Poses) -> Vec<WorldLight> {
     plan.lights
         .iter()
         .map(|&index| {
@@ -121,51 +121,10 @@ pub(crate) fn shade(
         normal
     };
     for light in lights {
-        let (to_light, attenuation, spot) = match &light.kind {
-            LightKind::Directional { direction } => (-*direction, 1.0, 1.0),
-            LightKind::Point {
-                location,
-                radius,
-                attenuation,
-            } => {
-                let offset = *location - point;
-                let distance = offset.length();
-                if distance > *radius {
-                    continue;
-                }
-                (
-                    offset / distance.max(1e-300),
-                    attenuate(*attenuation, distance),
-                    1.0,
-                )
-            }
-            LightKind::Spot {
-                location,
-                direction,
-                radius,
-                attenuation,
-                beam_width,
-                cut_off,
-            } => {
-                let offset = *location - point;
-                let distance = offset.length();
-                if distance > *radius {
-                    continue;
-                }
-                let to_light = offset / distance.max(1e-300);
-                let cos_angle = (-to_light).dot(*direction);
-                let angle = libm::acos(cos_angle.clamp(-1.0, 1.0));
-                let spot = if angle >= *cut_off {
-                    0.0
-                } else if angle <= *beam_width {
-                    1.0
-                } else {
-                    (angle - cut_off) / (beam_width - cut_off)
-                };
-                (to_light, attenuate(*attenuation, distance), spot)
-            }
+        let Some((to_light, reach)) = light_at(&light.kind, point) else {
+            continue;
         };
-        if attenuation * spot == 0.0 {
+        if reach == 0.0 {
             continue;
         }
         let n_dot_l = normal.dot(to_light).max(0.0);
@@ -175,7 +134,7 @@ pub(crate) fn shade(
             specular_factor = libm::pow(normal.dot(half).max(0.0), material.shininess * 128.0);
         }
         let lit = n_dot_l > 0.0 && !(light.shadows && occluded(point, &light.kind));
-        let scale = attenuation * spot;
+        let scale = reach;
         for k in 0..3 {
             let ambient = light.ambient_intensity * diffuse[k] * material.ambient_intensity;
             let direct = if lit {
@@ -187,6 +146,53 @@ pub(crate) fn shade(
         }
     }
     out
+}
+
+/// How a light reaches `point`: the unit direction towards the light, and attenuation × spot
+/// factor (VRML97: `1/max(a0 + a1·d + a2·d², 1)`, full inside the beam width, linear to zero
+/// at the cut-off angle). `None` beyond the light's radius.
+pub(crate) fn light_at(kind: &LightKind, point: DVec3) -> Option<(DVec3, f64)> {
+    match kind {
+        LightKind::Directional { direction } => Some((-*direction, 1.0)),
+        LightKind::Point {
+            location,
+            radius,
+            attenuation,
+        } => {
+            let offset = *location - point;
+            let distance = offset.length();
+            (distance <= *radius).then(|| {
+                (
+                    offset / distance.max(1e-300),
+                    attenuate(*attenuation, distance),
+                )
+            })
+        }
+        LightKind::Spot {
+            location,
+            direction,
+            radius,
+            attenuation,
+            beam_width,
+            cut_off,
+        } => {
+            let offset = *location - point;
+            let distance = offset.length();
+            if distance > *radius {
+                return None;
+            }
+            let to_light = offset / distance.max(1e-300);
+            let angle = libm::acos((-to_light).dot(*direction).clamp(-1.0, 1.0));
+            let spot = if angle >= *cut_off {
+                0.0
+            } else if angle <= *beam_width {
+                1.0
+            } else {
+                (angle - cut_off) / (beam_width - cut_off)
+            };
+            Some((to_light, attenuate(*attenuation, distance) * spot))
+        }
+    }
 }
 
 fn attenuate(coefficients: DVec3, distance: f64) -> f64 {

@@ -265,6 +265,12 @@ impl<'c> Simulation<'c> {
             .zip(&poses.floor_y)
             .map(|(p, &y)| p.placement(y))
             .collect();
+        // Ambient sensors read the plan's lights, placed once per step.
+        let lights = if self.robots.iter().any(|r| !r.ambient_due.is_empty()) {
+            crate::render::world_lights(&compiled.graph, &compiled.plan, &poses)
+        } else {
+            Vec::new()
+        };
         for (index, robot) in self.robots.iter_mut().enumerate() {
             let rig = &compiled.rig.robots[index];
             for (s, sensor) in rig.distance_sensors.iter().enumerate().take(8) {
@@ -282,9 +288,8 @@ impl<'c> Simulation<'c> {
             for (s, sensor) in rig.light_sensors.iter().enumerate().take(8) {
                 if due(&mut robot.ambient_due[s], t, sensor.period) {
                     robot.ambient[s] = sensors::ambient(
-                        compiled,
+                        &lights,
                         &self.slab,
-                        &poses,
                         &placements,
                         index,
                         sensor,

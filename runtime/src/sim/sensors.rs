@@ -21,10 +21,9 @@ use glam::{DVec2, DVec3};
 
 use super::noise::Stream;
 use super::world2d::{Shape2, Slab};
-use crate::compile::graph::{LightKind, Owner};
+use crate::compile::graph::LightKind;
 use crate::compile::rig::{DistanceSensorRig, LightSensorRig, Placement, RobotRig};
-use crate::compile::Compiled;
-use crate::render::Poses;
+use crate::render::{light_at, WorldLight};
 use crate::retina::luminance;
 
 /// Value and relative noise of a lookup table at `x` (rows sorted by their first column).
@@ -126,9 +125,8 @@ pub fn proximity(
 /// One ambient light reading, 0…1023.
 #[allow(clippy::too_many_arguments)]
 pub fn ambient(
-    compiled: &Compiled,
+    lights: &[WorldLight],
     slab: &Slab,
-    poses: &Poses,
     placements: &[Placement],
     robot: usize,
     sensor: &LightSensorRig,
@@ -140,90 +138,25 @@ pub fn ambient(
         .direction_to_world(sensor.direction)
         .normalize_or(DVec3::X);
     let mut irradiance = 0.0;
-    for &index in &compiled.plan.lights {
-        let light = &compiled.graph.lights[index];
-        let frame = match light.owner {
-            Owner::Robot(owner) if owner < poses.poses.len() => Some(poses.frame(owner)),
-            _ => None,
+    for light in lights {
+        let Some((to_light, reach)) = light_at(&light.kind, position) else {
+            continue;
         };
-        let place = |p: DVec3| frame.map_or(p, |f| f.apply(p));
-        let turn = |v: DVec3| frame.map_or(v, |f| f.apply_vector(v));
-        let colour = luminance(light.color);
-        let (to_light, attenuation, spot, location) = match &light.kind {
-            LightKind::Directional { direction } => {
-                (-turn(*direction).normalize_or_zero(), 1.0, 1.0, None)
-            }
-            LightKind::Point {
-                location,
-                radius,
-                attenuation,
-            } => {
-                let location = place(*location);
-                let offset = location - position;
-                let distance = offset.length();
-                if distance > *radius {
+        if sensor.occlusion {
+            if let LightKind::Point { location, .. } | LightKind::Spot { location, .. } = light.kind
+            {
+                if blocked(slab, position, location) {
                     continue;
                 }
-                (
-                    offset / distance.max(1e-300),
-                    attenuate(*attenuation, distance),
-                    1.0,
-                    Some(location),
-                )
-            }
-            LightKind::Spot {
-                location,
-                direction,
-                radius,
-                attenuation,
-                beam_width,
-                cut_off,
-            } => {
-                let location = place(*location);
-                let offset = location - position;
-                let distance = offset.length();
-                if distance > *radius {
-                    continue;
-                }
-                let to_light = offset / distance.max(1e-300);
-                let angle = libm::acos(
-                    (-to_light)
-                        .dot(turn(*direction).normalize_or_zero())
-                        .clamp(-1.0, 1.0),
-                );
-                let spot = if angle >= *cut_off {
-                    0.0
-                } else if angle <= *beam_width {
-                    1.0
-                } else {
-                    (angle - cut_off) / (beam_width - cut_off)
-                };
-                (
-                    to_light,
-                    attenuate(*attenuation, distance),
-                    spot,
-                    Some(location),
-                )
-            }
-        };
-        if let (true, Some(location)) = (sensor.occlusion, location) {
-            if blocked(slab, position, location) {
-                continue;
             }
         }
-        irradiance += colour
-            * attenuation
-            * spot
+        irradiance += luminance(light.color)
+            * reach
             * (light.intensity * normal.dot(to_light).max(0.0) + light.ambient_intensity);
     }
     let (value, noise) = lookup(&sensor.lookup, irradiance);
     let reading = value * (1.0 + noise * stream.gaussian());
     libm::round(reading).clamp(0.0, 1023.0) as u16
-}
-
-fn attenuate(coefficients: DVec3, distance: f64) -> f64 {
-    1.0 / (coefficients.x + coefficients.y * distance + coefficients.z * distance * distance)
-        .max(1.0)
 }
 
 /// Whether an obstacle at the sensor's height stands between the sensor and a light.
