@@ -4,7 +4,7 @@
 //! Transcendental functions go through `libm` so that results do not depend on the platform's
 //! math library.
 
-use glam::{DMat3, DVec3};
+use glam::{DMat3, DVec2, DVec3};
 
 /// A ray `origin + t·direction`, `t ≥ 0`; `direction` need not be unit length.
 #[derive(Clone, Copy, Debug)]
@@ -180,6 +180,114 @@ impl Frame {
     /// Transforms a normal (inverse transpose).
     pub fn apply_normal(&self, inverse: &Frame, n: DVec3) -> DVec3 {
         (inverse.linear.transpose() * n).normalize_or_zero()
+    }
+}
+
+/// A horizontal cross-section in (x, z): what upright objects look like from above.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Footprint {
+    Circle {
+        center: DVec2,
+        radius: f64,
+    },
+    Rect {
+        center: DVec2,
+        u: DVec2,
+        v: DVec2,
+        half_u: f64,
+        half_v: f64,
+    },
+}
+
+impl Footprint {
+    /// Distance along a unit ray to the boundary, if hit at `t ≥ 0` (from inside: 0).
+    pub fn ray(&self, origin: DVec2, direction: DVec2) -> Option<f64> {
+        match *self {
+            Footprint::Circle { center, radius } => {
+                let oc = origin - center;
+                let b = oc.dot(direction);
+                let c = oc.length_squared() - radius * radius;
+                if c <= 0.0 {
+                    return Some(0.0);
+                }
+                let disc = b * b - c;
+                if disc < 0.0 || b > 0.0 {
+                    return None;
+                }
+                Some(-b - disc.sqrt())
+            }
+            Footprint::Rect {
+                center,
+                u,
+                v,
+                half_u,
+                half_v,
+            } => {
+                let oc = origin - center;
+                let (pu, pv) = (oc.dot(u), oc.dot(v));
+                let (du, dv) = (direction.dot(u), direction.dot(v));
+                let mut t_in = f64::NEG_INFINITY;
+                let mut t_out = f64::INFINITY;
+                for (p, d, h) in [(pu, du, half_u), (pv, dv, half_v)] {
+                    if d.abs() < 1e-300 {
+                        if p.abs() > h {
+                            return None;
+                        }
+                        continue;
+                    }
+                    let (a, b) = ((-h - p) / d, (h - p) / d);
+                    t_in = t_in.max(a.min(b));
+                    t_out = t_out.min(a.max(b));
+                }
+                (t_in <= t_out && t_out >= 0.0).then_some(t_in.max(0.0))
+            }
+        }
+    }
+
+    /// How far a circle of radius `r` at `c` reaches into the shape, and the unit direction to
+    /// push it out; `None` when they do not touch.
+    pub fn penetration(&self, c: DVec2, r: f64) -> Option<(f64, DVec2)> {
+        match *self {
+            Footprint::Circle { center, radius } => {
+                let offset = c - center;
+                let distance = offset.length();
+                let depth = r + radius - distance;
+                if depth <= 0.0 {
+                    return None;
+                }
+                let normal = if distance > 1e-12 {
+                    offset / distance
+                } else {
+                    DVec2::X
+                };
+                Some((depth, normal))
+            }
+            Footprint::Rect {
+                center,
+                u,
+                v,
+                half_u,
+                half_v,
+            } => {
+                let offset = c - center;
+                let (pu, pv) = (offset.dot(u), offset.dot(v));
+                let (qu, qv) = (pu.clamp(-half_u, half_u), pv.clamp(-half_v, half_v));
+                if pu.abs() <= half_u && pv.abs() <= half_v {
+                    // Centre inside: out through the nearest face.
+                    let (exit_u, exit_v) = (half_u - pu.abs(), half_v - pv.abs());
+                    return Some(if exit_u < exit_v {
+                        (exit_u + r, u * pu.signum())
+                    } else {
+                        (exit_v + r, v * pv.signum())
+                    });
+                }
+                let closest = center + u * qu + v * qv;
+                let away = c - closest;
+                let distance = away.length();
+                let depth = r - distance;
+                (depth > 0.0).then(|| (depth, away / distance.max(1e-300)))
+            }
+        }
     }
 }
 

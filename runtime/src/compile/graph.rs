@@ -6,10 +6,10 @@
 //! triangulated (concave and non-planar faces included). Static parts are kept apart from
 //! robot-attached parts (whose frames are relative to their robot) and indexed by a BVH.
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use regatta_schema::{NodeId, Scene, Value};
 
-use crate::geometry::{Aabb, Bvh, Frame};
+use crate::geometry::{Aabb, Bvh, Footprint, Frame};
 
 /// Handle of a primitive in [`RenderGraph::primitives`].
 pub type PrimitiveId = usize;
@@ -60,6 +60,38 @@ impl Shape {
                 max: DVec3::splat(*radius),
             },
             Shape::Mesh(index) => Aabb::from_points(meshes[*index].positions.iter().copied()),
+        }
+    }
+
+    /// The horizontal cross-section and half height under `frame`, for boxes and cylinders
+    /// (meaningful when the frame keeps them upright).
+    pub fn footprint(&self, frame: &Frame) -> Option<(Footprint, f64)> {
+        let center = DVec2::new(frame.translation.x, frame.translation.z);
+        let x = frame.apply_vector(DVec3::X);
+        let y = frame.apply_vector(DVec3::Y);
+        let z = frame.apply_vector(DVec3::Z);
+        match self {
+            Shape::Box { half } => {
+                let (u, v) = (DVec2::new(x.x, x.z), DVec2::new(z.x, z.z));
+                Some((
+                    Footprint::Rect {
+                        center,
+                        u: u.normalize(),
+                        v: v.normalize(),
+                        half_u: half.x * u.length(),
+                        half_v: half.z * v.length(),
+                    },
+                    half.y * y.length(),
+                ))
+            }
+            Shape::Cylinder { radius, height, .. } => Some((
+                Footprint::Circle {
+                    center,
+                    radius: radius * DVec2::new(x.x, x.z).length(),
+                },
+                height / 2.0 * y.length(),
+            )),
+            _ => None,
         }
     }
 

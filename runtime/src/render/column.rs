@@ -19,23 +19,8 @@ use glam::{DVec2, DVec3};
 use super::{shade, world_lights, Poses, WorldLight};
 use crate::compile::graph::{LightKind, Owner, RenderGraph, Shape};
 use crate::compile::plan::Plan;
+use crate::geometry::Footprint;
 use crate::retina::luminance;
-
-/// The horizontal cross-section of an upright object.
-#[derive(Clone, Copy, Debug)]
-enum Footprint {
-    Circle {
-        center: DVec2,
-        radius: f64,
-    },
-    Rect {
-        center: DVec2,
-        u: DVec2,
-        v: DVec2,
-        half_u: f64,
-        half_v: f64,
-    },
-}
 
 /// An upright object placed in the world.
 #[derive(Clone, Copy, Debug)]
@@ -190,45 +175,14 @@ fn upright_of(
     frame: &crate::geometry::Frame,
 ) -> Option<Upright> {
     let p = &graph.primitives[primitive];
-    let center = frame.translation;
-    let x = frame.apply_vector(DVec3::X);
-    let y = frame.apply_vector(DVec3::Y);
-    let z = frame.apply_vector(DVec3::Z);
-    let (footprint, half_height, side, top, bottom) = match &p.shape {
-        Shape::Box { half } => {
-            let (u, v) = (DVec2::new(x.x, x.z), DVec2::new(z.x, z.z));
-            (
-                Footprint::Rect {
-                    center: DVec2::new(center.x, center.z),
-                    u: u.normalize(),
-                    v: v.normalize(),
-                    half_u: half.x * u.length(),
-                    half_v: half.z * v.length(),
-                },
-                half.y * y.length(),
-                true,
-                true,
-                true,
-            )
-        }
+    let (footprint, half_height) = p.shape.footprint(frame)?;
+    let (side, top, bottom) = match &p.shape {
         Shape::Cylinder {
-            radius,
-            height,
-            side,
-            bottom,
-            top,
-        } => (
-            Footprint::Circle {
-                center: DVec2::new(center.x, center.z),
-                radius: radius * x.length(),
-            },
-            height / 2.0 * y.length(),
-            *side,
-            *top,
-            *bottom,
-        ),
-        _ => return None,
+            side, top, bottom, ..
+        } => (*side, *top, *bottom),
+        _ => (true, true, true),
     };
+    let center = frame.translation;
     Some(Upright {
         primitive,
         footprint,

@@ -20,7 +20,7 @@ use crate::optics::{LinearCamera, LinearCameraOutput, Panoramic, Renderer, Retin
 use crate::render::Poses;
 use crate::retina::FilterKind;
 use noise::{kind, Stream};
-use world2d::{Shape2, Slab};
+use world2d::{Footprint, Slab};
 
 /// Why a simulation could not start.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -424,7 +424,7 @@ impl<'c> Simulation<'c> {
                     let (ra, rb) = (rigs[a].body_radius, rigs[b].body_radius);
                     let ca = DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z);
                     let cb = DVec2::new(self.robots[b].pose.x, self.robots[b].pose.z);
-                    if let Some((depth, normal)) = (Shape2::Circle {
+                    if let Some((depth, normal)) = (Footprint::Circle {
                         center: cb,
                         radius: rb,
                     })

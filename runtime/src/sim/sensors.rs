@@ -20,7 +20,7 @@
 use glam::{DVec2, DVec3};
 
 use super::noise::Stream;
-use super::world2d::{Shape2, Slab};
+use super::world2d::{Footprint, Slab};
 use crate::compile::graph::LightKind;
 use crate::compile::rig::{DistanceSensorRig, LightSensorRig, Placement, RobotRig};
 use crate::render::{light_at, WorldLight};
@@ -89,7 +89,7 @@ pub fn proximity(
             if height < place.floor_y || height > place.floor_y + rigs[other].body_height {
                 continue;
             }
-            let body = Shape2::Circle {
+            let body = Footprint::Circle {
                 center: DVec2::new(place.x, place.z),
                 radius: rigs[other].body_radius,
             };
