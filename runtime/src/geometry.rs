@@ -200,6 +200,19 @@ pub enum Footprint {
 }
 
 impl Footprint {
+    /// Centre and radius of a circle holding the footprint.
+    pub fn bounding_circle(&self) -> (DVec2, f64) {
+        match *self {
+            Footprint::Circle { center, radius } => (center, radius),
+            Footprint::Rect {
+                center,
+                half_u,
+                half_v,
+                ..
+            } => (center, (half_u * half_u + half_v * half_v).sqrt()),
+        }
+    }
+
     /// Distance along a unit ray to the boundary, if hit at `t ≥ 0` (from inside: 0).
     pub fn ray(&self, origin: DVec2, direction: DVec2) -> Option<f64> {
         match *self {

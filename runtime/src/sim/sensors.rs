@@ -61,6 +61,28 @@ pub fn proximity(
     let origin2 = DVec2::new(origin.x, origin.z);
     let looking = placement.direction_to_world(sensor.direction);
     let direction = DVec2::new(looking.x, looking.z).normalize_or(DVec2::X);
+    // Only obstacles at the sensor's height and within its range can answer any of its rays.
+    let mut near = [0u32; 32];
+    let mut count = 0;
+    let mut overflow = Vec::new();
+    for (index, obstacle) in slab.obstacles.iter().enumerate() {
+        if height < obstacle.y0 || height > obstacle.y1 {
+            continue;
+        }
+        let (center, radius) = obstacle.shape.bounding_circle();
+        if (center - origin2).length() <= sensor.range + radius {
+            if count < near.len() {
+                near[count] = index as u32;
+                count += 1;
+            } else {
+                overflow.push(index as u32);
+            }
+        }
+    }
+    let candidates = near[..count]
+        .iter()
+        .chain(&overflow)
+        .map(|&i| &slab.obstacles[i as usize]);
     let (mut value_sum, mut noise_sum, mut weight_sum) = (0.0, 0.0, 0.0);
     for &(_, cos, sin) in &sensor.ray_turns {
         // Counter-clockwise seen from above, in (x, z): the same sense as headings.
@@ -71,10 +93,7 @@ pub fn proximity(
         let weight = cos;
         let mut nearest = sensor.range;
         let mut reflectance = 0.0;
-        for obstacle in &slab.obstacles {
-            if height < obstacle.y0 || height > obstacle.y1 {
-                continue;
-            }
+        for obstacle in candidates.clone() {
             if let Some(t) = obstacle.shape.ray(origin2, ray) {
                 if t < nearest {
                     nearest = t;
