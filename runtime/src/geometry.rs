@@ -237,22 +237,15 @@ impl Footprint {
                 half_v,
             } => {
                 let oc = origin - center;
-                let (pu, pv) = (oc.dot(u), oc.dot(v));
-                let (du, dv) = (direction.dot(u), direction.dot(v));
-                let mut t_in = f64::NEG_INFINITY;
-                let mut t_out = f64::INFINITY;
-                for (p, d, h) in [(pu, du, half_u), (pv, dv, half_v)] {
-                    if d.abs() < 1e-300 {
-                        if p.abs() > h {
-                            return None;
-                        }
-                        continue;
-                    }
-                    let (a, b) = ((-h - p) / d, (h - p) / d);
-                    t_in = t_in.max(a.min(b));
-                    t_out = t_out.min(a.max(b));
-                }
-                (t_in <= t_out && t_out >= 0.0).then_some(t_in.max(0.0))
+                rect_slabs(
+                    oc.dot(u),
+                    oc.dot(v),
+                    direction.dot(u),
+                    direction.dot(v),
+                    half_u,
+                    half_v,
+                )
+                .map(|(t_in, _, _)| t_in.max(0.0))
             }
         }
     }
@@ -302,6 +295,41 @@ impl Footprint {
             }
         }
     }
+}
+
+/// A ray through a rectangle in its own axes: position `(pu, pv)` and direction `(du, dv)`
+/// relative to the centre, half extents `half_u`, `half_v`. Returns the entry and exit
+/// parameters (entry may be negative: the ray starts inside) and which face it enters by:
+/// `(axis 0 for u or 1 for v, sign of the outward normal)`.
+#[inline]
+pub fn rect_slabs(
+    pu: f64,
+    pv: f64,
+    du: f64,
+    dv: f64,
+    half_u: f64,
+    half_v: f64,
+) -> Option<(f64, f64, (usize, f64))> {
+    let mut t_in = f64::NEG_INFINITY;
+    let mut t_out = f64::INFINITY;
+    let mut face = (0, 0.0);
+    for (axis, (p, d, h)) in [(pu, du, half_u), (pv, dv, half_v)].into_iter().enumerate() {
+        if d.abs() < 1e-300 {
+            if p.abs() > h {
+                return None;
+            }
+            continue;
+        }
+        let inverse = 1.0 / d;
+        let (a, b) = ((-h - p) * inverse, (h - p) * inverse);
+        let (near, far) = if a < b { (a, b) } else { (b, a) };
+        if near > t_in {
+            t_in = near;
+            face = (axis, if d > 0.0 { -1.0 } else { 1.0 });
+        }
+        t_out = t_out.min(far);
+    }
+    (t_in <= t_out && t_out >= 0.0).then_some((t_in, t_out, face))
 }
 
 /// A hit in a primitive's local frame.

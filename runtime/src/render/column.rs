@@ -1019,29 +1019,18 @@ impl Relative {
                 half_u,
                 half_v,
             } => {
-                let (du, dv) = (direction.dot(u), direction.dot(v));
-                let mut t_in = f64::NEG_INFINITY;
-                let mut t_out = f64::INFINITY;
-                let mut normal = DVec2::ZERO;
-                for (p, d, h, axis) in [(pu, du, half_u, u), (pv, dv, half_v, v)] {
-                    if d.abs() < 1e-300 {
-                        if p.abs() > h {
-                            return None;
-                        }
-                        continue;
-                    }
-                    let inverse = 1.0 / d;
-                    let (a, b) = ((-h - p) * inverse, (h - p) * inverse);
-                    let (near, far) = if a < b { (a, b) } else { (b, a) };
-                    if near > t_in {
-                        t_in = near;
-                        normal = if d > 0.0 { -axis } else { axis };
-                    }
-                    t_out = t_out.min(far);
-                }
-                if t_in > t_out || t_out <= 0.0 {
+                let (t_in, t_out, (axis, sign)) = crate::geometry::rect_slabs(
+                    pu,
+                    pv,
+                    direction.dot(u),
+                    direction.dot(v),
+                    half_u,
+                    half_v,
+                )?;
+                if t_out <= 0.0 {
                     return None;
                 }
+                let normal = if axis == 0 { u * sign } else { v * sign };
                 Some((t_in.max(0.0), t_out, normal))
             }
         }
