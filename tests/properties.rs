@@ -225,3 +225,104 @@ fn exponential_proto_expansion_is_bounded() {
         .any(|d| d.diagnostic.code == "too-large" || d.diagnostic.code == "depth"));
     assert!(checked.scene.nodes.len() <= regatta_schema::MAX_NODES);
 }
+
+mod worlds_that_check {
+    //! Worlds that pass the checker must compile, simulate and render without panicking,
+    //! whatever their (valid) numbers: degenerate scales, far positions, zero lights.
+    use proptest::prelude::*;
+    use regatta_parser::SourceText;
+    use regatta_runtime::optics::{Panoramic, Renderer, RetinaOutput};
+    use regatta_runtime::sim::Simulation;
+    use regatta_schema::{check, Options};
+
+    fn number(range: std::ops::Range<f64>) -> impl Strategy<Value = String> {
+        range.prop_map(|x| format!("{x:.4}"))
+    }
+
+    fn shape() -> impl Strategy<Value = String> {
+        let geometry = prop_oneof![
+            (number(0.001..2.0), number(0.001..2.0), number(0.001..2.0)).prop_map(|(a, b, c)| format!("Box {{ size {a} {b} {c} }}")),
+            (number(0.001..1.0), number(0.001..1.0)).prop_map(|(r, h)| format!("Cylinder {{ radius {r} height {h} }}")),
+            (number(0.001..1.0), number(0.001..1.0)).prop_map(|(r, h)| format!("Cone {{ bottomRadius {r} height {h} }}")),
+            number(0.001..1.0).prop_map(|r| format!("Sphere {{ radius {r} }}")),
+            Just("IndexedFaceSet { coord Coordinate { point [ 0 0 0, 1 0 0, 1 1 0, 0.5 0.2 0, 0 1 0 ] } coordIndex [ 0 1 2 3 4 -1, 0 0 0 -1, 7 8 9 -1 ] }".to_owned()),
+        ];
+        let material = (number(0.0..1.0), number(0.0..1.0), number(0.0..1.0)).prop_map(|(d, e, r)| format!("Material {{ diffuseColor {d} {d} {d} emissiveColor {e} 0 0 irReflectance {r} }}"));
+        let transform = (
+            number(-3.0..3.0),
+            number(-0.5..0.5),
+            number(-3.0..3.0),
+            number(-7.0..7.0),
+            number(0.001..3.0),
+            prop::bool::ANY,
+        );
+        (geometry, material, transform).prop_map(|(g, m, (x, y, z, angle, scale, tilt))| {
+            let axis = if tilt { "1 0 0" } else { "0 1 0" };
+            format!("Transform {{ translation {x} {y} {z} rotation {axis} {angle} scale {scale} {scale} {scale} children [ Shape {{ appearance Appearance {{ material {m} }} geometry {g} }} ] }}\n")
+        })
+    }
+
+    fn world() -> impl Strategy<Value = String> {
+        let light = prop_oneof![
+            number(0.0..2.0).prop_map(|i| format!(
+                "DirectionalLight {{ direction 0.2 -1 0.1 intensity {i} }}\n"
+            )),
+            (number(-1.0..1.0), number(0.0..5.0), prop::bool::ANY).prop_map(|(x, i, s)| format!(
+                "PointLight {{ location {x} 0.2 0 intensity {i} castShadows {} }}\n",
+                if s { "TRUE" } else { "FALSE" }
+            )),
+            Just(String::new()),
+        ];
+        let robot = (
+            number(-2.0..2.0),
+            number(-2.0..2.0),
+            number(-4.0..4.0),
+            prop_oneof![Just("regatta"), Just("braitenberg"), Just("none")],
+            prop_oneof![Just("paper"), Just("exact")],
+            1u32..4,
+            1u32..17,
+        );
+        (prop::collection::vec(shape(), 0..6), light, prop::collection::vec(robot, 1..3)).prop_map(|(shapes, light, robots)| {
+            let mut text = String::from("#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" }\n");
+            text.push_str(&light);
+            for s in shapes {
+                text.push_str(&s);
+            }
+            for (i, (x, z, heading, controller, optics, samples, stride)) in robots.into_iter().enumerate() {
+                text.push_str(&format!(
+                    "Khepera {{ name \"k{i}\" translation {x} 0 {z} rotation 0 1 0 {heading} controller \"{controller}\" turret PanoramicTurret {{ optics \"{optics}\" samples {samples} stride {stride} filters [ \"raw\" \"odd\" \"bandpass\" ] }} }}\n"
+                ));
+            }
+            text
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+        #[test]
+        fn checked_worlds_compile_simulate_and_render(text in world()) {
+            let checked = check(SourceText::from_bytes("random.wbt".to_owned(), text.clone().into_bytes()), &Options::default());
+            prop_assert!(!checked.has_errors(), "{}\n{}", text, checked.render(false));
+            let compiled = regatta_runtime::compile(&checked.scene);
+            let mut simulation = Simulation::new(&compiled, Some(3)).unwrap();
+            simulation.run(20);
+            for robot in &simulation.robots {
+                prop_assert!(robot.pose.x.is_finite() && robot.pose.z.is_finite());
+                if let Some(turret) = &robot.panoramic {
+                    prop_assert!(turret.output.analog.iter().all(|a| a.is_finite()));
+                }
+            }
+            // The ray-casting reference renders the same world too.
+            let renderer = Renderer::new(&compiled.graph, &compiled.plan, true);
+            let poses = regatta_tests::start_poses(&compiled);
+            let view = renderer.view(&compiled.plan, &poses, 0);
+            if let Some(regatta_runtime::compile::rig::TurretRig::Panoramic(rig)) = &compiled.rig.robots[0].turret {
+                let mut retina = Panoramic::new(rig);
+                let mut out = RetinaOutput::default();
+                retina.update(&renderer, &view, compiled.rig.robots[0].start, 0.0, &mut out);
+                prop_assert!(out.analog.iter().all(|a| a.is_finite()));
+            }
+        }
+    }
+}
