@@ -12,6 +12,7 @@ pub mod compile;
 pub mod controllers;
 pub mod geometry;
 pub mod khepera;
+pub mod log;
 pub mod optics;
 pub mod render;
 pub mod retina;

@@ -3,7 +3,11 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
 use anyhow::{bail, Context};
+use regatta_runtime::log::{Recorder, RunInfo};
 use regatta_runtime::sim::Simulation;
 
 use crate::Outcome;
@@ -24,6 +28,9 @@ pub struct Args {
     /// Read a foreign file leniently.
     #[arg(long)]
     lenient: bool,
+    /// Record every sensor and actuator to this MCAP file.
+    #[arg(long, value_name = "FILE.mcap")]
+    log: Option<PathBuf>,
 }
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
@@ -41,9 +48,55 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         }
         (None, None) => libm_ceil(60.0 / simulation.time_step),
     };
+    let mut recorder = match &args.log {
+        Some(path) => {
+            let file = std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+            let run = RunInfo {
+                world_name: args.world.display().to_string(),
+                world_text: loaded.checked.sources[0].text.to_string(),
+                seed: simulation.seed,
+                lenient: args.lenient,
+                steps_requested: steps,
+            };
+            Some(Recorder::new(std::io::BufWriter::new(file), &simulation, &run)?)
+        }
+        None => None,
+    };
+    // Ctrl-C ends the run between steps; the log is then closed properly and marked.
+    let interrupted = Arc::new(AtomicBool::new(false));
+    {
+        let interrupted = interrupted.clone();
+        let _ = ctrlc::set_handler(move || interrupted.store(true, Ordering::SeqCst));
+    }
+    let progress = progress_bar(steps);
     let started = Instant::now();
-    simulation.run(steps);
+    for step in 0..steps {
+        if interrupted.load(Ordering::SeqCst) {
+            break;
+        }
+        simulation.step();
+        if let Some(recorder) = &mut recorder {
+            recorder.record(&simulation).with_context(|| format!("while logging step {}", simulation.steps))?;
+        }
+        if step % 1024 == 0 {
+            if let Some(bar) = &progress {
+                if started.elapsed().as_secs_f64() > 1.0 {
+                    bar.set_position(step);
+                }
+            }
+        }
+    }
+    if let Some(bar) = progress {
+        bar.finish_and_clear();
+    }
+    let was_interrupted = interrupted.load(Ordering::SeqCst);
+    if let Some(recorder) = recorder {
+        recorder.finish(&simulation, was_interrupted).context("cannot close the log")?;
+    }
     let wall = started.elapsed().as_secs_f64();
+    if was_interrupted {
+        eprintln!("interrupted after {} steps{}", simulation.steps, if args.log.is_some() { "; the log is complete and marked interrupted" } else { "" });
+    }
     println!("world {}: seed {}", args.world.display(), simulation.seed);
     println!(
         "simulated {:.3} s in {} steps of {} ms",
@@ -88,6 +141,18 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         println!();
     }
     Ok(Outcome::Clean)
+}
+
+/// A progress bar on standard error when it is a terminal (hidden otherwise); it shows up only
+/// once a run has lasted a second.
+fn progress_bar(steps: u64) -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = indicatif::ProgressBar::new(steps);
+    bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps, {per_sec}, eta {eta}").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()));
+    Some(bar)
 }
 
 fn libm_ceil(x: f64) -> u64 {

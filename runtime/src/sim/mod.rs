@@ -38,6 +38,18 @@ pub enum SimError {
 /// Largest penetration left after a step's collision handling (m).
 pub const PENETRATION_TOLERANCE: f64 = 1e-9;
 
+/// Which sensor readings a step refreshed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Updated {
+    pub proximity: bool,
+    pub ambient: bool,
+    pub vision: bool,
+    /// A contact began or ended.
+    pub contact: bool,
+    /// The controller returned an error.
+    pub controller_error: bool,
+}
+
 /// Contact bookkeeping of one robot.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Contacts {
@@ -51,6 +63,13 @@ pub struct Contacts {
     /// Contact events per obstacle (static obstacles, then robots).
     pub per_obstacle: Vec<u64>,
     touching: Vec<bool>,
+}
+
+impl Contacts {
+    /// Whether the robot ended the last step touching something.
+    pub fn is_touching(&self) -> bool {
+        self.touching.iter().any(|&t| t)
+    }
 }
 
 /// Visits to the world's landmarks (buoys).
@@ -78,6 +97,8 @@ pub struct LinearCameraState {
 /// One simulated robot.
 pub struct RobotState {
     pub name: String,
+    /// Which readings the last step refreshed (what a log records, at each sensor's rate).
+    pub updated: Updated,
     pub pose: Pose2,
     /// Wheel speed commands (pulses per 10 ms).
     pub command: (i32, i32),
@@ -152,6 +173,7 @@ impl<'c> Simulation<'c> {
                 })?;
             robots.push(RobotState {
                 name: rig.name.clone(),
+                updated: Updated::default(),
                 pose: rig.start,
                 command: (0, 0),
                 travel: (0.0, 0.0),
@@ -227,6 +249,9 @@ impl<'c> Simulation<'c> {
     /// Advances the world by one step.
     pub fn step(&mut self) {
         let t = self.time;
+        for robot in &mut self.robots {
+            robot.updated = Updated::default();
+        }
         self.update_sensors(t);
         let rigs = &self.compiled.rig.robots;
         for (index, robot) in self.robots.iter_mut().enumerate() {
@@ -238,6 +263,7 @@ impl<'c> Simulation<'c> {
                 rig: &rigs[index],
             };
             if let Err(error) = controller.step(&mut io) {
+                robot.updated.controller_error = true;
                 robot.controller_errors += 1;
                 robot.last_controller_error = Some(error.to_string());
             }
@@ -275,6 +301,7 @@ impl<'c> Simulation<'c> {
             let rig = &compiled.rig.robots[index];
             for (s, sensor) in rig.distance_sensors.iter().enumerate().take(8) {
                 if due(&mut robot.ir_due[s], t, sensor.period) {
+                    robot.updated.proximity = true;
                     robot.proximity[s] = sensors::proximity(
                         &self.slab,
                         &placements,
@@ -287,6 +314,7 @@ impl<'c> Simulation<'c> {
             }
             for (s, sensor) in rig.light_sensors.iter().enumerate().take(8) {
                 if due(&mut robot.ambient_due[s], t, sensor.period) {
+                    robot.updated.ambient = true;
                     robot.ambient[s] = sensors::ambient(
                         &lights,
                         &self.slab,
@@ -300,6 +328,7 @@ impl<'c> Simulation<'c> {
             if let Some(renderer) = &self.renderer {
                 if let Some(turret) = &mut robot.panoramic {
                     if due(&mut turret.due, t, turret.model.rig.period) {
+                        robot.updated.vision = true;
                         let view = renderer.view(&compiled.plan, &poses, index);
                         turret.model.update(
                             renderer,
@@ -312,6 +341,7 @@ impl<'c> Simulation<'c> {
                 }
                 if let Some(camera) = &mut robot.linear_camera {
                     if due(&mut camera.due, t, camera.model.rig.period) {
+                        robot.updated.vision = true;
                         let view = renderer.view(&compiled.plan, &poses, index);
                         camera.model.update(
                             renderer,
@@ -376,9 +406,11 @@ impl<'c> Simulation<'c> {
                     contacts.per_obstacle[k] += 1;
                 }
             }
-            if any && !contacts.touching.iter().any(|&t| t) {
+            let was = contacts.touching.iter().any(|&t| t);
+            if any && !was {
                 contacts.events += 1;
             }
+            robot.updated.contact |= any != was;
             if any {
                 contacts.steps += 1;
                 contacts.current += dt;
