@@ -57,9 +57,15 @@ impl RunInfo {
             ("world_sha256".to_owned(), digest),
             ("seed".to_owned(), self.seed.to_string()),
             ("lenient".to_owned(), self.lenient.to_string()),
-            ("steps_requested".to_owned(), self.steps_requested.to_string()),
+            (
+                "steps_requested".to_owned(),
+                self.steps_requested.to_string(),
+            ),
             ("time_step".to_owned(), format!("{time_step}")),
-            ("regatta_version".to_owned(), env!("CARGO_PKG_VERSION").to_owned()),
+            (
+                "regatta_version".to_owned(),
+                env!("CARGO_PKG_VERSION").to_owned(),
+            ),
         ])
     }
 
@@ -69,9 +75,13 @@ impl RunInfo {
         Ok(RunInfo {
             world_name: get("world_name")?.clone(),
             world_text: get("world")?.clone(),
-            seed: get("seed")?.parse().map_err(|_| LogError::MissingField("seed"))?,
+            seed: get("seed")?
+                .parse()
+                .map_err(|_| LogError::MissingField("seed"))?,
             lenient: get("lenient")? == "true",
-            steps_requested: get("steps_requested")?.parse().map_err(|_| LogError::MissingField("steps_requested"))?,
+            steps_requested: get("steps_requested")?
+                .parse()
+                .map_err(|_| LogError::MissingField("steps_requested"))?,
         })
     }
 }
@@ -192,23 +202,33 @@ impl<'a> CdrReader<'a> {
     }
     pub fn f64(&mut self) -> Result<f64, ShortMessage> {
         self.align(8);
-        Ok(f64::from_le_bytes(self.take(8)?.try_into().expect("8 bytes")))
+        Ok(f64::from_le_bytes(
+            self.take(8)?.try_into().expect("8 bytes"),
+        ))
     }
     pub fn i32(&mut self) -> Result<i32, ShortMessage> {
         self.align(4);
-        Ok(i32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes")))
+        Ok(i32::from_le_bytes(
+            self.take(4)?.try_into().expect("4 bytes"),
+        ))
     }
     pub fn u32(&mut self) -> Result<u32, ShortMessage> {
         self.align(4);
-        Ok(u32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes")))
+        Ok(u32::from_le_bytes(
+            self.take(4)?.try_into().expect("4 bytes"),
+        ))
     }
     pub fn u64(&mut self) -> Result<u64, ShortMessage> {
         self.align(8);
-        Ok(u64::from_le_bytes(self.take(8)?.try_into().expect("8 bytes")))
+        Ok(u64::from_le_bytes(
+            self.take(8)?.try_into().expect("8 bytes"),
+        ))
     }
     pub fn u16(&mut self) -> Result<u16, ShortMessage> {
         self.align(2);
-        Ok(u16::from_le_bytes(self.take(2)?.try_into().expect("2 bytes")))
+        Ok(u16::from_le_bytes(
+            self.take(2)?.try_into().expect("2 bytes"),
+        ))
     }
     pub fn bool(&mut self) -> Result<bool, ShortMessage> {
         Ok(self.take(1)?[0] != 0)
@@ -223,7 +243,13 @@ impl<'a> CdrReader<'a> {
         if n > self.data.len() {
             return Err(ShortMessage);
         }
-        (0..n).map(|_| Ok(f32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes")))).collect()
+        (0..n)
+            .map(|_| {
+                Ok(f32::from_le_bytes(
+                    self.take(4)?.try_into().expect("4 bytes"),
+                ))
+            })
+            .collect()
     }
     pub fn u16s(&mut self, fixed: Option<usize>) -> Result<Vec<u16>, ShortMessage> {
         let n = match fixed {
@@ -255,35 +281,74 @@ impl<W: Write + Seek> Recorder<W> {
             .profile("");
         let mut writer = options.create(sink).map_err(LogError::Write)?;
         writer
-            .write_metadata(&mcap::records::Metadata { name: "regatta".to_owned(), metadata: run.to_metadata(simulation.time_step) })
+            .write_metadata(&mcap::records::Metadata {
+                name: "regatta".to_owned(),
+                metadata: run.to_metadata(simulation.time_step),
+            })
             .map_err(LogError::Write)?;
         let mut schema = BTreeMap::new();
         for (name, text) in SCHEMAS {
-            schema.insert(*name, writer.add_schema(name, "ros2msg", text.as_bytes()).map_err(LogError::Write)?);
+            schema.insert(
+                *name,
+                writer
+                    .add_schema(name, "ros2msg", text.as_bytes())
+                    .map_err(LogError::Write)?,
+            );
         }
         let mut robots = Vec::new();
         let none = BTreeMap::new();
         for robot in &simulation.robots {
-            let mut channel = |topic: &str, schema_name: &str| writer.add_channel(schema[schema_name], &format!("/{}/{topic}", robot.name), "cdr", &none).map_err(LogError::Write);
+            let mut channel = |topic: &str, schema_name: &str| {
+                writer
+                    .add_channel(
+                        schema[schema_name],
+                        &format!("/{}/{topic}", robot.name),
+                        "cdr",
+                        &none,
+                    )
+                    .map_err(LogError::Write)
+            };
             robots.push(RobotChannels {
                 pose: channel("pose", "regatta/msg/Pose")?,
                 wheels: channel("wheels", "regatta/msg/Wheels")?,
                 proximity: channel("proximity", "regatta/msg/Readings8")?,
                 ambient: channel("ambient", "regatta/msg/Readings8")?,
-                retina: if robot.panoramic.is_some() { Some(channel("retina", "regatta/msg/Retina")?) } else { None },
-                k213: if robot.linear_camera.is_some() { Some(channel("k213", "regatta/msg/LinearCamera")?) } else { None },
+                retina: if robot.panoramic.is_some() {
+                    Some(channel("retina", "regatta/msg/Retina")?)
+                } else {
+                    None
+                },
+                k213: if robot.linear_camera.is_some() {
+                    Some(channel("k213", "regatta/msg/LinearCamera")?)
+                } else {
+                    None
+                },
                 contacts: channel("contacts", "regatta/msg/Contact")?,
                 controller: channel("controller", "regatta/msg/ControllerEvent")?,
             });
         }
-        Ok(Recorder { writer, robots, sequence: 0, cdr: Cdr { buf: Vec::with_capacity(4096) } })
+        Ok(Recorder {
+            writer,
+            robots,
+            sequence: 0,
+            cdr: Cdr {
+                buf: Vec::with_capacity(4096),
+            },
+        })
     }
 
     /// Writes the message encoded in `self.cdr`.
     fn write(&mut self, channel: u16, time_ns: u64) -> Result<(), LogError> {
         self.sequence = self.sequence.wrapping_add(1);
-        let header = mcap::records::MessageHeader { channel_id: channel, sequence: self.sequence, log_time: time_ns, publish_time: time_ns };
-        self.writer.write_to_known_channel(&header, &self.cdr.buf).map_err(LogError::Write)
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: self.sequence,
+            log_time: time_ns,
+            publish_time: time_ns,
+        };
+        self.writer
+            .write_to_known_channel(&header, &self.cdr.buf)
+            .map_err(LogError::Write)
     }
 
     /// Records what the last step produced: the pose and wheels every step, sensors when they
@@ -296,8 +361,16 @@ impl<W: Write + Seek> Recorder<W> {
         for (index, robot) in simulation.robots.iter().enumerate() {
             let rig = &simulation.compiled.rig.robots[index];
             let channels = &self.robots[index];
-            let (pose, wheels, proximity, ambient, retina, k213, contacts, controller) =
-                (channels.pose, channels.wheels, channels.proximity, channels.ambient, channels.retina, channels.k213, channels.contacts, channels.controller);
+            let (pose, wheels, proximity, ambient, retina, k213, contacts, controller) = (
+                channels.pose,
+                channels.wheels,
+                channels.proximity,
+                channels.ambient,
+                channels.retina,
+                channels.k213,
+                channels.contacts,
+                channels.controller,
+            );
             let updated = robot.updated;
             if updated.proximity {
                 self.cdr.start();
@@ -326,8 +399,18 @@ impl<W: Write + Seek> Recorder<W> {
                     for (kind, _) in &out.filtered {
                         cdr.string(kind.name());
                     }
-                    cdr.f32s(out.filtered.iter().flat_map(|(_, v)| v.iter().copied()).collect::<Vec<f64>>().into_iter());
-                    let digital: Vec<u16> = out.digital.iter().flat_map(|(_, v)| v.iter().copied()).collect();
+                    cdr.f32s(
+                        out.filtered
+                            .iter()
+                            .flat_map(|(_, v)| v.iter().copied())
+                            .collect::<Vec<f64>>()
+                            .into_iter(),
+                    );
+                    let digital: Vec<u16> = out
+                        .digital
+                        .iter()
+                        .flat_map(|(_, v)| v.iter().copied())
+                        .collect();
                     cdr.u16s(&digital);
                     self.write(channel, ns(read_at))?;
                 }
@@ -342,7 +425,8 @@ impl<W: Write + Seek> Recorder<W> {
             if updated.controller_error {
                 self.cdr.start();
                 self.cdr.f64(read_at);
-                self.cdr.string(robot.last_controller_error.as_deref().unwrap_or(""));
+                self.cdr
+                    .string(robot.last_controller_error.as_deref().unwrap_or(""));
                 self.write(controller, ns(read_at))?;
             }
             let (left, right) = robot.counters(rig);
@@ -377,7 +461,12 @@ impl<W: Write + Seek> Recorder<W> {
             ("time".to_owned(), format!("{}", simulation.time)),
             ("interrupted".to_owned(), interrupted.to_string()),
         ]);
-        self.writer.write_metadata(&mcap::records::Metadata { name: "regatta.end".to_owned(), metadata: end }).map_err(LogError::Write)?;
+        self.writer
+            .write_metadata(&mcap::records::Metadata {
+                name: "regatta.end".to_owned(),
+                metadata: end,
+            })
+            .map_err(LogError::Write)?;
         self.writer.finish().map_err(LogError::Write)?;
         Ok(())
     }
@@ -400,11 +489,19 @@ pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
     let mut run = None;
     let mut end = None;
     let mut truncated = None;
-    let reader = mcap::read::LinearReader::new_with_options(bytes, mcap::read::Options::IgnoreEndMagic.into()).map_err(LogError::Read)?;
+    let reader = mcap::read::LinearReader::new_with_options(
+        bytes,
+        mcap::read::Options::IgnoreEndMagic.into(),
+    )
+    .map_err(LogError::Read)?;
     for record in reader {
         match record {
-            Ok(mcap::records::Record::Metadata(metadata)) if metadata.name == "regatta" => run = Some(RunInfo::from_metadata(&metadata.metadata)?),
-            Ok(mcap::records::Record::Metadata(metadata)) if metadata.name == "regatta.end" => end = Some(metadata.metadata),
+            Ok(mcap::records::Record::Metadata(metadata)) if metadata.name == "regatta" => {
+                run = Some(RunInfo::from_metadata(&metadata.metadata)?)
+            }
+            Ok(mcap::records::Record::Metadata(metadata)) if metadata.name == "regatta.end" => {
+                end = Some(metadata.metadata)
+            }
             Ok(_) => {}
             Err(error) => {
                 truncated = Some(error.to_string());
@@ -414,10 +511,16 @@ pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
     }
     let run = run.ok_or(LogError::NoMetadata)?;
     let mut messages = Vec::new();
-    let stream = mcap::MessageStream::new_with_options(bytes, mcap::read::Options::IgnoreEndMagic.into()).map_err(LogError::Read)?;
+    let stream =
+        mcap::MessageStream::new_with_options(bytes, mcap::read::Options::IgnoreEndMagic.into())
+            .map_err(LogError::Read)?;
     for message in stream {
         match message {
-            Ok(message) => messages.push((message.channel.topic.clone(), message.log_time, message.data.into_owned())),
+            Ok(message) => messages.push((
+                message.channel.topic.clone(),
+                message.log_time,
+                message.data.into_owned(),
+            )),
             Err(error) => {
                 truncated.get_or_insert(error.to_string());
                 break;
@@ -427,5 +530,10 @@ pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
     if end.is_none() && truncated.is_none() {
         truncated = Some("the log has no end record".to_owned());
     }
-    Ok(LogContents { run, end, messages, truncated })
+    Ok(LogContents {
+        run,
+        end,
+        messages,
+        truncated,
+    })
 }

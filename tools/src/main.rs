@@ -8,6 +8,7 @@ mod check;
 mod explain;
 mod fmt;
 mod font;
+mod logs;
 mod render;
 mod run;
 mod schema;
@@ -52,6 +53,10 @@ enum Command {
     Render(render::Args),
     /// Step a world and print a summary: time, speed, contacts, buoy visits.
     Run(run::Args),
+    /// Re-run a log's world and seed and check that every message is the same.
+    Replay(logs::ReplayArgs),
+    /// Work with sensor logs (export to CSV).
+    Log(logs::LogArgs),
 }
 
 /// What a subcommand reports back.
@@ -98,6 +103,8 @@ fn main() -> ExitCode {
         Command::Explain(args) => explain::run(args, color),
         Command::Render(args) => render::run(args, color),
         Command::Run(args) => run::run(args, color),
+        Command::Replay(args) => logs::replay(args),
+        Command::Log(args) => logs::log(args),
     };
     match result {
         Ok(Outcome::Clean) => ExitCode::SUCCESS,

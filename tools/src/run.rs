@@ -50,7 +50,8 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
     };
     let mut recorder = match &args.log {
         Some(path) => {
-            let file = std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+            let file = std::fs::File::create(path)
+                .with_context(|| format!("cannot create {}", path.display()))?;
             let run = RunInfo {
                 world_name: args.world.display().to_string(),
                 world_text: loaded.checked.sources[0].text.to_string(),
@@ -58,7 +59,11 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 lenient: args.lenient,
                 steps_requested: steps,
             };
-            Some(Recorder::new(std::io::BufWriter::new(file), &simulation, &run)?)
+            Some(Recorder::new(
+                std::io::BufWriter::new(file),
+                &simulation,
+                &run,
+            )?)
         }
         None => None,
     };
@@ -76,7 +81,9 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         }
         simulation.step();
         if let Some(recorder) = &mut recorder {
-            recorder.record(&simulation).with_context(|| format!("while logging step {}", simulation.steps))?;
+            recorder
+                .record(&simulation)
+                .with_context(|| format!("while logging step {}", simulation.steps))?;
         }
         if step % 1024 == 0 {
             if let Some(bar) = &progress {
@@ -91,11 +98,21 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
     }
     let was_interrupted = interrupted.load(Ordering::SeqCst);
     if let Some(recorder) = recorder {
-        recorder.finish(&simulation, was_interrupted).context("cannot close the log")?;
+        recorder
+            .finish(&simulation, was_interrupted)
+            .context("cannot close the log")?;
     }
     let wall = started.elapsed().as_secs_f64();
     if was_interrupted {
-        eprintln!("interrupted after {} steps{}", simulation.steps, if args.log.is_some() { "; the log is complete and marked interrupted" } else { "" });
+        eprintln!(
+            "interrupted after {} steps{}",
+            simulation.steps,
+            if args.log.is_some() {
+                "; the log is complete and marked interrupted"
+            } else {
+                ""
+            }
+        );
     }
     println!("world {}: seed {}", args.world.display(), simulation.seed);
     println!(
@@ -151,7 +168,10 @@ fn progress_bar(steps: u64) -> Option<indicatif::ProgressBar> {
         return None;
     }
     let bar = indicatif::ProgressBar::new(steps);
-    bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps, {per_sec}, eta {eta}").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()));
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps, {per_sec}, eta {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
     Some(bar)
 }
 

@@ -1,0 +1,255 @@
+//! Commands over sensor logs: `regatta replay --verify`, `regatta log export`, `regatta plot`.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
+use regatta_runtime::log::{read, CdrReader, LogContents, Recorder, RunInfo};
+use regatta_runtime::sim::Simulation;
+
+use crate::Outcome;
+
+/// Reads a log file, warning when it was cut short.
+fn load(path: &Path) -> anyhow::Result<LogContents> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let contents =
+        read(&bytes).with_context(|| format!("{} is not a regatta log", path.display()))?;
+    if let Some(reason) = &contents.truncated {
+        eprintln!(
+            "warning: {} ends early ({reason}); using the {} messages of its complete chunks",
+            path.display(),
+            contents.messages.len()
+        );
+    }
+    Ok(contents)
+}
+
+/// Checks and compiles the world embedded in a log.
+fn compile_embedded(run: &RunInfo) -> anyhow::Result<regatta_runtime::Compiled> {
+    let source = regatta_parser::SourceText::from_bytes(
+        run.world_name.clone(),
+        run.world_text.clone().into_bytes(),
+    );
+    let base = Path::new(&run.world_name).parent().map(Path::to_owned);
+    let checked = regatta_schema::check(
+        source,
+        &regatta_schema::Options {
+            strict: !run.lenient,
+            base_dir: base,
+        },
+    );
+    if checked.has_errors() {
+        eprint!("{}", checked.render(false));
+        bail!("the world embedded in the log no longer checks with this regatta");
+    }
+    Ok(regatta_runtime::compile(&checked.scene))
+}
+
+#[derive(clap::Args)]
+pub struct ReplayArgs {
+    /// Re-run the log's world and seed and compare every message.
+    #[arg(long, required = true)]
+    verify: bool,
+    /// The log.
+    log: PathBuf,
+}
+
+pub fn replay(args: ReplayArgs) -> anyhow::Result<Outcome> {
+    let _ = args.verify;
+    let contents = load(&args.log)?;
+    let steps: u64 = contents
+        .end
+        .as_ref()
+        .and_then(|end| end.get("steps"))
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(contents.run.steps_requested);
+    let compiled = compile_embedded(&contents.run)?;
+    let mut simulation = Simulation::new(&compiled, Some(contents.run.seed))?;
+    let mut buffer = std::io::Cursor::new(Vec::new());
+    let mut recorder = Recorder::new(&mut buffer, &simulation, &contents.run)?;
+    for _ in 0..steps {
+        simulation.step();
+        recorder.record(&simulation)?;
+    }
+    let interrupted = contents
+        .end
+        .as_ref()
+        .and_then(|e| e.get("interrupted"))
+        .is_some_and(|v| v == "true");
+    recorder.finish(&simulation, interrupted)?;
+    let again = read(buffer.get_ref())?;
+    for (index, (recorded, replayed)) in contents.messages.iter().zip(&again.messages).enumerate() {
+        if recorded != replayed {
+            println!(
+                "DIFFERS at message {index}: {} at t = {:.3} s (replayed {} at t = {:.3} s)",
+                recorded.0,
+                recorded.1 as f64 / 1e9,
+                replayed.0,
+                replayed.1 as f64 / 1e9
+            );
+            return Ok(Outcome::Errors);
+        }
+    }
+    if contents.truncated.is_none() && contents.messages.len() != again.messages.len() {
+        println!(
+            "DIFFERS: the log has {} messages, the replay {}",
+            contents.messages.len(),
+            again.messages.len()
+        );
+        return Ok(Outcome::Errors);
+    }
+    println!(
+        "OK: {} messages over {} steps replay identically",
+        contents.messages.len().min(again.messages.len()),
+        steps
+    );
+    Ok(Outcome::Clean)
+}
+
+#[derive(clap::Args)]
+pub struct LogArgs {
+    #[command(subcommand)]
+    what: LogCommand,
+}
+
+#[derive(clap::Subcommand)]
+enum LogCommand {
+    /// Write one CSV per channel kind (pose.csv: t,robot,x,z,heading; …).
+    Export {
+        /// The log.
+        log: PathBuf,
+        /// Directory for the CSV files.
+        #[arg(long, value_name = "DIR")]
+        csv: PathBuf,
+    },
+}
+
+pub fn log(args: LogArgs) -> anyhow::Result<Outcome> {
+    match args.what {
+        LogCommand::Export { log, csv } => export(&log, &csv),
+    }
+}
+
+/// The robot and the channel kind of a topic `/{robot}/{kind}`.
+fn split_topic(topic: &str) -> (&str, &str) {
+    let trimmed = topic.trim_start_matches('/');
+    trimmed.rsplit_once('/').unwrap_or(("", trimmed))
+}
+
+/// One CSV row (after `t,robot`) and its header, from a message of `kind`.
+fn decode(
+    kind: &str,
+    data: &[u8],
+) -> Result<Option<(f64, Vec<String>, Vec<String>)>, regatta_runtime::log::ShortMessage> {
+    let mut r = CdrReader::new(data);
+    let t = r.f64()?;
+    let numbered =
+        |prefix: &str, n: usize| (0..n).map(|i| format!("{prefix}{i}")).collect::<Vec<_>>();
+    Ok(Some(match kind {
+        "pose" => (
+            t,
+            vec!["x".into(), "z".into(), "heading".into()],
+            vec![
+                r.f64()?.to_string(),
+                r.f64()?.to_string(),
+                r.f64()?.to_string(),
+            ],
+        ),
+        "wheels" => (
+            t,
+            [
+                "command_left",
+                "command_right",
+                "encoder_left",
+                "encoder_right",
+            ]
+            .map(String::from)
+            .to_vec(),
+            vec![
+                r.i32()?.to_string(),
+                r.i32()?.to_string(),
+                r.i32()?.to_string(),
+                r.i32()?.to_string(),
+            ],
+        ),
+        "proximity" | "ambient" => (
+            t,
+            numbered(if kind == "proximity" { "p" } else { "a" }, 8),
+            r.u16s(Some(8))?.iter().map(u16::to_string).collect(),
+        ),
+        "retina" => {
+            let dark = r.bool()?;
+            let (first, last) = (r.u16()?, r.u16()?);
+            let analog = r.f32s()?;
+            let filters = r.strings()?;
+            let filtered = r.f32s()?;
+            let digital = r.u16s(None)?;
+            let roi = (last as usize).saturating_sub(first as usize) + 1;
+            let mut header = vec!["dark".to_owned()];
+            let mut row = vec![dark.to_string()];
+            header.extend(numbered("analog", analog.len()));
+            row.extend(analog.iter().map(f32::to_string));
+            for (k, name) in filters.iter().enumerate() {
+                header.extend((0..analog.len()).map(|i| format!("{name}{i}")));
+                row.extend(
+                    filtered
+                        .iter()
+                        .skip(k * analog.len())
+                        .take(analog.len())
+                        .map(f32::to_string),
+                );
+                header.extend(
+                    (first as usize..first as usize + roi).map(|i| format!("{name}_digital{i}")),
+                );
+                row.extend(digital.iter().skip(k * roi).take(roi).map(u16::to_string));
+            }
+            (t, header, row)
+        }
+        "k213" => {
+            let pixels = r.u16s(None)?;
+            let light = r.u16()?;
+            let mut header = numbered("pixel", pixels.len());
+            header.push("light_level".into());
+            let mut row: Vec<String> = pixels.iter().map(u16::to_string).collect();
+            row.push(light.to_string());
+            (t, header, row)
+        }
+        "contacts" => (
+            t,
+            vec!["touching".into(), "contacts".into()],
+            vec![r.bool()?.to_string(), r.u64()?.to_string()],
+        ),
+        "controller" => (
+            t,
+            vec!["error".into()],
+            vec![format!("\"{}\"", r.string()?.replace('"', "\"\""))],
+        ),
+        _ => return Ok(None),
+    }))
+}
+
+fn export(log: &Path, dir: &Path) -> anyhow::Result<Outcome> {
+    let contents = load(log)?;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let mut files: std::collections::BTreeMap<String, (Vec<String>, String)> = Default::default();
+    for (topic, _, data) in &contents.messages {
+        let (robot, kind) = split_topic(topic);
+        let Some((t, header, row)) =
+            decode(kind, data).with_context(|| format!("a {topic} message is damaged"))?
+        else {
+            continue;
+        };
+        let entry = files
+            .entry(kind.to_owned())
+            .or_insert_with(|| (header.clone(), String::new()));
+        entry
+            .1
+            .push_str(&format!("{t},{robot},{}\n", row.join(",")));
+    }
+    for (kind, (header, body)) in &files {
+        let path = dir.join(format!("{kind}.csv"));
+        let text = format!("t,robot,{}\n{body}", header.join(","));
+        std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
+        println!("{}", path.display());
+    }
+    Ok(Outcome::Clean)
+}
