@@ -229,3 +229,75 @@ fn a_closed_pipe_ends_quietly() {
     let output = child.wait_with_output().unwrap();
     assert!(!String::from_utf8_lossy(&output.stderr).contains("panicked"));
 }
+
+fn run_logged(dir: &Path, name: &str, steps: &str) -> PathBuf {
+    let log = dir.join(name);
+    let status = regatta().args(["run", "--steps", steps, "--log"]).arg(&log).arg(root().join("worlds/regatta.wbt")).output().unwrap();
+    assert_eq!(status.status.code(), Some(0), "{}", String::from_utf8_lossy(&status.stderr));
+    log
+}
+
+#[test]
+fn logs_are_byte_identical_and_replay_verifies() {
+    let dir = temp_dir("logs");
+    let a = std::fs::read(run_logged(&dir, "a.mcap", "300")).unwrap();
+    let b = std::fs::read(run_logged(&dir, "b.mcap", "300")).unwrap();
+    assert!(a.len() > 1000);
+    assert!(a == b, "the same world and seed give the same bytes");
+    let replay = regatta().args(["replay", "--verify"]).arg(dir.join("a.mcap")).output().unwrap();
+    let text = String::from_utf8_lossy(&replay.stdout);
+    assert_eq!(replay.status.code(), Some(0), "{text}{}", String::from_utf8_lossy(&replay.stderr));
+    assert!(text.starts_with("OK: "), "{text}");
+    // Another seed is another run.
+    let other = dir.join("c.mcap");
+    regatta().args(["run", "--steps", "300", "--seed", "9", "--log"]).arg(&other).arg(root().join("worlds/regatta.wbt")).status().unwrap();
+    assert!(std::fs::read(&other).unwrap() != a);
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn exported_csv_has_a_header_and_a_row_per_pose() {
+    let dir = temp_dir("export");
+    let log = run_logged(&dir, "run.mcap", "100");
+    let out = dir.join("csv");
+    let export = regatta().args(["log", "export"]).arg(&log).arg("--csv").arg(&out).output().unwrap();
+    assert_eq!(export.status.code(), Some(0), "{}", String::from_utf8_lossy(&export.stderr));
+    let pose = std::fs::read_to_string(out.join("pose.csv")).unwrap();
+    let mut lines = pose.lines();
+    assert_eq!(lines.next(), Some("t,robot,x,z,heading"));
+    assert_eq!(lines.count(), 100);
+    for name in ["wheels.csv", "proximity.csv", "ambient.csv", "retina.csv"] {
+        assert!(out.join(name).exists(), "{name}");
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn a_cut_log_still_exports_its_complete_chunks_and_garbage_is_an_error() {
+    let dir = temp_dir("cut");
+    let log = run_logged(&dir, "run.mcap", "3000");
+    let bytes = std::fs::read(&log).unwrap();
+    let cut = dir.join("cut.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() * 3 / 4]).unwrap();
+    let out = dir.join("csv");
+    let export = regatta().args(["log", "export"]).arg(&cut).arg("--csv").arg(&out).output().unwrap();
+    let stderr = String::from_utf8_lossy(&export.stderr);
+    assert_eq!(export.status.code(), Some(0), "{stderr}");
+    assert!(stderr.contains("warning:") && stderr.contains("ends early"), "{stderr}");
+    let rows = std::fs::read_to_string(out.join("pose.csv")).unwrap().lines().count();
+    assert!(rows > 100 && rows < 3001, "{rows} rows");
+    let garbage = dir.join("garbage.mcap");
+    std::fs::write(&garbage, b"this is not an mcap file at all").unwrap();
+    for args in [vec!["log", "export"], vec!["replay", "--verify"]] {
+        let mut command = regatta();
+        command.args(&args).arg(&garbage);
+        if args[0] == "log" {
+            command.arg("--csv").arg(&out);
+        }
+        let output = command.output().unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(1), "{stderr}");
+        assert!(stderr.contains("is not a regatta log") && !stderr.contains("panicked"), "{stderr}");
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
