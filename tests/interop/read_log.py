@@ -1,0 +1,64 @@
+"""Interoperability check: an independent MCAP reader (Python's `mcap` package) reads a regatta
+log back, and its messages match what regatta wrote (compared with `regatta log export`).
+
+Usage: python3 tests/interop/read_log.py PATH/TO/regatta
+"""
+import csv
+import os
+import struct
+import subprocess
+import sys
+import tempfile
+
+from mcap.reader import make_reader
+
+
+def main() -> int:
+    regatta = sys.argv[1]
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    world = os.path.join(root, "worlds", "regatta.wbt")
+    failures = 0
+    checks = 0
+    with tempfile.TemporaryDirectory() as tmp:
+        log = os.path.join(tmp, "run.mcap")
+        subprocess.run([regatta, "run", "--steps", "500", "--log", log, world], check=True, stdout=subprocess.DEVNULL)
+        subprocess.run([regatta, "log", "export", log, "--csv", os.path.join(tmp, "csv")], check=True, stdout=subprocess.DEVNULL)
+        with open(os.path.join(tmp, "csv", "pose.csv")) as f:
+            exported = [row for row in csv.DictReader(f)]
+        poses = []
+        topics = {}
+        metadata = {}
+        with open(log, "rb") as f:
+            reader = make_reader(f)
+            for record in reader.iter_metadata():
+                metadata[record.name] = record.metadata
+            for schema, channel, message in reader.iter_messages():
+                topics[channel.topic] = topics.get(channel.topic, 0) + 1
+                if channel.topic.endswith("/pose"):
+                    assert schema.encoding == "ros2msg" and channel.message_encoding == "cdr"
+                    t, x, z, heading = struct.unpack_from("<dddd", message.data, 4)
+                    poses.append((t, x, z, heading, message.log_time))
+
+        def check(condition, what):
+            nonlocal failures, checks
+            checks += 1
+            if not condition:
+                failures += 1
+                print("FAILED:", what)
+
+        check("regatta" in metadata and metadata["regatta"]["seed"] == "1", "metadata record with the seed")
+        check(metadata.get("regatta.end", {}).get("steps") == "500", "end record with the steps")
+        check(len(poses) == 500 == len(exported), f"500 poses read ({len(poses)}) and exported ({len(exported)})")
+        check(topics.get("/khepera/retina") == 500, f"a retina message per step ({topics.get('/khepera/retina')})")
+        same = all(
+            (t, x, z, h) == (float(row["t"]), float(row["x"]), float(row["z"]), float(row["heading"]))
+            for (t, x, z, h, _), row in zip(poses, exported)
+        )
+        check(same, "poses decoded by Python equal regatta's export bit for bit")
+        check(all(log_time == round(t * 1e9) for t, _, _, _, log_time in poses), "log times are simulated time")
+    print(f"interop: {checks - failures} passed, {failures} failed")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
