@@ -135,11 +135,11 @@ fn split_topic(topic: &str) -> (&str, &str) {
     trimmed.rsplit_once('/').unwrap_or(("", trimmed))
 }
 
+/// A decoded message: its time, the CSV header after `t,robot`, and the row.
+type CsvRow = (f64, Vec<String>, Vec<String>);
+
 /// One CSV row (after `t,robot`) and its header, from a message of `kind`.
-fn decode(
-    kind: &str,
-    data: &[u8],
-) -> Result<Option<(f64, Vec<String>, Vec<String>)>, regatta_runtime::log::ShortMessage> {
+fn decode(kind: &str, data: &[u8]) -> Result<Option<CsvRow>, regatta_runtime::log::ShortMessage> {
     let mut r = CdrReader::new(data);
     let t = r.f64()?;
     let numbered =
@@ -252,4 +252,178 @@ fn export(log: &Path, dir: &Path) -> anyhow::Result<Outcome> {
         println!("{}", path.display());
     }
     Ok(Outcome::Clean)
+}
+
+#[derive(clap::Args)]
+pub struct PlotArgs {
+    /// The log.
+    log: PathBuf,
+    /// Directory for the pictures.
+    #[arg(long, default_value = "out/plots")]
+    out: PathBuf,
+}
+
+/// `regatta plot`: a top view of the arena with every robot's trajectory, and for each robot
+/// with a retina a kymograph (time downwards, 150 photodiodes across, digital values as grey).
+pub fn plot(args: PlotArgs) -> anyhow::Result<Outcome> {
+    use image::{Rgb, RgbImage};
+    let contents = load(&args.log)?;
+    let compiled = compile_embedded(&contents.run)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    // Trajectories and retina rows per robot, in file order.
+    let mut paths: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    let mut retinas: Vec<(String, Vec<Vec<f64>>)> = Vec::new();
+    for (topic, _, data) in &contents.messages {
+        let (robot, kind) = split_topic(topic);
+        let mut r = CdrReader::new(data);
+        match kind {
+            "pose" => {
+                let (_, x, z) = (r.f64(), r.f64(), r.f64());
+                if let (Ok(x), Ok(z)) = (x, z) {
+                    match paths.iter_mut().find(|(name, _)| name == robot) {
+                        Some((_, path)) => path.push((x, z)),
+                        None => paths.push((robot.to_owned(), vec![(x, z)])),
+                    }
+                }
+            }
+            "retina" => {
+                let row = (|| -> Result<Vec<f64>, regatta_runtime::log::ShortMessage> {
+                    r.f64()?;
+                    r.bool()?;
+                    r.u16()?;
+                    r.u16()?;
+                    let analog = r.f32s()?;
+                    let filters = r.strings()?;
+                    r.f32s()?;
+                    let digital = r.u16s(None)?;
+                    // The first filter's digital values, scaled to 0…1; analog when none.
+                    if filters.is_empty() || digital.is_empty() {
+                        let peak = analog
+                            .iter()
+                            .fold(0.0f32, |m, v| m.max(*v))
+                            .max(f32::MIN_POSITIVE);
+                        return Ok(analog.iter().map(|&a| (a / peak) as f64).collect());
+                    }
+                    let width = digital.len() / filters.len();
+                    let top = digital.iter().copied().max().unwrap_or(1).max(1) as f64;
+                    let top = if top <= 63.0 { 63.0 } else { top };
+                    Ok(digital[..width].iter().map(|&d| d as f64 / top).collect())
+                })();
+                if let Ok(row) = row {
+                    match retinas.iter_mut().find(|(name, _)| name == robot) {
+                        Some((_, rows)) => rows.push(row),
+                        None => retinas.push((robot.to_owned(), vec![row])),
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    // Top view: x to the right, z downwards, 800 px across the static geometry and the paths.
+    let mut bounds = compiled.graph.static_bounds();
+    for (_, path) in &paths {
+        for &(x, z) in path {
+            bounds = bounds.union(regatta_runtime::geometry::Aabb {
+                min: glam_point(x, z),
+                max: glam_point(x, z),
+            });
+        }
+    }
+    if bounds.is_empty() {
+        bail!("the log has neither geometry nor poses to plot");
+    }
+    let (span_x, span_z) = (
+        (bounds.max.x - bounds.min.x).max(1e-6),
+        (bounds.max.z - bounds.min.z).max(1e-6),
+    );
+    let scale = 760.0 / span_x.max(span_z);
+    let (width, height) = ((span_x * scale) as u32 + 40, (span_z * scale) as u32 + 40);
+    let mut top = RgbImage::from_pixel(width, height, Rgb([250, 250, 250]));
+    let to_pixel = |x: f64, z: f64| {
+        (
+            (20.0 + (x - bounds.min.x) * scale) as i64,
+            (20.0 + (z - bounds.min.z) * scale) as i64,
+        )
+    };
+    let dot = |image: &mut RgbImage, (px, py): (i64, i64), color: Rgb<u8>| {
+        if px >= 0 && py >= 0 && (px as u32) < image.width() && (py as u32) < image.height() {
+            image.put_pixel(px as u32, py as u32, color);
+        }
+    };
+    // Static geometry standing on the floor, as footprints.
+    for &index in &compiled.graph.static_primitives {
+        let primitive = &compiled.graph.primitives[index];
+        let b = primitive.bounds;
+        if b.max.y <= 0.001 {
+            continue; // floors
+        }
+        let (x0, z0) = to_pixel(b.min.x, b.min.z);
+        let (x1, z1) = to_pixel(b.max.x, b.max.z);
+        for py in z0..=z1 {
+            for px in x0..=x1 {
+                dot(&mut top, (px, py), Rgb([150, 150, 150]));
+            }
+        }
+    }
+    for landmark in &compiled.landmarks {
+        let (cx, cz) = to_pixel(landmark.center.x, landmark.center.y);
+        let r = (landmark.radius * scale).max(2.0) as i64;
+        for dy in -r..=r {
+            for dx in -r..=r {
+                if dx * dx + dy * dy <= r * r {
+                    dot(&mut top, (cx + dx, cz + dy), Rgb([230, 180, 20]));
+                }
+            }
+        }
+    }
+    let colors = [
+        Rgb([30, 80, 200]),
+        Rgb([200, 40, 40]),
+        Rgb([30, 150, 60]),
+        Rgb([140, 60, 180]),
+        Rgb([20, 150, 160]),
+    ];
+    for (k, (_, path)) in paths.iter().enumerate() {
+        for pair in path.windows(2) {
+            let (a, b) = (
+                to_pixel(pair[0].0, pair[0].1),
+                to_pixel(pair[1].0, pair[1].1),
+            );
+            let steps = (a.0 - b.0).abs().max((a.1 - b.1).abs()).max(1);
+            for s in 0..=steps {
+                let p = (a.0 + (b.0 - a.0) * s / steps, a.1 + (b.1 - a.1) * s / steps);
+                dot(&mut top, p, colors[k % colors.len()]);
+            }
+        }
+    }
+    let path = args.out.join("top.png");
+    top.save(&path)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    println!("{}", path.display());
+    // Kymographs: at most 3000 rows, each pixel 4 px wide.
+    for (robot, rows) in &retinas {
+        let every = rows.len().div_ceil(3000).max(1);
+        let kept: Vec<&Vec<f64>> = rows.iter().step_by(every).collect();
+        let width = kept.iter().map(|r| r.len()).max().unwrap_or(0) as u32 * 4;
+        let mut image = image::GrayImage::new(width.max(1), kept.len().max(1) as u32);
+        for (y, row) in kept.iter().enumerate() {
+            for (i, &v) in row.iter().enumerate() {
+                let grey = (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+                for dx in 0..4 {
+                    image.put_pixel(i as u32 * 4 + dx, y as u32, image::Luma([grey]));
+                }
+            }
+        }
+        let path = args.out.join(format!("{robot}-kymograph.png"));
+        image
+            .save(&path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        println!("{}", path.display());
+    }
+    Ok(Outcome::Clean)
+}
+
+fn glam_point(x: f64, z: f64) -> glam::DVec3 {
+    glam::DVec3::new(x, 0.0, z)
 }

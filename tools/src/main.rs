@@ -57,6 +57,8 @@ enum Command {
     Replay(logs::ReplayArgs),
     /// Work with sensor logs (export to CSV).
     Log(logs::LogArgs),
+    /// Pictures of a log: the arena from above with the trajectories, and retina kymographs.
+    Plot(logs::PlotArgs),
 }
 
 /// What a subcommand reports back.
@@ -105,6 +107,7 @@ fn main() -> ExitCode {
         Command::Run(args) => run::run(args, color),
         Command::Replay(args) => logs::replay(args),
         Command::Log(args) => logs::log(args),
+        Command::Plot(args) => logs::plot(args),
     };
     match result {
         Ok(Outcome::Clean) => ExitCode::SUCCESS,

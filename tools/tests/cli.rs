@@ -232,8 +232,18 @@ fn a_closed_pipe_ends_quietly() {
 
 fn run_logged(dir: &Path, name: &str, steps: &str) -> PathBuf {
     let log = dir.join(name);
-    let status = regatta().args(["run", "--steps", steps, "--log"]).arg(&log).arg(root().join("worlds/regatta.wbt")).output().unwrap();
-    assert_eq!(status.status.code(), Some(0), "{}", String::from_utf8_lossy(&status.stderr));
+    let status = regatta()
+        .args(["run", "--steps", steps, "--log"])
+        .arg(&log)
+        .arg(root().join("worlds/regatta.wbt"))
+        .output()
+        .unwrap();
+    assert_eq!(
+        status.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
     log
 }
 
@@ -244,13 +254,27 @@ fn logs_are_byte_identical_and_replay_verifies() {
     let b = std::fs::read(run_logged(&dir, "b.mcap", "300")).unwrap();
     assert!(a.len() > 1000);
     assert!(a == b, "the same world and seed give the same bytes");
-    let replay = regatta().args(["replay", "--verify"]).arg(dir.join("a.mcap")).output().unwrap();
+    let replay = regatta()
+        .args(["replay", "--verify"])
+        .arg(dir.join("a.mcap"))
+        .output()
+        .unwrap();
     let text = String::from_utf8_lossy(&replay.stdout);
-    assert_eq!(replay.status.code(), Some(0), "{text}{}", String::from_utf8_lossy(&replay.stderr));
+    assert_eq!(
+        replay.status.code(),
+        Some(0),
+        "{text}{}",
+        String::from_utf8_lossy(&replay.stderr)
+    );
     assert!(text.starts_with("OK: "), "{text}");
     // Another seed is another run.
     let other = dir.join("c.mcap");
-    regatta().args(["run", "--steps", "300", "--seed", "9", "--log"]).arg(&other).arg(root().join("worlds/regatta.wbt")).status().unwrap();
+    regatta()
+        .args(["run", "--steps", "300", "--seed", "9", "--log"])
+        .arg(&other)
+        .arg(root().join("worlds/regatta.wbt"))
+        .status()
+        .unwrap();
     assert!(std::fs::read(&other).unwrap() != a);
     std::fs::remove_dir_all(dir).ok();
 }
@@ -260,8 +284,19 @@ fn exported_csv_has_a_header_and_a_row_per_pose() {
     let dir = temp_dir("export");
     let log = run_logged(&dir, "run.mcap", "100");
     let out = dir.join("csv");
-    let export = regatta().args(["log", "export"]).arg(&log).arg("--csv").arg(&out).output().unwrap();
-    assert_eq!(export.status.code(), Some(0), "{}", String::from_utf8_lossy(&export.stderr));
+    let export = regatta()
+        .args(["log", "export"])
+        .arg(&log)
+        .arg("--csv")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        export.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&export.stderr)
+    );
     let pose = std::fs::read_to_string(out.join("pose.csv")).unwrap();
     let mut lines = pose.lines();
     assert_eq!(lines.next(), Some("t,robot,x,z,heading"));
@@ -280,11 +315,23 @@ fn a_cut_log_still_exports_its_complete_chunks_and_garbage_is_an_error() {
     let cut = dir.join("cut.mcap");
     std::fs::write(&cut, &bytes[..bytes.len() * 3 / 4]).unwrap();
     let out = dir.join("csv");
-    let export = regatta().args(["log", "export"]).arg(&cut).arg("--csv").arg(&out).output().unwrap();
+    let export = regatta()
+        .args(["log", "export"])
+        .arg(&cut)
+        .arg("--csv")
+        .arg(&out)
+        .output()
+        .unwrap();
     let stderr = String::from_utf8_lossy(&export.stderr);
     assert_eq!(export.status.code(), Some(0), "{stderr}");
-    assert!(stderr.contains("warning:") && stderr.contains("ends early"), "{stderr}");
-    let rows = std::fs::read_to_string(out.join("pose.csv")).unwrap().lines().count();
+    assert!(
+        stderr.contains("warning:") && stderr.contains("ends early"),
+        "{stderr}"
+    );
+    let rows = std::fs::read_to_string(out.join("pose.csv"))
+        .unwrap()
+        .lines()
+        .count();
     assert!(rows > 100 && rows < 3001, "{rows} rows");
     let garbage = dir.join("garbage.mcap");
     std::fs::write(&garbage, b"this is not an mcap file at all").unwrap();
@@ -297,7 +344,35 @@ fn a_cut_log_still_exports_its_complete_chunks_and_garbage_is_an_error() {
         let output = command.output().unwrap();
         let stderr = String::from_utf8_lossy(&output.stderr);
         assert_eq!(output.status.code(), Some(1), "{stderr}");
-        assert!(stderr.contains("is not a regatta log") && !stderr.contains("panicked"), "{stderr}");
+        assert!(
+            stderr.contains("is not a regatta log") && !stderr.contains("panicked"),
+            "{stderr}"
+        );
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn plot_draws_the_top_view_and_a_kymograph() {
+    let dir = temp_dir("plot");
+    let log = run_logged(&dir, "run.mcap", "200");
+    let out = dir.join("plots");
+    let plot = regatta()
+        .arg("plot")
+        .arg(&log)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        plot.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&plot.stderr)
+    );
+    for name in ["top.png", "khepera-kymograph.png"] {
+        let bytes = std::fs::read(out.join(name)).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG"), "{name} is a PNG");
     }
     std::fs::remove_dir_all(dir).ok();
 }
