@@ -51,7 +51,8 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
     let mut recorder = match &args.log {
         Some(path) => {
             if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-                std::fs::create_dir_all(parent).with_context(|| format!("cannot create {}", parent.display()))?;
+                std::fs::create_dir_all(parent)
+                    .with_context(|| format!("cannot create {}", parent.display()))?;
             }
             let file = std::fs::File::create(path)
                 .with_context(|| format!("cannot create {}", path.display()))?;

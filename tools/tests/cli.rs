@@ -376,3 +376,54 @@ fn plot_draws_the_top_view_and_a_kymograph() {
     }
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_ends_a_run_with_a_complete_log_marked_interrupted() {
+    let dir = temp_dir("interrupt");
+    let log = dir.join("run.mcap");
+    let child = regatta()
+        .args(["run", "--steps", "100000000", "--log"])
+        .arg(&log)
+        .arg(root().join("worlds/regatta.wbt"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(800));
+    // SAFETY: sending a signal to our own child process.
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGINT);
+    }
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("interrupted after") && stderr.contains("marked interrupted"),
+        "{stderr}"
+    );
+    // Complete: no warning on reading; and it replays.
+    let export = regatta()
+        .args(["log", "export"])
+        .arg(&log)
+        .arg("--csv")
+        .arg(dir.join("csv"))
+        .output()
+        .unwrap();
+    assert!(
+        !String::from_utf8_lossy(&export.stderr).contains("warning"),
+        "{}",
+        String::from_utf8_lossy(&export.stderr)
+    );
+    let replay = regatta()
+        .args(["replay", "--verify"])
+        .arg(&log)
+        .output()
+        .unwrap();
+    assert!(
+        String::from_utf8_lossy(&replay.stdout).starts_with("OK"),
+        "{}",
+        String::from_utf8_lossy(&replay.stdout)
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
