@@ -38,6 +38,10 @@ fn steps_per_second(compiled: &Compiled, millis: u64) -> anyhow::Result<f64> {
     Ok(steps as f64 / started.elapsed().as_secs_f64())
 }
 
+fn text_of(path: &std::path::Path) -> anyhow::Result<String> {
+    std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))
+}
+
 fn load(path: &std::path::Path) -> anyhow::Result<Compiled> {
     Ok(crate::world::load(path, false, false)?.compiled)
 }
@@ -69,6 +73,39 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     );
     let full = steps_per_second(&compiled, args.millis)?;
     report("as written (IR, ambient, vision every step)", full);
+    // The same with every message logged (into memory: the cost of recording, not of a disk).
+    {
+        let mut simulation = Simulation::new(&compiled, None)?;
+        let run = regatta_runtime::log::RunInfo {
+            world_name: args.world.display().to_string(),
+            world_text: text_of(&args.world)?,
+            seed: simulation.seed,
+            lenient: false,
+            steps_requested: 0,
+        };
+        let mut sink = std::io::Cursor::new(Vec::new());
+        let mut recorder = regatta_runtime::log::Recorder::new(&mut sink, &simulation, &run)?;
+        let started = Instant::now();
+        let budget = std::time::Duration::from_millis(args.millis);
+        let mut steps = 0u64;
+        while started.elapsed() < budget {
+            for _ in 0..500 {
+                simulation.step();
+                recorder.record(&simulation)?;
+            }
+            steps += 500;
+        }
+        let rate = steps as f64 / started.elapsed().as_secs_f64();
+        recorder.finish(&simulation, false)?;
+        report("as written, logging every message", rate);
+        let per_minute = sink.get_ref().len() as f64 / simulation.time * 60.0;
+        println!(
+            "{:<44} {:>12.1} MB per simulated minute ({:.1} MB for 10 minutes)",
+            "log size",
+            per_minute / 1e6,
+            per_minute * 10.0 / 1e6
+        );
+    }
     // IR only: the same world with the turrets taken off.
     let mut ir_only = compiled.clone();
     for robot in &mut ir_only.rig.robots {
