@@ -427,3 +427,63 @@ fn ctrl_c_ends_a_run_with_a_complete_log_marked_interrupted() {
     );
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_disk_is_reported_as_such() {
+    let output = regatta()
+        .args(["run", "--steps", "3000", "--log", "/dev/full"])
+        .arg(root().join("worlds/regatta.wbt"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("cannot write the log") && stderr.contains("No space left on device"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[cfg(unix)]
+#[test]
+fn a_recording_killed_with_sigkill_still_exports_its_complete_chunks() {
+    let dir = temp_dir("sigkill");
+    let log = dir.join("run.mcap");
+    let mut child = regatta()
+        .args(["run", "--steps", "100000000", "--log"])
+        .arg(&log)
+        .arg(root().join("worlds/regatta.wbt"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Wait until at least one 1 MB chunk is on disk, then kill without warning.
+    let started = std::time::Instant::now();
+    while std::fs::metadata(&log).map(|m| m.len()).unwrap_or(0) < 3_000_000
+        && started.elapsed().as_secs() < 60
+    {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let export = regatta()
+        .args(["log", "export"])
+        .arg(&log)
+        .arg("--csv")
+        .arg(dir.join("csv"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&export.stderr);
+    assert_eq!(export.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("warning:") && stderr.contains("ends early"),
+        "{stderr}"
+    );
+    let rows = std::fs::read_to_string(dir.join("csv/pose.csv"))
+        .unwrap()
+        .lines()
+        .count();
+    assert!(rows > 1000, "{rows} poses recovered");
+    std::fs::remove_dir_all(dir).ok();
+}
