@@ -186,3 +186,38 @@ fn the_papers_ir_gain_finding_bare_buoys_need_double_ir_gain() {
         "bare buoy, gain 2: it orbits within {doubled:.3} m"
     );
 }
+
+#[test]
+fn logs_do_not_depend_on_how_many_threads_run_worlds() {
+    use regatta_runtime::log::{Recorder, RunInfo};
+    let compiled = compile_world("regatta.wbt");
+    let record = |seed: u64| -> Vec<u8> {
+        let mut simulation = Simulation::new(&compiled, Some(seed)).unwrap();
+        let run = RunInfo {
+            world_name: "regatta.wbt".into(),
+            world_text: String::new(),
+            seed,
+            lenient: false,
+            steps_requested: 200,
+        };
+        let mut sink = std::io::Cursor::new(Vec::new());
+        let mut recorder = Recorder::new(&mut sink, &simulation, &run).unwrap();
+        for _ in 0..200 {
+            simulation.step();
+            recorder.record(&simulation).unwrap();
+        }
+        recorder.finish(&simulation, false).unwrap();
+        sink.into_inner()
+    };
+    let alone: Vec<Vec<u8>> = (0..4).map(record).collect();
+    let together: Vec<Vec<u8>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..4)
+            .map(|seed| scope.spawn(move || record(seed)))
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert!(
+        alone == together,
+        "four worlds on four threads log what they log alone"
+    );
+}

@@ -1,7 +1,9 @@
 """Interoperability check: an independent MCAP reader (Python's `mcap` package) reads a regatta
 log back, and its messages match what regatta wrote (compared with `regatta log export`).
 
-Usage: python3 tests/interop/read_log.py PATH/TO/regatta
+It also checks that a debug and a release build of regatta write byte-identical logs.
+
+Usage: python3 tests/interop/read_log.py PATH/TO/regatta [PATH/TO/OTHER/BUILD/regatta]
 """
 import csv
 import os
@@ -56,6 +58,11 @@ def main() -> int:
         )
         check(same, "poses decoded by Python equal regatta's export bit for bit")
         check(all(log_time == round(t * 1e9) for t, _, _, _, log_time in poses), "log times are simulated time")
+        if len(sys.argv) > 2:
+            other = os.path.join(tmp, "other.mcap")
+            subprocess.run([sys.argv[2], "run", "--steps", "500", "--log", other, world], check=True, stdout=subprocess.DEVNULL)
+            with open(log, "rb") as a, open(other, "rb") as b:
+                check(a.read() == b.read(), "the other build writes a byte-identical log")
     print(f"interop: {checks - failures} passed, {failures} failed")
     return 1 if failures else 0
 
