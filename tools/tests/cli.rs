@@ -307,19 +307,13 @@ fn exported_csv_has_a_header_and_a_row_per_pose() {
     std::fs::remove_dir_all(dir).ok();
 }
 
-#[test]
-fn a_cut_log_still_exports_its_complete_chunks_and_garbage_is_an_error() {
-    let dir = temp_dir("cut");
-    let log = run_logged(&dir, "run.mcap", "3000");
-    let bytes = std::fs::read(&log).unwrap();
-    let cut = dir.join("cut.mcap");
-    std::fs::write(&cut, &bytes[..bytes.len() * 3 / 4]).unwrap();
-    let out = dir.join("csv");
+/// Exports a log that ends early: it succeeds with a warning; returns the pose.csv line count.
+fn export_cut_log(log: &Path, out: &Path) -> usize {
     let export = regatta()
         .args(["log", "export"])
-        .arg(&cut)
+        .arg(log)
         .arg("--csv")
-        .arg(&out)
+        .arg(out)
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&export.stderr);
@@ -328,10 +322,21 @@ fn a_cut_log_still_exports_its_complete_chunks_and_garbage_is_an_error() {
         stderr.contains("warning:") && stderr.contains("ends early"),
         "{stderr}"
     );
-    let rows = std::fs::read_to_string(out.join("pose.csv"))
+    std::fs::read_to_string(out.join("pose.csv"))
         .unwrap()
         .lines()
-        .count();
+        .count()
+}
+
+#[test]
+fn a_cut_log_still_exports_its_complete_chunks_and_garbage_is_an_error() {
+    let dir = temp_dir("cut");
+    let log = run_logged(&dir, "run.mcap", "3000");
+    let bytes = std::fs::read(&log).unwrap();
+    let cut = dir.join("cut.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() * 3 / 4]).unwrap();
+    let out = dir.join("csv");
+    let rows = export_cut_log(&cut, &out);
     assert!(rows > 100 && rows < 3001, "{rows} rows");
     let garbage = dir.join("garbage.mcap");
     std::fs::write(&garbage, b"this is not an mcap file at all").unwrap();
@@ -467,23 +472,7 @@ fn a_recording_killed_with_sigkill_still_exports_its_complete_chunks() {
     }
     child.kill().unwrap();
     child.wait().unwrap();
-    let export = regatta()
-        .args(["log", "export"])
-        .arg(&log)
-        .arg("--csv")
-        .arg(dir.join("csv"))
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&export.stderr);
-    assert_eq!(export.status.code(), Some(0), "{stderr}");
-    assert!(
-        stderr.contains("warning:") && stderr.contains("ends early"),
-        "{stderr}"
-    );
-    let rows = std::fs::read_to_string(dir.join("csv/pose.csv"))
-        .unwrap()
-        .lines()
-        .count();
+    let rows = export_cut_log(&log, &dir.join("csv"));
     assert!(rows > 1000, "{rows} poses recovered");
     std::fs::remove_dir_all(dir).ok();
 }
