@@ -184,6 +184,20 @@ struct ProtoDef {
     enclosing: ProtoTable,
 }
 
+impl ProtoDef {
+    /// A PROTO defined at the top level of `file`, as a table entry.
+    fn file_level(file: FileId, proto: &syntax::Proto) -> (String, Rc<ProtoDef>) {
+        (
+            proto.name.text.clone(),
+            Rc::new(ProtoDef {
+                file,
+                proto: proto.clone(),
+                enclosing: Rc::new(Vec::new()),
+            }),
+        )
+    }
+}
+
 /// What names mean at some point of a file or PROTO body.
 #[derive(Clone)]
 struct Scope {
@@ -360,14 +374,7 @@ impl<'c> Lowerer<'c> {
             let parsed = self.parse(file);
             for item in &parsed.items {
                 if let Item::Proto(proto) = item {
-                    list.push((
-                        proto.name.text.clone(),
-                        Rc::new(ProtoDef {
-                            file,
-                            proto: proto.clone(),
-                            enclosing: Rc::new(Vec::new()),
-                        }),
-                    ));
+                    list.push(ProtoDef::file_level(file, proto));
                 }
             }
         }
@@ -418,14 +425,7 @@ impl<'c> Lowerer<'c> {
                     .with_code("proto-redefined"),
                 );
             }
-            list.push((
-                proto.name.text.clone(),
-                Rc::new(ProtoDef {
-                    file,
-                    proto: proto.clone(),
-                    enclosing: Rc::new(Vec::new()),
-                }),
-            ));
+            list.push(ProtoDef::file_level(file, proto));
         }
         let list = Rc::new(list);
         // PROTOs of one file see each other: bodies look the file's table up when instantiated.
