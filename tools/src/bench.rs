@@ -25,6 +25,15 @@ enum What {
     /// Simulation steps per second: the regatta world, IR only, 10 robots, parallel worlds,
     /// and the peak memory of a one-robot run.
     Step(crate::bench_step::Args),
+    /// glTF export time on a generated world of about a million triangles.
+    Gltf {
+        /// Points in the generated IndexedFaceSet (709² gives 1,002,528 triangles).
+        #[arg(long, default_value_t = 709 * 709)]
+        points: usize,
+        /// Timed exports; the best is reported.
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+    },
     /// Parser throughput (MB/s) and peak memory (× file size) on a generated mesh world.
     Parse {
         /// Points in the generated IndexedFaceSet.
@@ -43,6 +52,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     match args.what {
         What::Retina(args) => crate::bench_retina::run(args),
         What::Step(args) => crate::bench_step::run(args),
+        What::Gltf { points, runs } => gltf(points, runs),
         What::Parse {
             points,
             runs,
@@ -124,4 +134,46 @@ pub fn peak_resident_bytes() -> Option<u64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kilobytes: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kilobytes * 1024)
+}
+
+fn gltf(points: usize, runs: usize) -> anyhow::Result<Outcome> {
+    if runs == 0 {
+        bail!("--runs must be at least 1");
+    }
+    let world = regatta_parser::testgen::mesh_world(points);
+    let started = Instant::now();
+    let checked = regatta_schema::check(
+        regatta_parser::SourceText::from_bytes("mesh.wbt".into(), world.into_bytes()),
+        &regatta_schema::Options {
+            strict: true,
+            base_dir: None,
+        },
+    );
+    if checked.has_errors() {
+        bail!("the generated world does not check");
+    }
+    let compiled = regatta_runtime::compile(&checked.scene);
+    let load = started.elapsed();
+    let options = regatta_gltf::Options::default();
+    let mut best_export = f64::INFINITY;
+    let mut best_glb = f64::INFINITY;
+    let mut document = None;
+    for _ in 0..runs {
+        let started = Instant::now();
+        let exported = regatta_gltf::export(&compiled, &options, &[])?;
+        let exported_at = started.elapsed().as_secs_f64();
+        let glb = exported.to_glb();
+        let total = started.elapsed().as_secs_f64();
+        best_export = best_export.min(exported_at);
+        best_glb = best_glb.min(total);
+        document = Some((exported.triangle_count, exported.node_count, glb.len()));
+    }
+    let (triangles, nodes, bytes) = document.expect("runs ≥ 1");
+    println!("glTF export of a generated mesh world ({points} points), best of {runs}:");
+    println!("  triangles            {triangles}");
+    println!("  nodes                {nodes}");
+    println!("  export               {:.3} s", best_export);
+    println!("  export + GLB bytes   {:.3} s ({:.1} MB)", best_glb, bytes as f64 / 1e6);
+    println!("  (parse, check and compile before it: {:.3} s)", load.as_secs_f64());
+    Ok(Outcome::Clean)
 }

@@ -8,6 +8,7 @@ mod check;
 mod explain;
 mod fmt;
 mod font;
+mod gltf;
 mod logs;
 mod render;
 mod run;
@@ -51,6 +52,8 @@ enum Command {
     Explain(explain::Args),
     /// Render what each robot's vision device sees, stage by stage (PNG or JSON).
     Render(render::Args),
+    /// Export a world to glTF 2.0 (.glb or .gltf), optionally animated from a log.
+    Gltf(gltf::Args),
     /// Step a world and print a summary: time, speed, contacts, buoy visits.
     Run(run::Args),
     /// Re-run a log's world and seed and check that every message is the same.
@@ -104,6 +107,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(args),
         Command::Explain(args) => explain::run(args, color),
         Command::Render(args) => render::run(args, color),
+        Command::Gltf(args) => gltf::run(args, color),
         Command::Run(args) => run::run(args, color),
         Command::Replay(args) => logs::replay(args),
         Command::Log(args) => logs::log(args),

@@ -14,6 +14,9 @@ use crate::geometry::{Aabb, Bvh, Footprint, Frame};
 /// Handle of a primitive in [`RenderGraph::primitives`].
 pub type PrimitiveId = usize;
 
+/// Handle of a group in [`RenderGraph::groups`].
+pub type GroupId = usize;
+
 /// Analytic or triangulated geometry, in the primitive's local frame.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
@@ -59,7 +62,58 @@ impl Shape {
                 min: DVec3::splat(-radius),
                 max: DVec3::splat(*radius),
             },
-            Shape::Mesh(index) => Aabb::from_points(meshes[*index].positions.iter().copied()),
+            Shape::Mesh(index) => Aabb::from_points(meshes[*index].used_positions()),
+        }
+    }
+
+    /// Tight bounds of the shape placed by `frame` (exact for the analytic shapes under any
+    /// affine frame, exact for meshes), so that culling and exported bounds agree.
+    pub fn bounds_under(&self, frame: &Frame, meshes: &[Mesh]) -> Aabb {
+        let center = frame.translation;
+        let round = |radial_x: DVec3, radial_z: DVec3| {
+            DVec3::new(
+                radial_x.x.hypot(radial_z.x),
+                radial_x.y.hypot(radial_z.y),
+                radial_x.z.hypot(radial_z.z),
+            )
+        };
+        match self {
+            Shape::Box { .. } => self.local_bounds(meshes).transformed(frame),
+            Shape::Cylinder { radius, height, .. } => {
+                let axis = frame.apply_vector(DVec3::Y * (height / 2.0)).abs();
+                let disk = round(
+                    frame.apply_vector(DVec3::X * *radius),
+                    frame.apply_vector(DVec3::Z * *radius),
+                );
+                Aabb {
+                    min: center - axis - disk,
+                    max: center + axis + disk,
+                }
+            }
+            Shape::Cone { radius, height, .. } => {
+                let axis = frame.apply_vector(DVec3::Y * (height / 2.0));
+                let disk = round(
+                    frame.apply_vector(DVec3::X * *radius),
+                    frame.apply_vector(DVec3::Z * *radius),
+                );
+                let (apex, base) = (center + axis, center - axis);
+                Aabb {
+                    min: apex.min(base - disk),
+                    max: apex.max(base + disk),
+                }
+            }
+            Shape::Sphere { radius } => {
+                let l = frame.linear;
+                let extent = DVec3::new(l.row(0).length(), l.row(1).length(), l.row(2).length())
+                    * *radius;
+                Aabb {
+                    min: center - extent,
+                    max: center + extent,
+                }
+            }
+            Shape::Mesh(index) => {
+                Aabb::from_points(meshes[*index].used_positions().map(|p| frame.apply(p)))
+            }
         }
     }
 
@@ -112,9 +166,22 @@ pub struct Mesh {
     pub positions: Vec<DVec3>,
     pub triangles: Vec<[u32; 3]>,
     pub triangle_colors: Option<Vec<[f64; 3]>>,
+    /// Per-corner colours, parallel to `triangles`, when the file gives colours per vertex
+    /// (the renderers use the per-triangle average; exporters keep the gradient).
+    pub corner_colors: Option<Vec<[[f64; 3]; 3]>>,
     /// Whether back faces are culled (`solid TRUE`).
     pub solid: bool,
     pub crease_angle: f64,
+}
+
+impl Mesh {
+    /// The positions triangles refer to (points no face uses are not geometry), with repeats.
+    pub fn used_positions(&self) -> impl Iterator<Item = DVec3> + '_ {
+        self.triangles
+            .iter()
+            .flatten()
+            .map(|&i| self.positions[i as usize])
+    }
 }
 
 /// VRML97 Material, plus infra-red reflectance. `unlit` is VRML's "no material": colour 1, no
@@ -164,6 +231,8 @@ pub struct Primitive {
     pub node: NodeId,
     /// Bounds in the frame of its owner (world for static parts, robot for attached ones).
     pub bounds: Aabb,
+    /// The grouping node it sits in, for exporters that keep the hierarchy.
+    pub group: Option<GroupId>,
     /// Rotated only about the vertical axis (cylinder and cone axes vertical, boxes
     /// yaw-rotated) with circular cross-sections: what the column renderer handles.
     pub upright: bool,
@@ -200,6 +269,34 @@ pub struct Light {
     pub shadows: bool,
     pub owner: Owner,
     pub node: NodeId,
+    pub group: Option<GroupId>,
+}
+
+/// A grouping node of the file (Transform, Solid, Group, a robot…), kept so that exporters can
+/// rebuild the hierarchy; the renderers never read it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Group {
+    /// The DEF name, else the PROTO instance's name, else the node's `name` field, else its type.
+    pub name: String,
+    pub parent: Option<GroupId>,
+    /// The frame its children are placed in, in its owner's coordinates (world for static
+    /// groups, the robot's frame for robot-attached ones). A robot's own group is static and
+    /// sits at the robot's start pose.
+    pub frame: Frame,
+    pub owner: Owner,
+    pub node: NodeId,
+    /// For a robot's own group: its index in the sensor rig.
+    pub robot: Option<usize>,
+}
+
+/// The first Viewpoint of the file: where a viewer's camera starts.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Viewpoint {
+    pub name: String,
+    /// World frame; the camera looks along its −z with +y up.
+    pub frame: Frame,
+    /// Radians, across the smaller image dimension (VRML97).
+    pub field_of_view: f64,
 }
 
 /// What is seen where no geometry is.
@@ -217,6 +314,8 @@ pub struct RenderGraph {
     pub meshes: Vec<Mesh>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    pub groups: Vec<Group>,
+    pub viewpoint: Option<Viewpoint>,
     pub background: Background,
     /// The static primitives, in the order [`RenderGraph::static_index`] refers to.
     pub static_primitives: Vec<PrimitiveId>,

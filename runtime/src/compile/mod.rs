@@ -15,8 +15,8 @@ use regatta_schema::{NodeId, Scene, Value};
 
 use crate::geometry::{axis_angle, Frame};
 use graph::{
-    background_of, index_static, material_of, shape_of, Light, LightKind, Material, Owner,
-    Primitive, RenderGraph,
+    background_of, index_static, material_of, shape_of, Group, GroupId, Light, LightKind,
+    Material, Owner, Primitive, RenderGraph, Viewpoint,
 };
 pub use plan::Plan;
 use rig::{
@@ -65,6 +65,8 @@ pub fn compile(scene: &Scene) -> Compiled {
             meshes: Vec::new(),
             materials: Vec::new(),
             lights: Vec::new(),
+            groups: Vec::new(),
+            viewpoint: None,
             background: background_of(scene),
             static_primitives: Vec::new(),
             static_index: Default::default(),
@@ -73,6 +75,7 @@ pub fn compile(scene: &Scene) -> Compiled {
         warnings: Vec::new(),
         materials: Vec::new(),
         landmarks: Vec::new(),
+        group: None,
     };
     let root = scene.root_rotation();
     let root_frame = Frame {
@@ -118,6 +121,8 @@ struct Compiler<'s> {
     /// Material nodes already converted, to share entries.
     materials: Vec<(Option<NodeId>, usize)>,
     landmarks: Vec<Landmark>,
+    /// The group the walk is inside.
+    group: Option<GroupId>,
 }
 
 const MAX_WALK_DEPTH: usize = 256;
@@ -170,14 +175,18 @@ impl Compiler<'_> {
                     },
                 );
                 let frame = frame.then(&local);
+                let outer = self.enter_group(node, &frame, owner, None);
                 for &child in scene.children(node, "children") {
                     self.walk(child, &frame, owner, depth + 1);
                 }
+                self.group = outer;
             }
             "Group" | "Anchor" | "Billboard" | "Collision" => {
+                let outer = self.enter_group(node, frame, owner, None);
                 for &child in scene.children(node, "children") {
                     self.walk(child, frame, owner, depth + 1);
                 }
+                self.group = outer;
             }
             "Switch" => {
                 let which = scene.int(node, "whichChoice");
@@ -185,11 +194,32 @@ impl Compiler<'_> {
                     .ok()
                     .and_then(|i| scene.children(node, "choice").get(i))
                 {
+                    let outer = self.enter_group(node, frame, owner, None);
                     self.walk(child, frame, owner, depth + 1);
+                    self.group = outer;
                 }
             }
             "Shape" => self.shape(node, frame, owner),
             "PointLight" | "DirectionalLight" | "SpotLight" => self.light(node, frame, owner),
+            "Viewpoint" if owner == Owner::Static && self.graph.viewpoint.is_none() => {
+                let local = Frame::vrml(
+                    DVec3::from_array(scene.vec3(node, "position")),
+                    scene.rotation(node, "orientation"),
+                    DVec3::ONE,
+                    [0.0, 0.0, 1.0, 0.0],
+                    DVec3::ZERO,
+                );
+                let description = scene.string(node, "description");
+                self.graph.viewpoint = Some(Viewpoint {
+                    name: if description.is_empty() {
+                        group_name(scene, node)
+                    } else {
+                        description.to_owned()
+                    },
+                    frame: frame.then(&local),
+                    field_of_view: scene.float(node, "fieldOfView"),
+                });
+            }
             "DifferentialWheels" => self.robot(node, frame, owner, depth),
             "DistanceSensor" | "LightSensor" | "PanoramicTurret" | "LinearCamera" => match owner {
                 Owner::Robot(robot) => self.device(node, frame, robot),
@@ -200,6 +230,26 @@ impl Compiler<'_> {
             },
             _ => {}
         }
+    }
+
+    /// Opens a group for `node` (its children are placed in `frame`); returns the group to
+    /// restore when the node's children are done.
+    fn enter_group(
+        &mut self,
+        node: NodeId,
+        frame: &Frame,
+        owner: Owner,
+        robot: Option<usize>,
+    ) -> Option<GroupId> {
+        self.graph.groups.push(Group {
+            name: group_name(self.scene, node),
+            parent: self.group,
+            frame: *frame,
+            owner,
+            node,
+            robot,
+        });
+        std::mem::replace(&mut self.group, Some(self.graph.groups.len() - 1))
     }
 
     fn material(&mut self, appearance: Option<NodeId>) -> usize {
@@ -228,7 +278,7 @@ impl Compiler<'_> {
             return;
         };
         let material = self.material(scene.child(node, "appearance"));
-        let bounds = shape.local_bounds(&self.graph.meshes).transformed(frame);
+        let bounds = shape.bounds_under(frame, &self.graph.meshes);
         let upright = is_upright(&shape, frame);
         self.graph.primitives.push(Primitive {
             shape,
@@ -238,6 +288,7 @@ impl Compiler<'_> {
             owner,
             node,
             bounds,
+            group: self.group,
             upright,
         });
     }
@@ -275,6 +326,7 @@ impl Compiler<'_> {
             shadows: scene.bool(node, "castShadows"),
             owner,
             node,
+            group: self.group,
         });
     }
 
@@ -329,10 +381,22 @@ impl Compiler<'_> {
             light_sensors: Vec::new(),
             turret: None,
         });
+        // The robot's group sits where the simulation puts the robot: upright on the floor.
+        let (s, c) = (libm::sin(start.heading), libm::cos(start.heading));
+        let start_frame = Frame {
+            linear: glam::DMat3::from_cols(
+                DVec3::new(c, 0.0, -s),
+                DVec3::Y,
+                DVec3::new(s, 0.0, c),
+            ),
+            translation: robot_frame.translation,
+        };
+        let outer = self.enter_group(node, &start_frame, Owner::Static, Some(index));
         // Attached parts: frames relative to the robot.
         for &child in scene.children(node, "children") {
             self.walk(child, &Frame::IDENTITY, Owner::Robot(index), depth + 1);
         }
+        self.group = outer;
         if let Some(turret) = scene.child(node, "turret") {
             self.turret(turret, index);
         }
@@ -429,6 +493,26 @@ impl Compiler<'_> {
         };
         self.rig.robots[robot].turret = Some(turret);
     }
+}
+
+/// A group's name: its DEF name, else (for a PROTO instance) its `name` field or the PROTO's
+/// name, else its `name` field, else its type.
+fn group_name(scene: &Scene, node: NodeId) -> String {
+    let data = scene.node(node);
+    if let Some(def) = &data.def_name {
+        return def.clone();
+    }
+    let name_field = match scene.spec(node).field_index("name") {
+        Some(index) => match &data.fields[index] {
+            Value::String(name) if !name.is_empty() => Some(name.clone()),
+            _ => None,
+        },
+        None => None,
+    };
+    if let Some(proto) = data.proto_names.last() {
+        return name_field.unwrap_or_else(|| proto.clone());
+    }
+    name_field.unwrap_or_else(|| scene.type_name(node).to_owned())
 }
 
 /// A device's position and looking direction (+x of its frame) in the robot frame.

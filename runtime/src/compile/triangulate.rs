@@ -32,6 +32,7 @@ pub fn indexed_face_set(scene: &Scene, node: NodeId) -> Mesh {
         positions: points.clone(),
         triangles: Vec::new(),
         triangle_colors: (!colors.is_empty()).then(Vec::new),
+        corner_colors: (!colors.is_empty() && per_vertex).then(Vec::new),
         solid: scene.bool(node, "solid"),
         crease_angle: scene.float(node, "creaseAngle"),
     };
@@ -59,6 +60,23 @@ pub fn indexed_face_set(scene: &Scene, node: NodeId) -> Mesh {
                     &valid,
                 );
                 triangle_colors.extend(std::iter::repeat_n(color, mesh.triangles.len() - before));
+            }
+            if let Some(corner_colors) = &mut mesh.corner_colors {
+                let corners = &face[..];
+                let color_of = |point: u32| {
+                    let slot = corners.iter().position(|&p| p == point).unwrap_or(0);
+                    let index = if color_index.is_empty() {
+                        point as usize
+                    } else {
+                        color_index
+                            .get(start_corner + slot)
+                            .map_or(usize::MAX, |&c| c.max(0) as usize)
+                    };
+                    colors.get(index).copied().unwrap_or([1.0; 3])
+                };
+                for triangle in &mesh.triangles[before..] {
+                    corner_colors.push(triangle.map(color_of));
+                }
             }
         }
         face.clear();
