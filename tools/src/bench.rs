@@ -173,7 +173,14 @@ fn gltf(points: usize, runs: usize) -> anyhow::Result<Outcome> {
     println!("  triangles            {triangles}");
     println!("  nodes                {nodes}");
     println!("  export               {:.3} s", best_export);
-    println!("  export + GLB bytes   {:.3} s ({:.1} MB)", best_glb, bytes as f64 / 1e6);
-    println!("  (parse, check and compile before it: {:.3} s)", load.as_secs_f64());
+    println!(
+        "  export + GLB bytes   {:.3} s ({:.1} MB)",
+        best_glb,
+        bytes as f64 / 1e6
+    );
+    println!(
+        "  (parse, check and compile before it: {:.3} s)",
+        load.as_secs_f64()
+    );
     Ok(Outcome::Clean)
 }

@@ -86,8 +86,7 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
 
 fn write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create {}", dir.display()))?;
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
     std::fs::write(path, bytes).with_context(|| format!("cannot write {}", path.display()))
 }
@@ -139,7 +138,11 @@ fn tracks_from_log(
         };
         let entry = poses.entry(robot).or_default();
         // Keep times strictly increasing in single precision, as glTF stores them.
-        if entry.0.last().is_none_or(|&last| (t as f32) > (last as f32)) {
+        if entry
+            .0
+            .last()
+            .is_none_or(|&last| (t as f32) > (last as f32))
+        {
             entry.0.push(t);
             entry.1.push(pose);
         }
@@ -151,10 +154,7 @@ fn tracks_from_log(
         .into_iter()
         .map(|(name, (times, poses))| {
             let robot = compiled.rig.robot(name).with_context(|| {
-                format!(
-                    "the log's robot '{name}' is not in {}",
-                    world.display()
-                )
+                format!("the log's robot '{name}' is not in {}", world.display())
             })?;
             let (mut times, mut poses) = (times, poses);
             // Poses are logged at the end of each step: the run starts at the file's pose.

@@ -476,3 +476,119 @@ fn a_recording_killed_with_sigkill_still_exports_its_complete_chunks() {
     assert!(rows > 1000, "{rows} poses recovered");
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn gltf_exports_binary_and_text_and_animates_a_log() {
+    let dir = temp_dir("gltf");
+    let world = root().join("worlds/regatta.wbt");
+    let glb = dir.join("arena.glb");
+    let output = regatta()
+        .arg("gltf")
+        .arg(&world)
+        .arg("-o")
+        .arg(&glb)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let bytes = std::fs::read(&glb).unwrap();
+    assert_eq!(&bytes[..4], b"glTF");
+    assert_eq!(
+        u32::from_le_bytes(bytes[8..12].try_into().unwrap()) as usize,
+        bytes.len()
+    );
+
+    let text = dir.join("arena.gltf");
+    let output = regatta()
+        .arg("gltf")
+        .arg(&world)
+        .arg("-o")
+        .arg(&text)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let json = std::fs::read_to_string(&text).unwrap();
+    assert!(json.contains("\"uri\": \"arena.bin\""), "{json}");
+    assert!(dir.join("arena.bin").exists());
+
+    let log = run_logged(&dir, "run", "40");
+    let animated = dir.join("run.glb");
+    let output = regatta()
+        .arg("gltf")
+        .arg(&world)
+        .arg("--log")
+        .arg(&log)
+        .arg("-o")
+        .arg(&animated)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("1 robot track(s) of up to 41 poses"),
+        "{stderr}"
+    );
+    let size = std::fs::metadata(&animated).unwrap().len();
+    assert!(size > bytes.len() as u64, "the animation adds data");
+}
+
+#[test]
+fn gltf_refuses_bad_output_names_and_logs_of_other_worlds() {
+    let dir = temp_dir("gltf-bad");
+    let world = root().join("worlds/regatta.wbt");
+    let output = regatta()
+        .arg("gltf")
+        .arg(&world)
+        .arg("-o")
+        .arg(dir.join("arena.obj"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("must end in .glb or .gltf"), "{stderr}");
+
+    // A log whose robot the world does not have.
+    let log = run_logged(&dir, "run", "5");
+    let other = dir.join("other.wbt");
+    std::fs::write(
+        &other,
+        "#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" }\nKhepera { name \"someone else\" }\n",
+    )
+    .unwrap();
+    let output = regatta()
+        .arg("gltf")
+        .arg(&other)
+        .arg("--log")
+        .arg(&log)
+        .arg("-o")
+        .arg(dir.join("x.glb"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("is not in"), "{stderr}");
+    assert!(!dir.join("x.glb").exists(), "nothing is written on error");
+
+    // Garbage instead of a log.
+    let garbage = dir.join("garbage.mcap");
+    std::fs::write(&garbage, b"not a log at all").unwrap();
+    let output = regatta()
+        .arg("gltf")
+        .arg(&world)
+        .arg("--log")
+        .arg(&garbage)
+        .arg("-o")
+        .arg(dir.join("y.glb"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("is not a regatta log"), "{stderr}");
+}

@@ -168,7 +168,13 @@ fn f32s<const N: usize>(v: [f64; N]) -> Value {
 }
 
 fn clamp01(v: [f64; 3]) -> [f64; 3] {
-    v.map(|x| if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 })
+    v.map(|x| {
+        if x.is_finite() {
+            x.clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    })
 }
 
 const LIGHTS: &str = "KHR_lights_punctual";
@@ -381,7 +387,10 @@ impl<'a> Builder<'a> {
                     let mut triangles =
                         tessellate::triangles(&primitive.shape, &graph.meshes, self.quality);
                     triangles.bake(&local);
-                    (None, self.mesh(&triangles, material_index, primitive.shape.name()))
+                    (
+                        None,
+                        self.mesh(&triangles, material_index, primitive.shape.name()),
+                    )
                 }
             };
             let node = self.add_node(parent, primitive.shape.name(), transform, world);
@@ -660,7 +669,9 @@ impl<'a> Builder<'a> {
         let Some(viewpoint) = &self.graph.viewpoint else {
             return;
         };
-        let fov = viewpoint.field_of_view.clamp(1e-3, std::f64::consts::PI - 1e-3);
+        let fov = viewpoint
+            .field_of_view
+            .clamp(1e-3, std::f64::consts::PI - 1e-3);
         self.cameras.push(json!({
             "name": viewpoint.name,
             "type": "perspective",
@@ -776,7 +787,11 @@ impl<'a> Builder<'a> {
                 continue;
             }
             let times: Vec<f32> = track.times.iter().map(|&t| t as f32).collect();
-            if times.windows(2).any(|w| !(w[1] > w[0])) || !times.iter().all(|t| t.is_finite()) {
+            if times
+                .windows(2)
+                .any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+                || !times.iter().all(|t| t.is_finite())
+            {
                 return Err(bad("times are not strictly increasing"));
             }
             let floor_y = self.compiled.rig.robots[track.robot].floor_y;
@@ -792,7 +807,8 @@ impl<'a> Builder<'a> {
             let translation = self.accessor(&translations, "VEC3", None, None);
             let rotation = self.accessor(&rotations, "VEC4", None, None);
             for (output, path) in [(translation, "translation"), (rotation, "rotation")] {
-                samplers.push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
+                samplers
+                    .push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
                 channels.push(json!({
                     "sampler": samplers.len() - 1,
                     "target": { "node": node, "path": path },
@@ -890,7 +906,10 @@ fn orthonormalized(m: DMat3) -> DMat3 {
 
 /// The frame the simulation starts a robot in: upright on its floor at its start pose.
 pub fn start_frame(robot: &RobotRig) -> Frame {
-    let (s, c) = (libm::sin(robot.start.heading), libm::cos(robot.start.heading));
+    let (s, c) = (
+        libm::sin(robot.start.heading),
+        libm::cos(robot.start.heading),
+    );
     Frame {
         linear: DMat3::from_cols(DVec3::new(c, 0.0, -s), DVec3::Y, DVec3::new(s, 0.0, c)),
         translation: DVec3::new(robot.start.x, robot.floor_y, robot.start.z),

@@ -104,8 +104,8 @@ impl Shape {
             }
             Shape::Sphere { radius } => {
                 let l = frame.linear;
-                let extent = DVec3::new(l.row(0).length(), l.row(1).length(), l.row(2).length())
-                    * *radius;
+                let extent =
+                    DVec3::new(l.row(0).length(), l.row(1).length(), l.row(2).length()) * *radius;
                 Aabb {
                     min: center - extent,
                     max: center + extent,

@@ -15,8 +15,8 @@ use regatta_schema::{NodeId, Scene, Value};
 
 use crate::geometry::{axis_angle, Frame};
 use graph::{
-    background_of, index_static, material_of, shape_of, Group, GroupId, Light, LightKind,
-    Material, Owner, Primitive, RenderGraph, Viewpoint,
+    background_of, index_static, material_of, shape_of, Group, GroupId, Light, LightKind, Material,
+    Owner, Primitive, RenderGraph, Viewpoint,
 };
 pub use plan::Plan;
 use rig::{
@@ -249,7 +249,7 @@ impl Compiler<'_> {
             node,
             robot,
         });
-        std::mem::replace(&mut self.group, Some(self.graph.groups.len() - 1))
+        self.group.replace(self.graph.groups.len() - 1)
     }
 
     fn material(&mut self, appearance: Option<NodeId>) -> usize {
@@ -384,11 +384,7 @@ impl Compiler<'_> {
         // The robot's group sits where the simulation puts the robot: upright on the floor.
         let (s, c) = (libm::sin(start.heading), libm::cos(start.heading));
         let start_frame = Frame {
-            linear: glam::DMat3::from_cols(
-                DVec3::new(c, 0.0, -s),
-                DVec3::Y,
-                DVec3::new(s, 0.0, c),
-            ),
+            linear: glam::DMat3::from_cols(DVec3::new(c, 0.0, -s), DVec3::Y, DVec3::new(s, 0.0, c)),
             translation: robot_frame.translation,
         };
         let outer = self.enter_group(node, &start_frame, Owner::Static, Some(index));

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Exports every world in worlds/, an animated run, and the corpus's worlds to glTF, and runs
+# the Khronos glTF-Validator (npm package gltf-validator) over all of them: any error fails.
+# Usage: tests/interop/gltf.sh path/to/regatta
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+regatta="$1"
+out=target/gltf-interop
+rm -rf "$out" && mkdir -p "$out/corpus"
+
+if [ ! -d target/npm/node_modules/gltf-validator ]; then
+  npm install --silent --no-audit --no-fund --prefix target/npm gltf-validator@2.0.0-dev.3.10
+fi
+
+for world in worlds/*.wbt; do
+  name=$(basename "$world" .wbt)
+  "$regatta" gltf "$world" -o "$out/$name.glb" 2>>"$out/export.log"
+  "$regatta" gltf "$world" -o "$out/$name.gltf" --quality 8 2>>"$out/export.log"
+done
+"$regatta" run worlds/regatta.wbt --duration 20 --log "$out/run.mcap" >/dev/null
+"$regatta" gltf worlds/regatta.wbt --log "$out/run.mcap" -o "$out/regatta-run.glb" 2>>"$out/export.log"
+
+count=0
+while IFS= read -r world; do
+  count=$((count + 1))
+  # The two parser-test files that are broken on purpose are refused, as they must be.
+  if "$regatta" gltf --lenient "$world" -o "$out/corpus/$count.glb" 2>>"$out/export.log"; then
+    echo "$count $world" >>"$out/corpus/index.txt"
+  fi
+done < <(find ../shared/corpus -name '*.wbt' -o -name '*.wrl' | sort)
+
+NODE_PATH=target/npm/node_modules node tests/interop/validate_gltf.js \
+  "$out"/*.glb "$out"/*.gltf "$out"/corpus/*.glb
