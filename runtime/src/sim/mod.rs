@@ -246,13 +246,26 @@ impl<'c> Simulation<'c> {
         }
     }
 
-    /// Advances the world by one step.
+    /// Advances the world by one step: [`Simulation::sense`] then [`Simulation::act`].
     pub fn step(&mut self) {
+        self.sense();
+        self.act();
+    }
+
+    /// The first half of a step: clears the update flags and refreshes the sensors that are
+    /// due. A robot driven from outside (over the serial protocol) is read and commanded
+    /// between this and [`Simulation::act`], exactly where a built-in controller runs.
+    pub fn sense(&mut self) {
         let t = self.time;
         for robot in &mut self.robots {
             robot.updated = Updated::default();
         }
         self.update_sensors(t);
+    }
+
+    /// The second half of a step: runs the built-in controllers, moves the robots and
+    /// advances time.
+    pub fn act(&mut self) {
         let rigs = &self.compiled.rig.robots;
         for (index, robot) in self.robots.iter_mut().enumerate() {
             let Some(mut controller) = robot.controller.take() else {
@@ -273,6 +286,20 @@ impl<'c> Simulation<'c> {
         self.steps += 1;
         self.time = self.steps as f64 * self.time_step;
         self.track_visits();
+    }
+
+    /// Takes a robot's built-in controller away, so that something outside drives it.
+    pub fn detach_controller(&mut self, robot: usize) -> Option<Box<dyn Controller>> {
+        self.robots[robot].controller.take()
+    }
+
+    /// One robot's Khepera API, for driving it from outside between [`Simulation::sense`] and
+    /// [`Simulation::act`].
+    pub fn khepera(&mut self, robot: usize) -> SimulatedKhepera<'_> {
+        SimulatedKhepera {
+            robot: &mut self.robots[robot],
+            rig: &self.compiled.rig.robots[robot],
+        }
     }
 
     /// Runs `steps` steps.
@@ -508,7 +535,7 @@ fn due(next: &mut f64, t: f64, period: f64) -> bool {
 }
 
 /// The simulated robot behind the Khepera API.
-struct SimulatedKhepera<'a> {
+pub struct SimulatedKhepera<'a> {
     robot: &'a mut RobotState,
     rig: &'a RobotRig,
 }
