@@ -13,6 +13,7 @@ mod logs;
 mod render;
 mod run;
 mod schema;
+mod serial;
 mod world;
 
 use std::io::IsTerminal;
@@ -54,6 +55,10 @@ enum Command {
     Render(render::Args),
     /// Export a world to glTF 2.0 (.glb or .gltf), optionally animated from a log.
     Gltf(gltf::Args),
+    /// Answer like a real Khepera on a pseudo-terminal or a TCP port (the serial protocol).
+    Serve(serial::ServeArgs),
+    /// Run a built-in controller on a real Khepera, or a served one, over the serial protocol.
+    Drive(serial::DriveArgs),
     /// Step a world and print a summary: time, speed, contacts, buoy visits.
     Run(run::Args),
     /// Re-run a log's world and seed and check that every message is the same.
@@ -109,6 +114,8 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(args, color),
         Command::Gltf(args) => gltf::run(args, color),
         Command::Run(args) => run::run(args, color),
+        Command::Serve(args) => serial::serve(args, color),
+        Command::Drive(args) => serial::drive(args),
         Command::Replay(args) => logs::replay(args),
         Command::Log(args) => logs::log(args),
         Command::Plot(args) => logs::plot(args),

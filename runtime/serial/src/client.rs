@@ -82,8 +82,9 @@ impl<L: Link> RemoteKhepera<L> {
                 .collect::<Vec<_>>()
                 .join(",")
         );
-        robot.has_panoramic =
-            robot.try_once(&Request::Panoramic(PanoramicRequest::Bits))?.is_some();
+        robot.has_panoramic = robot
+            .try_once(&Request::Panoramic(PanoramicRequest::Bits))?
+            .is_some();
         robot.has_k213 = robot.try_once(&Request::K213Light)?.is_some();
         Ok(robot)
     }
@@ -187,7 +188,8 @@ impl<L: Link> RemoteKhepera<L> {
     /// Discards what arrives within a short quiet period (late replies, garbage).
     fn drain(&mut self) -> io::Result<()> {
         self.pending.clear();
-        let quiet = (self.options.timeout / 10).clamp(Duration::from_millis(5), Duration::from_millis(100));
+        let quiet =
+            (self.options.timeout / 10).clamp(Duration::from_millis(5), Duration::from_millis(100));
         self.link.set_timeout(Some(quiet))?;
         let mut buffer = [0u8; 1024];
         for _ in 0..1000 {

@@ -23,14 +23,26 @@ pub const PANORAMIC_ID: i64 = 3;
 
 /// regatta's Panoramic turret sub-commands (`T,3,<letter>,…`), for documentation and `--help`.
 pub const PANORAMIC_COMMANDS: &[(&str, &str, &str)] = &[
-    ("T,3,E,f", "t,3,e", "enable filter f (0 raw, 1 lowpass, 2 highpass, 3 bandpass, 4 odd)"),
+    (
+        "T,3,E,f",
+        "t,3,e",
+        "enable filter f (0 raw, 1 lowpass, 2 highpass, 3 bandpass, 4 odd)",
+    ),
     ("T,3,D,f", "t,3,d", "disable filter f"),
-    ("T,3,R,f", "t,3,r,v…", "read filter f over the region of interest"),
+    (
+        "T,3,R,f",
+        "t,3,r,v…",
+        "read filter f over the region of interest",
+    ),
     ("T,3,L,x", "t,3,l", "set λ to x/1000 pixels"),
     ("T,3,M", "t,3,m,x", "read λ, in thousandths of a pixel"),
     ("T,3,B,b", "t,3,b", "set the converter's bits (1…16)"),
     ("T,3,C", "t,3,c,b", "read the converter's bits"),
-    ("T,3,I,first,last", "t,3,i", "set the region of interest (0…149)"),
+    (
+        "T,3,I,first,last",
+        "t,3,i",
+        "set the region of interest (0…149)",
+    ),
     ("T,3,J", "t,3,j,first,last", "read the region of interest"),
 ];
 
@@ -307,7 +319,8 @@ fn parse_turret(fields: &[&str]) -> Result<Request, Malformed> {
             })
         }
     };
-    let filter = |code: i64| filter_of(code).ok_or_else(|| Malformed::BadParameter(code.to_string()));
+    let filter =
+        |code: i64| filter_of(code).ok_or_else(|| Malformed::BadParameter(code.to_string()));
     let pixel = |v: i64| {
         usize::try_from(v)
             .ok()
@@ -411,7 +424,11 @@ mod tests {
         ];
         for request in requests {
             let line = request.encode();
-            assert_eq!(Request::parse(line.as_bytes()), Ok(request.clone()), "{line}");
+            assert_eq!(
+                Request::parse(line.as_bytes()),
+                Ok(request.clone()),
+                "{line}"
+            );
         }
         assert_eq!(Request::SetSpeed(1, 2).reply_prefix(), "d");
         assert_eq!(Request::K213Pixels.reply_prefix(), "t,2,n");
@@ -420,14 +437,35 @@ mod tests {
     #[test]
     fn malformed_lines_are_named() {
         assert_eq!(Request::parse(b""), Err(Malformed::Empty));
-        assert_eq!(Request::parse(b"Q"), Err(Malformed::UnknownCommand("Q".into())));
-        assert!(matches!(Request::parse(b"D,1"), Err(Malformed::Arity { .. })));
-        assert!(matches!(Request::parse(b"D,1,x"), Err(Malformed::BadParameter(_))));
-        assert!(matches!(Request::parse(b"D,99999999999,0"), Err(Malformed::BadParameter(_))));
-        assert_eq!(Request::parse("D,1,\u{e9}".as_bytes()), Err(Malformed::NotAscii));
+        assert_eq!(
+            Request::parse(b"Q"),
+            Err(Malformed::UnknownCommand("Q".into()))
+        );
+        assert!(matches!(
+            Request::parse(b"D,1"),
+            Err(Malformed::Arity { .. })
+        ));
+        assert!(matches!(
+            Request::parse(b"D,1,x"),
+            Err(Malformed::BadParameter(_))
+        ));
+        assert!(matches!(
+            Request::parse(b"D,99999999999,0"),
+            Err(Malformed::BadParameter(_))
+        ));
+        assert_eq!(
+            Request::parse("D,1,\u{e9}".as_bytes()),
+            Err(Malformed::NotAscii)
+        );
         assert_eq!(Request::parse(&[b'N'; 200]), Err(Malformed::TooLong));
-        assert!(matches!(Request::parse(b"T,3,R,9"), Err(Malformed::BadParameter(_))));
-        assert!(matches!(Request::parse(b"T,7,N"), Err(Malformed::UnknownCommand(_))));
+        assert!(matches!(
+            Request::parse(b"T,3,R,9"),
+            Err(Malformed::BadParameter(_))
+        ));
+        assert!(matches!(
+            Request::parse(b"T,7,N"),
+            Err(Malformed::UnknownCommand(_))
+        ));
         assert_eq!(reply_values("n,1,2,3\r\n", "n"), Some(vec![1, 2, 3]));
         assert_eq!(reply_values("d\r\n", "d"), Some(vec![]));
         assert_eq!(reply_values("dx\r\n", "d"), None);

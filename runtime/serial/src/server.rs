@@ -121,9 +121,7 @@ pub fn answer(request: &Request, robot: &mut dyn Khepera) -> Result<String, Khep
                     turret.set_lambda(*x as f64 / 1000.0)?;
                     "t,3,l".into()
                 }
-                PanoramicRequest::Lambda => {
-                    list("t,3,m", &[libm_round(turret.lambda()? * 1000.0)])
-                }
+                PanoramicRequest::Lambda => list("t,3,m", &[libm_round(turret.lambda()? * 1000.0)]),
                 PanoramicRequest::SetBits(b) => {
                     turret.set_bits(*b)?;
                     "t,3,b".into()
@@ -180,6 +178,9 @@ pub enum Flow {
     Done,
 }
 
+/// What runs after each served step.
+pub type StepHook<'s> = Box<dyn FnMut(&Simulation) -> io::Result<()> + 's>;
+
 /// One served robot of a simulation.
 pub struct Server<'s, 'c> {
     pub simulation: &'s mut Simulation<'c>,
@@ -188,6 +189,10 @@ pub struct Server<'s, 'c> {
     /// Stop after this many steps.
     pub max_steps: Option<u64>,
     pub stats: ServeStats,
+    /// Called after each step, before the next step's sensors are read (where a log records).
+    pub on_step: Option<StepHook<'s>>,
+    /// The error the hook returned, which ended serving.
+    pub hook_error: Option<io::Error>,
     splitter: LineSplitter,
     lines: Vec<Result<Vec<u8>, Malformed>>,
 }
@@ -208,6 +213,8 @@ impl<'s, 'c> Server<'s, 'c> {
             pacing,
             max_steps,
             stats: ServeStats::default(),
+            on_step: None,
+            hook_error: None,
             splitter: LineSplitter::default(),
             lines: Vec::new(),
         }
@@ -221,6 +228,12 @@ impl<'s, 'c> Server<'s, 'c> {
     /// Ends the current step and reads the sensors for the next.
     pub fn advance(&mut self) -> Flow {
         self.simulation.act();
+        if let Some(hook) = &mut self.on_step {
+            if let Err(error) = hook(self.simulation) {
+                self.hook_error = Some(error);
+                return Flow::Done;
+            }
+        }
         if self.done() {
             return Flow::Done;
         }
@@ -246,6 +259,7 @@ impl<'s, 'c> Server<'s, 'c> {
                         Ok(reply) => {
                             if matches!(request, Request::SetSpeed(..))
                                 && self.pacing == Pacing::LockStep
+                                && !self.done()
                             {
                                 flow = self.advance();
                             }
@@ -312,9 +326,35 @@ pub fn serve_lock_step(
         link.write_all(&out)?;
         link.flush()?;
         if flow == Flow::Done {
+            linger(server, link, stop)?;
             return Ok(Ended::Done);
         }
     }
+}
+
+/// After the last step, answers what the client still asks (the world stays as it ended, so
+/// a final `D,0,0` is answered) until it leaves or falls silent for a second: closing at once
+/// could drop the last reply before the client has read it.
+fn linger(server: &mut Server, link: &mut dyn Link, stop: &AtomicBool) -> io::Result<()> {
+    let mut buffer = [0u8; 4096];
+    let mut out = Vec::new();
+    let mut quiet = Instant::now();
+    while quiet.elapsed() < Duration::from_secs(1) && !stop.load(Ordering::Relaxed) {
+        let n = match link.read(&mut buffer) {
+            Ok(0) => return Ok(()),
+            Ok(n) => n,
+            Err(e) if is_timeout(&e) || e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) if e.kind() == io::ErrorKind::BrokenPipe => return Ok(()),
+            Err(e) if e.raw_os_error() == Some(5) => return Ok(()), // EIO: the pty's client left
+            Err(e) => return Err(e),
+        };
+        quiet = Instant::now();
+        out.clear();
+        server.feed(&buffer[..n], &mut out);
+        link.write_all(&out)?;
+        link.flush()?;
+    }
+    Ok(())
 }
 
 /// Serves one link in real time: the world steps every basic time step of wall-clock time

@@ -16,7 +16,9 @@ use regatta_serial::server::{serve_lock_step, Ended};
 use regatta_serial::{ClientOptions, Pacing, RemoteKhepera, Server};
 
 fn compile(world: &str) -> regatta_runtime::Compiled {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../worlds").join(world);
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../worlds")
+        .join(world);
     let checked = regatta_schema::check_file(&path, true).expect("world readable");
     assert!(!checked.has_errors(), "{}", checked.render(false));
     regatta_runtime::compile(&checked.scene)
@@ -81,7 +83,8 @@ fn regatta_in_process_and_over_the_protocol_follow_the_same_trajectory() {
         );
     }
     // The robot really moved.
-    let travelled = (local[steps as usize - 1].x - local[0].x).hypot(local[steps as usize - 1].z - local[0].z);
+    let travelled =
+        (local[steps as usize - 1].x - local[0].x).hypot(local[steps as usize - 1].z - local[0].z);
     assert!(travelled > 0.05, "travelled {travelled} m");
 }
 
@@ -169,7 +172,10 @@ fn a_dead_link_times_out_with_a_clear_error() {
     };
     let message = error.to_string();
     assert!(matches!(error, KheperaError::Link(_)), "{message}");
-    assert!(message.contains("no reply to \"B\" within 50 ms, 3 tries"), "{message}");
+    assert!(
+        message.contains("no reply to \"B\" within 50 ms, 3 tries"),
+        "{message}"
+    );
 }
 
 #[test]
@@ -214,7 +220,8 @@ fn a_pty_pair_carries_the_protocol() {
             let ended = serve_lock_step(&mut server, &mut pty, &stop).unwrap();
             (ended, server.simulation.steps)
         });
-        let port = regatta_serial::link::open_serial(&path, 38400).expect("the pty opens as a serial port");
+        let port = regatta_serial::link::open_serial(&path, 38400)
+            .expect("the pty opens as a serial port");
         let mut robot = RemoteKhepera::connect(port, ClientOptions::default()).unwrap();
         let rig = &compiled.rig.robots[0];
         let mut controller = controllers::build(&rig.controller, &rig.controller_args).unwrap();

@@ -1,0 +1,327 @@
+//! `regatta serve` and `regatta drive`: the Khepera serial protocol from the command line. A
+//! served world answers like a real robot on a pseudo-terminal or a TCP port; `drive` runs a
+//! built-in controller on a real robot, or on a served one, through the real-robot backend.
+
+use std::net::{TcpListener, TcpStream};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context};
+use regatta_runtime::khepera::Khepera;
+use regatta_runtime::log::{Recorder, RunInfo};
+use regatta_runtime::sim::Simulation;
+use regatta_serial::link::Link;
+use regatta_serial::server::{serve_lock_step, serve_real_time, Ended};
+use regatta_serial::{ClientOptions, Pacing, RemoteKhepera, Server};
+
+use crate::Outcome;
+
+#[derive(clap::Args)]
+pub struct ServeArgs {
+    /// The world file.
+    world: PathBuf,
+    /// The robot that answers (by name; the first robot if not given). The others keep their
+    /// built-in controllers.
+    #[arg(long)]
+    robot: Option<String>,
+    /// Answer on a new pseudo-terminal; its path is printed (a serial port for any program).
+    #[arg(long, conflicts_with = "tcp", required_unless_present = "tcp")]
+    pty: bool,
+    /// Answer on a TCP address (port 0 picks a free port; the address is printed).
+    #[arg(long, value_name = "HOST:PORT")]
+    tcp: Option<String>,
+    /// Step the world in real time instead of one step per D (set speed) command.
+    #[arg(long)]
+    realtime: bool,
+    /// Stop after this many steps.
+    #[arg(long, conflicts_with = "duration")]
+    steps: Option<u64>,
+    /// Stop after this much simulated time (s).
+    #[arg(long)]
+    duration: Option<f64>,
+    /// Seed of every random stream (overrides WorldInfo.randomSeed).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Record every sensor and actuator to this MCAP file, as `regatta run --log` does.
+    #[arg(long, value_name = "FILE.mcap")]
+    log: Option<PathBuf>,
+    /// Read a foreign file leniently.
+    #[arg(long)]
+    lenient: bool,
+}
+
+pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
+    let loaded = crate::world::load(&args.world, args.lenient, color)?;
+    let compiled = &loaded.compiled;
+    let robot = match &args.robot {
+        Some(name) => compiled.rig.robot(name).with_context(|| {
+            let names: Vec<&str> = compiled
+                .rig
+                .robots
+                .iter()
+                .map(|r| r.name.as_str())
+                .collect();
+            format!(
+                "{} has no robot named '{name}' (it has: {})",
+                args.world.display(),
+                names.join(", ")
+            )
+        })?,
+        None if compiled.rig.robots.is_empty() => {
+            bail!("{} has no robot to serve", args.world.display())
+        }
+        None => 0,
+    };
+    let mut simulation = Simulation::new(compiled, args.seed)
+        .with_context(|| format!("cannot run {}", args.world.display()))?;
+    let max_steps = match (args.steps, args.duration) {
+        (Some(steps), _) => Some(steps),
+        (None, Some(duration)) if duration >= 0.0 && duration.is_finite() => {
+            Some((duration / simulation.time_step).ceil() as u64)
+        }
+        (None, Some(duration)) => {
+            bail!("--duration must be a non-negative number of seconds, found {duration}")
+        }
+        (None, None) => None,
+    };
+    let mut recorder = match &args.log {
+        Some(path) => {
+            let file = std::fs::File::create(path)
+                .with_context(|| format!("cannot create {}", path.display()))?;
+            let run = RunInfo {
+                world_name: args.world.display().to_string(),
+                world_text: loaded.checked.sources[0].text.to_string(),
+                seed: simulation.seed,
+                lenient: args.lenient,
+                steps_requested: max_steps.unwrap_or(0),
+            };
+            Some(Recorder::new(
+                std::io::BufWriter::new(file),
+                &simulation,
+                &run,
+            )?)
+        }
+        None => None,
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
+    }
+    let pacing = if args.realtime {
+        Pacing::RealTime
+    } else {
+        Pacing::LockStep
+    };
+    let name = compiled.rig.robots[robot].name.clone();
+    let mode = match pacing {
+        Pacing::LockStep => "lock-step: one step per D command",
+        Pacing::RealTime => "real time",
+    };
+    let started = Instant::now();
+    let (stats, ended, hook_error) = {
+        let mut server = Server::new(&mut simulation, robot, pacing, max_steps);
+        if let Some(recorder) = &mut recorder {
+            server.on_step = Some(Box::new(|simulation: &Simulation| {
+                recorder.record(simulation).map_err(std::io::Error::other)
+            }));
+        }
+        let serve_one = |server: &mut Server, link: &mut dyn Link| match pacing {
+            Pacing::LockStep => serve_lock_step(server, link, &stop),
+            Pacing::RealTime => serve_real_time(server, link, &stop),
+        };
+        let ended = if let Some(address) = &args.tcp {
+            let listener = TcpListener::bind(address)
+                .with_context(|| format!("cannot listen on {address}"))?;
+            listener.set_nonblocking(true)?;
+            println!(
+                "serving robot '{name}' of {} on tcp {} ({mode})",
+                args.world.display(),
+                listener.local_addr()?
+            );
+            flush_stdout();
+            loop {
+                if stop.load(Ordering::SeqCst) {
+                    break Ended::Stopped;
+                }
+                match listener.accept() {
+                    Ok((mut stream, peer)) => {
+                        stream.set_nonblocking(false)?;
+                        stream.set_nodelay(true)?;
+                        eprintln!("client {peer} connected");
+                        match serve_one(&mut server, &mut stream)? {
+                            Ended::Closed => eprintln!("client {peer} left"),
+                            other => break other,
+                        }
+                    }
+                    Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                        std::thread::sleep(Duration::from_millis(20))
+                    }
+                    Err(e) => return Err(e).context("cannot accept a client"),
+                }
+            }
+        } else {
+            let mut pty =
+                regatta_serial::link::Pty::open().context("cannot open a pseudo-terminal")?;
+            println!(
+                "serving robot '{name}' of {} on {} ({mode})",
+                args.world.display(),
+                pty.slave_path()
+            );
+            flush_stdout();
+            serve_one(&mut server, &mut pty)?
+        };
+        (server.stats.clone(), ended, server.hook_error.take())
+    };
+    if let Some(error) = hook_error {
+        return Err(error).context("cannot write the log");
+    }
+    if let Some(recorder) = recorder {
+        recorder
+            .finish(&simulation, ended == Ended::Stopped)
+            .context("cannot close the log")?;
+    }
+    let pose = simulation.robots[robot].pose;
+    println!(
+        "served {} steps ({:.3} s simulated, {:.3} s wall): {} requests, {} malformed, {} refused{}",
+        simulation.steps,
+        simulation.time,
+        started.elapsed().as_secs_f64(),
+        stats.requests,
+        stats.malformed,
+        stats.refused,
+        match &stats.last_problem {
+            Some(problem) => format!(" (last: {problem})"),
+            None => String::new(),
+        }
+    );
+    println!(
+        "final pose of '{name}': x {:.9} z {:.9} heading {:.9}",
+        pose.x, pose.z, pose.heading
+    );
+    Ok(Outcome::Clean)
+}
+
+fn flush_stdout() {
+    use std::io::Write;
+    let _ = std::io::stdout().flush();
+}
+
+#[derive(clap::Args)]
+pub struct DriveArgs {
+    /// A serial port (the robot's cable, or a served pseudo-terminal).
+    #[arg(long, conflicts_with = "tcp", required_unless_present = "tcp")]
+    port: Option<String>,
+    /// The serial port's speed: 9600, 19200 or 38400 baud.
+    #[arg(long, default_value = "38400", value_parser = ["9600", "19200", "38400"])]
+    baud: String,
+    /// A TCP address (a serial-over-IP adapter, or `regatta serve --tcp`).
+    #[arg(long, value_name = "HOST:PORT")]
+    tcp: Option<String>,
+    /// The built-in controller: braitenberg or regatta.
+    #[arg(long)]
+    controller: String,
+    /// Controller parameters, as in a world's controllerArgs (`irGain=2`).
+    #[arg(long = "arg", value_name = "KEY=VALUE")]
+    args: Vec<String>,
+    /// Control steps to run (the robot is stopped at the end).
+    #[arg(long, default_value_t = 1875)]
+    steps: u64,
+    /// Milliseconds per control step; 0 runs as fast as replies come (for a lock-step world).
+    #[arg(long, default_value_t = 32)]
+    period: u64,
+    /// Milliseconds one try waits for a reply.
+    #[arg(long, default_value_t = 1000)]
+    timeout: u64,
+    /// Tries per request.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
+    tries: u32,
+}
+
+pub fn drive(args: DriveArgs) -> anyhow::Result<Outcome> {
+    let controller = regatta_runtime::controllers::build(&args.controller, &args.args)
+        .with_context(|| format!("cannot build controller '{}'", args.controller))?;
+    let options = ClientOptions {
+        timeout: Duration::from_millis(args.timeout.max(1)),
+        tries: args.tries,
+    };
+    match (&args.port, &args.tcp) {
+        (Some(port), _) => {
+            let baud: u32 = args.baud.parse().context("--baud")?;
+            let link = regatta_serial::link::open_serial(port, baud)
+                .with_context(|| format!("cannot open serial port {port}"))?;
+            drive_link(link, port, controller, &args, options)
+        }
+        (None, Some(address)) => {
+            let stream = TcpStream::connect(address)
+                .with_context(|| format!("cannot connect to {address}"))?;
+            stream.set_nodelay(true)?;
+            drive_link(stream, address, controller, &args, options)
+        }
+        (None, None) => bail!("give --port or --tcp"),
+    }
+}
+
+fn drive_link<L: Link>(
+    link: L,
+    name: &str,
+    mut controller: Box<dyn regatta_runtime::khepera::Controller>,
+    args: &DriveArgs,
+    options: ClientOptions,
+) -> anyhow::Result<Outcome> {
+    let mut robot = RemoteKhepera::connect(link, options)
+        .with_context(|| format!("no Khepera answers on {name}"))?;
+    let panoramic = robot.panoramic().is_some();
+    let k213 = robot.linear_camera().is_some();
+    println!(
+        "driving the {} on {name} with '{}' ({}{}{})",
+        if robot.is_simulation() {
+            "simulated Khepera"
+        } else {
+            "Khepera"
+        },
+        args.controller,
+        robot.version,
+        if panoramic { ", Panoramic turret" } else { "" },
+        if k213 { ", K213 turret" } else { "" },
+    );
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
+    }
+    let period = Duration::from_millis(args.period);
+    let started = Instant::now();
+    let mut done = 0;
+    let mut failure = None;
+    for step in 0..args.steps {
+        if stop.load(Ordering::SeqCst) {
+            break;
+        }
+        if let Err(error) = controller.step(&mut robot) {
+            failure = Some(format!("step {step}: {error}"));
+            break;
+        }
+        done += 1;
+        if !period.is_zero() {
+            let next = started + period * (step as u32 + 1);
+            std::thread::sleep(next.saturating_duration_since(Instant::now()));
+        }
+    }
+    // Leave a real robot standing still, whatever happened.
+    let stopped = robot.set_speed(0, 0);
+    let wall = started.elapsed().as_secs_f64();
+    println!(
+        "{done} control steps in {wall:.3} s: {} requests, {} retries",
+        robot.stats.requests, robot.stats.retries
+    );
+    if let Some(failure) = failure {
+        bail!("{failure}");
+    }
+    if let Err(error) = stopped {
+        eprintln!("warning: cannot stop the robot at the end: {error}");
+    }
+    Ok(Outcome::Clean)
+}
