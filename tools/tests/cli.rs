@@ -592,3 +592,121 @@ fn gltf_refuses_bad_output_names_and_logs_of_other_worlds() {
     assert_eq!(output.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("is not a regatta log"), "{stderr}");
 }
+
+#[test]
+fn serve_and_drive_over_tcp_match_an_in_process_run() {
+    use std::io::BufRead;
+    let dir = temp_dir("serve");
+    let world = root().join("worlds/regatta.wbt");
+    let served_log = dir.join("served.mcap");
+    let mut server = regatta()
+        .args(["serve", "--tcp", "127.0.0.1:0", "--steps", "120", "--log"])
+        .arg(&served_log)
+        .arg(&world)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = std::io::BufReader::new(server.stdout.take().unwrap()).lines();
+    let banner = lines.next().unwrap().unwrap();
+    let address = banner
+        .split("tcp ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .unwrap_or_else(|| panic!("no address in {banner:?}"))
+        .to_owned();
+    let drive = regatta()
+        .args([
+            "drive",
+            "--tcp",
+            &address,
+            "--controller",
+            "regatta",
+            "--steps",
+            "120",
+            "--period",
+            "0",
+        ])
+        .output()
+        .unwrap();
+    let drive_out = String::from_utf8_lossy(&drive.stdout);
+    assert!(
+        drive.status.success(),
+        "{drive_out}{}",
+        String::from_utf8_lossy(&drive.stderr)
+    );
+    assert!(
+        drive_out.contains("driving the simulated Khepera"),
+        "{drive_out}"
+    );
+    let status = server.wait().unwrap();
+    let rest: Vec<String> = lines.map_while(Result::ok).collect();
+    assert!(status.success(), "{rest:?}");
+    assert!(
+        rest.iter().any(|l| l.starts_with("served 120 steps")),
+        "{rest:?}"
+    );
+
+    let run_log = dir.join("run.mcap");
+    let run = regatta()
+        .args(["run", "--steps", "120", "--log"])
+        .arg(&run_log)
+        .arg(&world)
+        .output()
+        .unwrap();
+    assert!(run.status.success());
+    assert_eq!(
+        std::fs::read(&run_log).unwrap(),
+        std::fs::read(&served_log).unwrap(),
+        "the served run's log differs from the in-process run's"
+    );
+}
+
+#[test]
+fn drive_reports_a_missing_robot_clearly_and_serve_an_unknown_name() {
+    // Nothing listens on this port: connecting fails at once with the address in the message.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    drop(listener);
+    let output = regatta()
+        .args([
+            "drive",
+            "--tcp",
+            &address,
+            "--controller",
+            "braitenberg",
+            "--steps",
+            "5",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&format!("cannot connect to {address}")),
+        "{stderr}"
+    );
+
+    let output = regatta()
+        .args(["serve", "--tcp", "127.0.0.1:0", "--robot", "nobody"])
+        .arg(root().join("worlds/regatta.wbt"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("has no robot named 'nobody' (it has: khepera)"),
+        "{stderr}"
+    );
+
+    let output = regatta()
+        .args(["drive", "--tcp", "127.0.0.1:1", "--controller", "nonsense"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("cannot build controller 'nonsense'"),
+        "{stderr}"
+    );
+}

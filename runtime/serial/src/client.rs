@@ -292,7 +292,7 @@ impl<L: Link> PanoramicTurret for RemoteKhepera<L> {
 
     fn set_lambda(&mut self, lambda: f64) -> Result<(), KheperaError> {
         let milli = (lambda * 1000.0).round();
-        if !(milli >= 1.0 && milli < 1e12) {
+        if !(1.0..1e12).contains(&milli) {
             return Err(KheperaError::OutOfRange {
                 what: "λ (×1000)",
                 value: milli as i64,
