@@ -42,18 +42,15 @@ fn served(compiled: &regatta_runtime::Compiled, seed: u64, steps: u64) -> Vec<Po
         let server = scope.spawn(move || {
             let mut simulation = Simulation::new(compiled, Some(seed)).unwrap();
             let mut poses = Vec::new();
-            let mut server = Server::new(&mut simulation, 0, Pacing::LockStep, None);
-            // Record the pose after each step by serving one D at a time.
-            let stop = AtomicBool::new(false);
-            server.max_steps = Some(1);
-            loop {
+            {
+                let mut server = Server::new(&mut simulation, 0, Pacing::LockStep, None);
+                server.on_step = Some(Box::new(|simulation: &Simulation| {
+                    poses.push(simulation.robots[0].pose);
+                    Ok(())
+                }));
+                let stop = AtomicBool::new(false);
                 let ended = serve_lock_step(&mut server, &mut server_end, &stop).unwrap();
-                if ended == Ended::Closed {
-                    break;
-                }
-                poses.push(server.simulation.robots[0].pose);
-                server.simulation.sense();
-                server.max_steps = Some(server.simulation.steps + 1);
+                assert_eq!(ended, Ended::Closed);
             }
             poses
         });
