@@ -229,3 +229,27 @@ fn a_pty_pair_carries_the_protocol() {
         assert_eq!((ended, steps), (Ended::Done, 25));
     });
 }
+
+#[test]
+fn a_real_time_server_answers_and_steps_on_its_own() {
+    let compiled = compile("regatta.wbt");
+    let (mut server_end, mut client_end) = UnixStream::pair().unwrap();
+    std::thread::scope(|scope| {
+        let server = scope.spawn(move || {
+            let mut simulation = Simulation::new(&compiled, Some(2)).unwrap();
+            let mut server = Server::new(&mut simulation, 0, Pacing::RealTime, Some(30));
+            let stop = AtomicBool::new(false);
+            let ended =
+                regatta_serial::server::serve_real_time(&mut server, &mut server_end, &stop)
+                    .unwrap();
+            (ended, server.simulation.steps)
+        });
+        client_end.write_all(b"B\nD,5,5\n").unwrap();
+        let mut reply = [0u8; 10];
+        client_end.read_exact(&mut reply).unwrap();
+        assert_eq!(&reply, b"b,0,0\r\nd\r\n");
+        // No further D is needed for time to pass: the clock alone ends the 30 steps.
+        let (ended, steps) = server.join().unwrap();
+        assert_eq!((ended, steps), (Ended::Done, 30));
+    });
+}
