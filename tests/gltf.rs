@@ -78,7 +78,8 @@ fn round_trip(compiled: &Compiled, quality: u32, what: &str) -> (gltf::Document,
         let to_owner = match primitive.owner {
             regatta_runtime::compile::graph::Owner::Static => DMat4::IDENTITY,
             regatta_runtime::compile::graph::Owner::Robot(r) => {
-                let start = regatta_gltf::start_frame(&compiled.rig.robots[r]);
+                let rig = &compiled.rig.robots[r];
+                let start = rig.start.frame(rig.floor_y);
                 let m = DMat4::from_mat3_translation(start.linear, start.translation);
                 m.inverse()
             }

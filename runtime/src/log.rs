@@ -183,6 +183,19 @@ pub struct CdrReader<'a> {
     at: usize,
 }
 
+/// A `/{robot}/pose` message: its time (s) and the pose.
+pub fn decode_pose(data: &[u8]) -> Result<(f64, crate::compile::rig::Pose2), ShortMessage> {
+    let mut r = CdrReader::new(data);
+    Ok((
+        r.f64()?,
+        crate::compile::rig::Pose2 {
+            x: r.f64()?,
+            z: r.f64()?,
+            heading: r.f64()?,
+        },
+    ))
+}
+
 /// A CDR message too short for its schema.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("a message is shorter than its schema")]

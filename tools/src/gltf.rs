@@ -7,7 +7,6 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context};
 use regatta_gltf::{export, Options, Track};
 use regatta_runtime::compile::rig::Pose2;
-use regatta_runtime::log::CdrReader;
 
 use crate::Outcome;
 
@@ -116,24 +115,11 @@ fn tracks_from_log(
     }
     let mut poses: BTreeMap<&str, (Vec<f64>, Vec<Pose2>)> = BTreeMap::new();
     for (topic, _, data) in &contents.messages {
-        let Some(robot) = topic
-            .strip_prefix('/')
-            .and_then(|t| t.strip_suffix("/pose"))
-        else {
+        let (robot, kind) = crate::logs::split_topic(topic);
+        if kind != "pose" {
             continue;
-        };
-        let mut reader = CdrReader::new(data);
-        let decoded = (|| {
-            Ok::<_, regatta_runtime::log::ShortMessage>((
-                reader.f64()?,
-                Pose2 {
-                    x: reader.f64()?,
-                    z: reader.f64()?,
-                    heading: reader.f64()?,
-                },
-            ))
-        })();
-        let Ok((t, pose)) = decoded else {
+        }
+        let Ok((t, pose)) = regatta_runtime::log::decode_pose(data) else {
             bail!("{}: a pose message on {topic} is cut short", log.display());
         };
         let entry = poses.entry(robot).or_default();

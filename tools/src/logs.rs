@@ -130,7 +130,7 @@ pub fn log(args: LogArgs) -> anyhow::Result<Outcome> {
 }
 
 /// The robot and the channel kind of a topic `/{robot}/{kind}`.
-fn split_topic(topic: &str) -> (&str, &str) {
+pub(crate) fn split_topic(topic: &str) -> (&str, &str) {
     let trimmed = topic.trim_start_matches('/');
     trimmed.rsplit_once('/').unwrap_or(("", trimmed))
 }
@@ -279,11 +279,11 @@ pub fn plot(args: PlotArgs) -> anyhow::Result<Outcome> {
         let mut r = CdrReader::new(data);
         match kind {
             "pose" => {
-                let (_, x, z) = (r.f64(), r.f64(), r.f64());
-                if let (Ok(x), Ok(z)) = (x, z) {
+                if let Ok((_, pose)) = regatta_runtime::log::decode_pose(data) {
+                    let point = (pose.x, pose.z);
                     match paths.iter_mut().find(|(name, _)| name == robot) {
-                        Some((_, path)) => path.push((x, z)),
-                        None => paths.push((robot.to_owned(), vec![(x, z)])),
+                        Some((_, path)) => path.push(point),
+                        None => paths.push((robot.to_owned(), vec![point])),
                     }
                 }
             }

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use image::{GrayImage, Luma, Rgb, RgbImage};
 use regatta_runtime::compile::rig::TurretRig;
 use regatta_runtime::optics::{
@@ -49,22 +49,7 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
     let loaded = crate::world::load(&args.world, args.lenient, color)?;
     let compiled = &loaded.compiled;
     let robots: Vec<usize> = match &args.robot {
-        Some(name) => match compiled.rig.robot(name) {
-            Some(index) => vec![index],
-            None => {
-                let names: Vec<&str> = compiled
-                    .rig
-                    .robots
-                    .iter()
-                    .map(|r| r.name.as_str())
-                    .collect();
-                bail!(
-                    "no robot named '{name}' in {}; robots: {}",
-                    args.world.display(),
-                    names.join(", ")
-                );
-            }
-        },
+        Some(name) => vec![crate::world::robot_named(compiled, &args.world, name)?],
         None => (0..compiled.rig.robots.len()).collect(),
     };
     let with_vision: Vec<usize> = robots

@@ -6,8 +6,7 @@ use std::time::Instant;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-use anyhow::{bail, Context};
-use regatta_runtime::log::{Recorder, RunInfo};
+use anyhow::Context;
 use regatta_runtime::sim::Simulation;
 
 use crate::Outcome;
@@ -40,37 +39,23 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         .with_context(|| format!("cannot run {}", args.world.display()))?;
     let steps = match (args.steps, args.duration) {
         (Some(steps), _) => steps,
-        (None, Some(duration)) => {
-            if !(duration >= 0.0 && duration.is_finite()) {
-                bail!("--duration must be a non-negative number of seconds, found {duration}");
-            }
-            libm_ceil(duration / simulation.time_step)
-        }
-        (None, None) => libm_ceil(60.0 / simulation.time_step),
+        (None, Some(duration)) => crate::world::steps_for(duration, simulation.time_step)?,
+        (None, None) => crate::world::steps_for(60.0, simulation.time_step)?,
     };
-    let mut recorder = match &args.log {
-        Some(path) => {
-            if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-                std::fs::create_dir_all(parent)
-                    .with_context(|| format!("cannot create {}", parent.display()))?;
-            }
-            let file = std::fs::File::create(path)
-                .with_context(|| format!("cannot create {}", path.display()))?;
-            let run = RunInfo {
-                world_name: args.world.display().to_string(),
-                world_text: loaded.checked.sources[0].text.to_string(),
-                seed: simulation.seed,
-                lenient: args.lenient,
-                steps_requested: steps,
-            };
-            Some(Recorder::new(
-                std::io::BufWriter::new(file),
+    let mut recorder = args
+        .log
+        .as_deref()
+        .map(|path| {
+            crate::world::create_recorder(
+                path,
+                &args.world,
+                &loaded,
                 &simulation,
-                &run,
-            )?)
-        }
-        None => None,
-    };
+                args.lenient,
+                steps,
+            )
+        })
+        .transpose()?;
     // Ctrl-C ends the run between steps; the log is then closed properly and marked.
     let interrupted = Arc::new(AtomicBool::new(false));
     {
@@ -177,8 +162,4 @@ fn progress_bar(steps: u64) -> Option<indicatif::ProgressBar> {
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     Some(bar)
-}
-
-fn libm_ceil(x: f64) -> u64 {
-    x.ceil().max(0.0) as u64
 }

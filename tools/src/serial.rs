@@ -10,7 +10,6 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
 use regatta_runtime::khepera::Khepera;
-use regatta_runtime::log::{Recorder, RunInfo};
 use regatta_runtime::sim::Simulation;
 use regatta_serial::link::Link;
 use regatta_serial::server::{serve_lock_step, serve_real_time, Ended};
@@ -56,19 +55,7 @@ pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
     let loaded = crate::world::load(&args.world, args.lenient, color)?;
     let compiled = &loaded.compiled;
     let robot = match &args.robot {
-        Some(name) => compiled.rig.robot(name).with_context(|| {
-            let names: Vec<&str> = compiled
-                .rig
-                .robots
-                .iter()
-                .map(|r| r.name.as_str())
-                .collect();
-            format!(
-                "{} has no robot named '{name}' (it has: {})",
-                args.world.display(),
-                names.join(", ")
-            )
-        })?,
+        Some(name) => crate::world::robot_named(compiled, &args.world, name)?,
         None if compiled.rig.robots.is_empty() => {
             bail!("{} has no robot to serve", args.world.display())
         }
@@ -78,33 +65,23 @@ pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
         .with_context(|| format!("cannot run {}", args.world.display()))?;
     let max_steps = match (args.steps, args.duration) {
         (Some(steps), _) => Some(steps),
-        (None, Some(duration)) if duration >= 0.0 && duration.is_finite() => {
-            Some((duration / simulation.time_step).ceil() as u64)
-        }
-        (None, Some(duration)) => {
-            bail!("--duration must be a non-negative number of seconds, found {duration}")
-        }
+        (None, Some(duration)) => Some(crate::world::steps_for(duration, simulation.time_step)?),
         (None, None) => None,
     };
-    let mut recorder = match &args.log {
-        Some(path) => {
-            let file = std::fs::File::create(path)
-                .with_context(|| format!("cannot create {}", path.display()))?;
-            let run = RunInfo {
-                world_name: args.world.display().to_string(),
-                world_text: loaded.checked.sources[0].text.to_string(),
-                seed: simulation.seed,
-                lenient: args.lenient,
-                steps_requested: max_steps.unwrap_or(0),
-            };
-            Some(Recorder::new(
-                std::io::BufWriter::new(file),
+    let mut recorder = args
+        .log
+        .as_deref()
+        .map(|path| {
+            crate::world::create_recorder(
+                path,
+                &args.world,
+                &loaded,
                 &simulation,
-                &run,
-            )?)
-        }
-        None => None,
-    };
+                args.lenient,
+                max_steps.unwrap_or(0),
+            )
+        })
+        .transpose()?;
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();

@@ -1,8 +1,10 @@
-//! Loading a world for the commands that run it: check (printing diagnostics), then compile.
+//! Loading a world for the commands that run it: check (printing diagnostics), then compile;
+//! and what those commands share once it is loaded (robot lookup, step counts, log recorders).
 
 use std::path::Path;
 
-use anyhow::bail;
+use anyhow::{bail, Context};
+use regatta_runtime::log::{Recorder, RunInfo};
 use regatta_runtime::{compile, Compiled};
 use regatta_schema::{check_file, Checked};
 
@@ -45,4 +47,58 @@ pub fn load(path: &Path, lenient: bool, color: bool) -> anyhow::Result<Loaded> {
         eprintln!("warning: {warning}");
     }
     Ok(Loaded { checked, compiled })
+}
+
+/// The index of the robot called `name`; the error lists the robots the world has.
+pub fn robot_named(compiled: &Compiled, world: &Path, name: &str) -> anyhow::Result<usize> {
+    compiled.rig.robot(name).ok_or_else(|| {
+        let names: Vec<&str> = compiled
+            .rig
+            .robots
+            .iter()
+            .map(|r| r.name.as_str())
+            .collect();
+        anyhow::anyhow!(
+            "{} has no robot named '{name}' (it has: {})",
+            world.display(),
+            names.join(", ")
+        )
+    })
+}
+
+/// Steps covering `duration` seconds of simulated time (a partial step counts as one).
+pub fn steps_for(duration: f64, time_step: f64) -> anyhow::Result<u64> {
+    if !(duration >= 0.0 && duration.is_finite()) {
+        bail!("--duration must be a non-negative number of seconds, found {duration}");
+    }
+    Ok((duration / time_step).ceil().max(0.0) as u64)
+}
+
+/// A log recorder writing to `path` (its folder created), with the run's world text and seed.
+pub fn create_recorder(
+    path: &Path,
+    world: &Path,
+    loaded: &Loaded,
+    simulation: &regatta_runtime::sim::Simulation,
+    lenient: bool,
+    steps_requested: u64,
+) -> anyhow::Result<Recorder<std::io::BufWriter<std::fs::File>>> {
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)
+            .with_context(|| format!("cannot create {}", parent.display()))?;
+    }
+    let file =
+        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let run = RunInfo {
+        world_name: world.display().to_string(),
+        world_text: loaded.checked.sources[0].text.to_string(),
+        seed: simulation.seed,
+        lenient,
+        steps_requested,
+    };
+    Ok(Recorder::new(
+        std::io::BufWriter::new(file),
+        simulation,
+        &run,
+    )?)
 }

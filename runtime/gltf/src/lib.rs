@@ -237,7 +237,10 @@ impl<'a> Builder<'a> {
     fn robot_world(&self, robot: usize) -> Frame {
         match self.robot_nodes.get(robot).copied().flatten() {
             Some(node) => self.effective[node],
-            None => start_frame(&self.compiled.rig.robots[robot]),
+            None => {
+                let rig = &self.compiled.rig.robots[robot];
+                rig.start.frame(rig.floor_y)
+            }
         }
     }
 
@@ -902,18 +905,6 @@ fn orthonormalized(m: DMat3) -> DMat3 {
     let z = m.z_axis.try_normalize().unwrap_or(DVec3::Z);
     let x = m.y_axis.cross(z).try_normalize().unwrap_or(DVec3::X);
     DMat3::from_cols(x, z.cross(x), z)
-}
-
-/// The frame the simulation starts a robot in: upright on its floor at its start pose.
-pub fn start_frame(robot: &RobotRig) -> Frame {
-    let (s, c) = (
-        libm::sin(robot.start.heading),
-        libm::cos(robot.start.heading),
-    );
-    Frame {
-        linear: DMat3::from_cols(DVec3::new(c, 0.0, -s), DVec3::Y, DVec3::new(s, 0.0, c)),
-        translation: DVec3::new(robot.start.x, robot.floor_y, robot.start.z),
-    }
 }
 
 fn robot_extras(robot: &RobotRig) -> Value {

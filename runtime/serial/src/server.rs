@@ -121,7 +121,7 @@ pub fn answer(request: &Request, robot: &mut dyn Khepera) -> Result<String, Khep
                     turret.set_lambda(*x as f64 / 1000.0)?;
                     "t,3,l".into()
                 }
-                PanoramicRequest::Lambda => list("t,3,m", &[libm_round(turret.lambda()? * 1000.0)]),
+                PanoramicRequest::Lambda => list("t,3,m", &[thousandths(turret.lambda()?)]),
                 PanoramicRequest::SetBits(b) => {
                     turret.set_bits(*b)?;
                     "t,3,b".into()
@@ -140,9 +140,11 @@ pub fn answer(request: &Request, robot: &mut dyn Khepera) -> Result<String, Khep
     })
 }
 
-fn libm_round(x: f64) -> i64 {
-    if x.is_finite() {
-        x.round() as i64
+/// λ in the protocol's integer unit.
+fn thousandths(x: f64) -> i64 {
+    let milli = x * 1000.0;
+    if milli.is_finite() {
+        milli.round() as i64
     } else {
         0
     }
@@ -250,8 +252,11 @@ impl<'s, 'c> Server<'s, 'c> {
             if flow == Flow::Done {
                 break;
             }
-            self.stats.requests += 1;
             let request = line.and_then(|l| Request::parse(&l));
+            if request == Err(Malformed::Empty) {
+                continue;
+            }
+            self.stats.requests += 1;
             let reply = match request {
                 Ok(request) => {
                     let mut robot = self.simulation.khepera(self.robot);
@@ -272,10 +277,6 @@ impl<'s, 'c> Server<'s, 'c> {
                             NOT_FOUND.to_owned()
                         }
                     }
-                }
-                Err(Malformed::Empty) => {
-                    self.stats.requests -= 1;
-                    continue;
                 }
                 Err(problem) => {
                     self.stats.malformed += 1;

@@ -382,11 +382,7 @@ impl Compiler<'_> {
             turret: None,
         });
         // The robot's group sits where the simulation puts the robot: upright on the floor.
-        let (s, c) = (libm::sin(start.heading), libm::cos(start.heading));
-        let start_frame = Frame {
-            linear: glam::DMat3::from_cols(DVec3::new(c, 0.0, -s), DVec3::Y, DVec3::new(s, 0.0, c)),
-            translation: robot_frame.translation,
-        };
+        let start_frame = start.frame(robot_frame.translation.y);
         let outer = self.enter_group(node, &start_frame, Owner::Static, Some(index));
         // Attached parts: frames relative to the robot.
         for &child in scene.children(node, "children") {

@@ -30,6 +30,16 @@ impl Pose2 {
         )
     }
 
+    /// The robot's frame in the world: upright on the floor at height `floor_y`, turned by its
+    /// heading about +y.
+    pub fn frame(&self, floor_y: f64) -> crate::geometry::Frame {
+        let (s, c) = (libm::sin(self.heading), libm::cos(self.heading));
+        crate::geometry::Frame {
+            linear: glam::DMat3::from_cols(DVec3::new(c, 0.0, -s), DVec3::Y, DVec3::new(s, 0.0, c)),
+            translation: DVec3::new(self.x, floor_y, self.z),
+        }
+    }
+
     /// The pose with its sine and cosine computed once, for many transforms.
     pub fn placement(&self, floor_y: f64) -> Placement {
         Placement {

@@ -26,12 +26,7 @@ pub struct Poses {
 impl Poses {
     /// The robot's frame in the world.
     pub fn frame(&self, robot: usize) -> Frame {
-        let pose = self.poses[robot];
-        let (s, c) = (libm::sin(pose.heading), libm::cos(pose.heading));
-        Frame {
-            linear: glam::DMat3::from_cols(DVec3::new(c, 0.0, -s), DVec3::Y, DVec3::new(s, 0.0, c)),
-            translation: DVec3::new(pose.x, self.floor_y[robot], pose.z),
-        }
+        self.poses[robot].frame(self.floor_y[robot])
     }
 }
 
