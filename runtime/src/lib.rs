@@ -3,7 +3,7 @@
 //!
 //! Data flow: [`compile::compile`] → [`optics::Renderer`] (analytic columns or ray casting) →
 //! [`optics::Panoramic`] / [`optics::LinearCamera`] → [`retina`] stages. Geometric queries live
-//! apart in [`geometry`].
+//! apart in [`geometry`]. Batched backends (wgpu) plug in through [`vision`].
 
 // Channel loops (`for k in 0..3`) read as the formulas they implement.
 #![allow(clippy::needless_range_loop)]
@@ -17,5 +17,6 @@ pub mod optics;
 pub mod render;
 pub mod retina;
 pub mod sim;
+pub mod vision;
 
 pub use compile::{compile, Compiled};

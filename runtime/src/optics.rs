@@ -251,6 +251,15 @@ impl Panoramic {
         self.process(out);
     }
 
+    /// One update from photocurrents a batched backend rendered (no flat views kept).
+    pub fn accept(&mut self, luminance: &[f64], out: &mut RetinaOutput) {
+        out.flat_views.clear();
+        out.warped.clear();
+        out.luminance.clear();
+        out.luminance.extend_from_slice(luminance);
+        self.process(out);
+    }
+
     /// Photodetectors to digital, from `out.luminance`.
     pub fn process(&self, out: &mut RetinaOutput) {
         out.analog.resize(out.luminance.len(), 0.0);
@@ -284,6 +293,57 @@ impl Panoramic {
     }
 }
 
+/// The two flat views of paper optics: the left one centred at +60°, the right at −60°.
+pub const VIEW_CENTERS: [f64; 2] = [VIEW_HALF_WIDTH, -VIEW_HALF_WIDTH];
+
+/// Where paper optics sample a flat view, shared by every backend so that they agree: the
+/// sub-columns (azimuth from the view's centre, and the slant √(x² + f²) that turns a row's
+/// y into a tan-elevation), left to right, `samples` per column; and the sub-rows' y, top to
+/// bottom, `samples` per row. Focal distance f = 1.
+pub fn flat_samples(samples: usize) -> (Vec<(f64, f64)>, Vec<f64>) {
+    let f = 1.0;
+    let x_extent = f * libm::tan(VIEW_HALF_WIDTH);
+    let y_extent = f * libm::tan(HALF_BAND);
+    let n = samples.max(1);
+    let mut columns = Vec::with_capacity(FLAT_COLUMNS * n);
+    for c in 0..FLAT_COLUMNS {
+        for si in 0..n {
+            let x = x_extent
+                * (2.0 * (c as f64 + (si as f64 + 0.5) / n as f64) / FLAT_COLUMNS as f64 - 1.0);
+            columns.push((-libm::atan(x / f), (x * x + f * f).sqrt()));
+        }
+    }
+    let mut rows = Vec::with_capacity(FLAT_ROWS * n);
+    for r in 0..FLAT_ROWS {
+        for sj in 0..n {
+            rows.push(
+                y_extent * (1.0 - 2.0 * (r as f64 + (sj as f64 + 0.5) / n as f64) / FLAT_ROWS as f64),
+            );
+        }
+    }
+    (columns, rows)
+}
+
+/// The warp of paper optics: for view `v`, retina column `j` (0…74) and warped row `k`
+/// (0…6), the continuous flat-view coordinates (u, w) to sample bilinearly, edges clamped.
+pub fn warp_coordinates(v: usize, j: usize, k: usize) -> (f64, f64) {
+    let f = 1.0;
+    let x_extent = f * libm::tan(VIEW_HALF_WIDTH);
+    let y_extent = f * libm::tan(HALF_BAND);
+    let theta = retina::pixel_azimuth(v * FLAT_COLUMNS + j) - VIEW_CENTERS[v];
+    let x = -f * libm::tan(theta);
+    let u = (x / x_extent + 1.0) / 2.0 * FLAT_COLUMNS as f64 - 0.5;
+    let phi = HALF_BAND - (k as f64 + 0.5) * 2.0 * HALF_BAND / FLAT_ROWS as f64;
+    let y = (x * x + f * f).sqrt() * libm::tan(phi);
+    let w = (1.0 - y / y_extent) / 2.0 * FLAT_ROWS as f64 - 0.5;
+    (u, w)
+}
+
+/// An 8-bit frame buffer's channel: clamped to [0, 1] and rounded to 1/255.
+pub fn quantize_channel(channel: f64) -> f64 {
+    libm::round(channel.clamp(0.0, 1.0) * 255.0) / 255.0
+}
+
 /// The paper's optics: render, quantise, warp, average.
 #[allow(clippy::too_many_arguments)]
 fn paper(
@@ -296,31 +356,21 @@ fn paper(
     luminance_out: &mut [f64],
     out: &mut RetinaOutput,
 ) {
-    let f = 1.0;
-    let x_extent = f * libm::tan(VIEW_HALF_WIDTH);
-    let y_extent = f * libm::tan(HALF_BAND);
     let n = samples.max(1);
+    let (sub_columns, sub_rows) = flat_samples(n);
     let look = renderer.look(view, eye, heading);
     let mut tans = vec![0.0; FLAT_ROWS * n];
     let mut samples = vec![[0.0; 3]; FLAT_ROWS * n];
-    for (v, view_center) in [VIEW_HALF_WIDTH, -VIEW_HALF_WIDTH].into_iter().enumerate() {
+    for (v, view_center) in VIEW_CENTERS.into_iter().enumerate() {
         // Render the flat view: columns left to right (x grows to the right, azimuth falls),
         // rows top to bottom; each sub-column is one azimuth with all its rows.
         let mut flat = vec![[0.0; 3]; FLAT_COLUMNS * FLAT_ROWS];
         for c in 0..FLAT_COLUMNS {
             for si in 0..n {
-                let x = x_extent
-                    * (2.0 * (c as f64 + (si as f64 + 0.5) / n as f64) / FLAT_COLUMNS as f64 - 1.0);
-                let alpha = view_center - libm::atan(x / f);
-                let slant = (x * x + f * f).sqrt();
-                for r in 0..FLAT_ROWS {
-                    for sj in 0..n {
-                        let y = y_extent
-                            * (1.0
-                                - 2.0 * (r as f64 + (sj as f64 + 0.5) / n as f64)
-                                    / FLAT_ROWS as f64);
-                        tans[r * n + sj] = y / slant;
-                    }
+                let (offset, slant) = sub_columns[c * n + si];
+                let alpha = view_center + offset;
+                for (tan, y) in tans.iter_mut().zip(&sub_rows) {
+                    *tan = y / slant;
                 }
                 renderer.flat_column(
                     view,
@@ -343,7 +393,7 @@ fn paper(
         }
         if quantize {
             for rgb in &mut flat {
-                *rgb = rgb.map(|channel| libm::round(channel.clamp(0.0, 1.0) * 255.0) / 255.0);
+                *rgb = rgb.map(quantize_channel);
             }
         }
         let flat_luminance: Vec<f64> = flat.iter().map(|&c| luminance(c)).collect();
@@ -351,14 +401,9 @@ fn paper(
         let mut warped = vec![0.0; FLAT_COLUMNS * FLAT_ROWS];
         for j in 0..FLAT_COLUMNS {
             let pixel = v * FLAT_COLUMNS + j;
-            let theta = retina::pixel_azimuth(pixel) - view_center;
-            let x = -f * libm::tan(theta);
-            let u = (x / x_extent + 1.0) / 2.0 * FLAT_COLUMNS as f64 - 0.5;
             let mut row_sum = 0.0;
             for k in 0..FLAT_ROWS {
-                let phi = HALF_BAND - (k as f64 + 0.5) * 2.0 * HALF_BAND / FLAT_ROWS as f64;
-                let y = (x * x + f * f).sqrt() * libm::tan(phi);
-                let w = (1.0 - y / y_extent) / 2.0 * FLAT_ROWS as f64 - 0.5;
+                let (u, w) = warp_coordinates(v, j, k);
                 let value = bilinear(&flat_luminance, u, w);
                 warped[k * FLAT_COLUMNS + j] = value;
                 row_sum += value;
@@ -435,9 +480,21 @@ impl LinearCamera {
         );
         out.luminance.clear();
         out.luminance.extend_from_slice(&self.luminance);
+        Self::convert(&self.rig, out);
+    }
+
+    /// One update from photocurrents a batched backend rendered.
+    pub fn accept(&mut self, luminance: &[f64], out: &mut LinearCameraOutput) {
+        out.luminance.clear();
+        out.luminance.extend_from_slice(luminance);
+        Self::convert(&self.rig, out);
+    }
+
+    /// Photodetectors to grey levels and light level, from `out.luminance`.
+    fn convert(rig: &LinearCameraRig, out: &mut LinearCameraOutput) {
         out.analog.resize(out.luminance.len(), 0.0);
         out.dark = !normalize(&out.luminance, &mut out.analog);
-        let top = ((1u32 << self.rig.bits) - 1) as f64;
+        let top = ((1u32 << rig.bits) - 1) as f64;
         out.digital = out
             .analog
             .iter()

@@ -359,8 +359,9 @@ impl<'g> ColumnScene<'g> {
         for object in &frame.objects {
             let interval = azimuth_interval(object, eye2, heading);
             if let Some((lo, hi)) = interval {
-                breaks.push(lo);
-                breaks.push(hi);
+                // An interval may reach past ±π; its edges are where a column of (−π, π] meets them.
+                breaks.push(wrap(lo));
+                breaks.push(wrap(hi));
             }
             let (lo, hi) = interval.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
             let relative = match object.footprint {
@@ -660,9 +661,15 @@ impl<'g> ColumnScene<'g> {
     }
 
     /// Segments of one column, sorted front to back (ties by object order: deterministic).
+    ///
+    /// A cap (a top seen from above, a bottom from below) is drawn at the depth of its far
+    /// edge: whatever stands on it or floats over it, nearer than that edge, covers it first
+    /// (a buoy on the floor, a lamp on its buoy). Its near part cannot be covered by such an
+    /// object, whose silhouette starts at the cap's plane. Geometry below a floor inside
+    /// the floor's footprint would show through; closed worlds have none.
     fn collect_segments(&self, look: &Look, direction: DVec2, alpha: f64, segments: &mut Segments) {
         for (index, object) in look.objects.iter().enumerate() {
-            if alpha < object.lo || alpha > object.hi {
+            if outside(alpha, object.lo, object.hi) {
                 continue;
             }
             let Some((t_in, t_out, normal)) = object.relative.cross(direction) else {
@@ -683,7 +690,7 @@ impl<'g> ColumnScene<'g> {
                 }
                 if object.top && y1 < 0.0 {
                     segments.insert(Segment {
-                        depth: t_in,
+                        depth: t_out,
                         t0: y1 * inv_in,
                         t1: y1 / t_out,
                         object: id,
@@ -695,7 +702,7 @@ impl<'g> ColumnScene<'g> {
                 }
                 if object.bottom && y0 > 0.0 {
                     segments.insert(Segment {
-                        depth: t_in,
+                        depth: t_out,
                         t0: y0 / t_out,
                         t1: y0 * inv_in,
                         object: id,
@@ -709,7 +716,7 @@ impl<'g> ColumnScene<'g> {
                 // Standing over it (a floor): its top fills everything below its far edge.
                 if object.top {
                     segments.insert(Segment {
-                        depth: 0.0,
+                        depth: t_out,
                         t0: f64::NEG_INFINITY,
                         t1: y1 / t_out,
                         object: id,
@@ -722,7 +729,7 @@ impl<'g> ColumnScene<'g> {
             } else if y0 > 0.0 {
                 if object.bottom {
                     segments.insert(Segment {
-                        depth: 0.0,
+                        depth: t_out,
                         t0: y0 / t_out,
                         t1: f64::INFINITY,
                         object: id,
@@ -893,6 +900,21 @@ impl<'g> ColumnScene<'g> {
         let mut none = |_: DVec3, _: &LightKind| false;
         shade(material, None, point, normal, eye, &frame.lights, &mut none)
     }
+}
+
+/// Whether azimuth `alpha` (in (−π, π]) misses the interval `[lo, hi]`, which may reach past
+/// ±π (it spans less than a turn), so `alpha ± 2π` is tried too.
+#[inline]
+fn outside(alpha: f64, lo: f64, hi: f64) -> bool {
+    if alpha >= lo && alpha <= hi {
+        return false;
+    }
+    let turned = if alpha < lo {
+        alpha + std::f64::consts::TAU
+    } else {
+        alpha - std::f64::consts::TAU
+    };
+    turned < lo || turned > hi
 }
 
 /// An object's azimuth interval relative to `heading`, or `None` when it surrounds the eye.

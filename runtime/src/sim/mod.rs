@@ -19,6 +19,7 @@ use crate::khepera::{
 use crate::optics::{LinearCamera, LinearCameraOutput, Panoramic, Renderer, RetinaOutput};
 use crate::render::Poses;
 use crate::retina::FilterKind;
+use crate::vision::{VisionBackend, VisionError, VisionRequest, WorldInstance};
 use noise::{kind, Stream};
 use world2d::{Footprint, Slab};
 
@@ -140,6 +141,12 @@ impl RobotState {
 pub struct Simulation<'c> {
     pub compiled: &'c Compiled,
     renderer: Option<Renderer<'c>>,
+    /// A batched backend that renders every due vision device of a step in one call,
+    /// replacing the CPU renderer.
+    vision: Option<Box<dyn VisionBackend + 'c>>,
+    /// The first error the vision backend returned; vision readings stop refreshing after it.
+    pub vision_error: Option<VisionError>,
+    vision_buffers: Vec<Vec<f64>>,
     pub slab: Slab,
     pub robots: Vec<RobotState>,
     /// Simulated time (s) and steps done.
@@ -223,6 +230,9 @@ impl<'c> Simulation<'c> {
         let mut simulation = Simulation {
             compiled,
             renderer,
+            vision: None,
+            vision_error: None,
+            vision_buffers: Vec::new(),
             slab,
             robots,
             time: 0.0,
@@ -232,6 +242,12 @@ impl<'c> Simulation<'c> {
         };
         simulation.track_visits();
         Ok(simulation)
+    }
+
+    /// Renders vision devices with `backend` (built for this world as scene 0) instead of
+    /// the CPU renderer.
+    pub fn set_vision_backend(&mut self, backend: Box<dyn VisionBackend + 'c>) {
+        self.vision = Some(backend);
     }
 
     /// Replaces a robot's controller (a library user's own).
@@ -324,6 +340,7 @@ impl<'c> Simulation<'c> {
         } else {
             Vec::new()
         };
+        let mut requests = Vec::new();
         for (index, robot) in self.robots.iter_mut().enumerate() {
             let rig = &compiled.rig.robots[index];
             for (s, sensor) in rig.distance_sensors.iter().enumerate().take(8) {
@@ -352,6 +369,20 @@ impl<'c> Simulation<'c> {
                     );
                 }
             }
+            if self.vision.is_some() {
+                let due_now = match (&mut robot.panoramic, &mut robot.linear_camera) {
+                    (Some(turret), _) => due(&mut turret.due, t, turret.model.rig.period),
+                    (None, Some(camera)) => due(&mut camera.due, t, camera.model.rig.period),
+                    (None, None) => false,
+                };
+                if due_now {
+                    requests.push(VisionRequest {
+                        instance: 0,
+                        robot: index,
+                    });
+                }
+                continue;
+            }
             if let Some(renderer) = &self.renderer {
                 if let Some(turret) = &mut robot.panoramic {
                     if due(&mut turret.due, t, turret.model.rig.period) {
@@ -379,6 +410,29 @@ impl<'c> Simulation<'c> {
                         );
                     }
                 }
+            }
+        }
+        if requests.is_empty() || self.vision_error.is_some() {
+            return;
+        }
+        let Some(backend) = &mut self.vision else {
+            return;
+        };
+        let instances = [WorldInstance {
+            scene: 0,
+            poses: &poses,
+        }];
+        if let Err(error) = backend.render(&instances, &requests, &mut self.vision_buffers) {
+            self.vision_error = Some(error);
+            return;
+        }
+        for (request, luminance) in requests.iter().zip(&self.vision_buffers) {
+            let robot = &mut self.robots[request.robot];
+            robot.updated.vision = true;
+            if let Some(turret) = &mut robot.panoramic {
+                turret.model.accept(luminance, &mut turret.output);
+            } else if let Some(camera) = &mut robot.linear_camera {
+                camera.model.accept(luminance, &mut camera.output);
             }
         }
     }
