@@ -32,6 +32,14 @@ pub struct Args {
     /// Minimum time spent timing each configuration (ms).
     #[arg(long, default_value_t = 300)]
     millis: u64,
+    /// `wgpu`: time per update for populations of 1, 10, 100 and 1000 robots, each in its own
+    /// copy of the world, all rendered in one batch (paper optics), and their agreement with
+    /// the CPU's paper optics.
+    #[arg(long, value_enum, default_value_t)]
+    renderer: crate::vision::RendererKind,
+    /// Population sizes for `--renderer wgpu`.
+    #[arg(long, value_delimiter = ',', default_values_t = [1usize, 10, 100, 1000])]
+    robots: Vec<usize>,
 }
 
 struct Row {
@@ -65,6 +73,28 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             args.world.display()
         );
     };
+    if args.renderer == crate::vision::RendererKind::Wgpu {
+        let poses = spread_poses(compiled, robot, args.robots.iter().copied().max().unwrap_or(1));
+        let paper = PanoramicRig {
+            optics: Optics::Paper,
+            ..base.clone()
+        };
+        let mut paper_world = compiled.clone();
+        if let Some(TurretRig::Panoramic(p)) = &mut paper_world.rig.robots[robot].turret {
+            *p = paper.clone();
+        }
+        let agreement_poses = &poses[..poses.len().min(args.poses.max(1))];
+        let cpu = outputs(&paper_world, robot, &paper, false, agreement_poses);
+        return crate::vision::bench_population(
+            &paper_world,
+            robot,
+            &poses,
+            &cpu,
+            &args.robots,
+            args.millis,
+            &args.out,
+        );
+    }
     let poses = spread_poses(compiled, robot, args.poses.max(1));
     let upright = compiled.plan.renderer == RendererChoice::Columns;
     // The reference.
@@ -208,7 +238,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
 }
 
 /// Poses spread over the plan's region, away from walls and static cylinders.
-fn spread_poses(compiled: &regatta_runtime::Compiled, robot: usize, count: usize) -> Vec<Pose2> {
+pub(crate) fn spread_poses(compiled: &regatta_runtime::Compiled, robot: usize, count: usize) -> Vec<Pose2> {
     let region = compiled.plan.region;
     let margin = compiled.rig.robots[robot].body_radius + 0.05;
     let (x0, x1, z0, z1) = (
@@ -269,7 +299,7 @@ fn outputs(
         .collect()
 }
 
-fn posed(compiled: &regatta_runtime::Compiled, robot: usize, pose: Pose2) -> Poses {
+pub(crate) fn posed(compiled: &regatta_runtime::Compiled, robot: usize, pose: Pose2) -> Poses {
     let mut poses = Poses {
         poses: compiled.rig.robots.iter().map(|r| r.start).collect(),
         floor_y: compiled.rig.robots.iter().map(|r| r.floor_y).collect(),

@@ -14,6 +14,7 @@ mod render;
 mod run;
 mod schema;
 mod serial;
+mod vision;
 mod world;
 
 use std::io::IsTerminal;

@@ -30,6 +30,9 @@ pub struct Args {
     /// Record every sensor and actuator to this MCAP file.
     #[arg(long, value_name = "FILE.mcap")]
     log: Option<PathBuf>,
+    /// What renders vision devices.
+    #[arg(long, value_enum, default_value_t)]
+    renderer: crate::vision::RendererKind,
 }
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
@@ -37,6 +40,11 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
     let compiled = &loaded.compiled;
     let mut simulation = Simulation::new(compiled, args.seed)
         .with_context(|| format!("cannot run {}", args.world.display()))?;
+    let backend = crate::vision::backend(args.renderer, compiled, &args.world)?;
+    let vision = backend.as_ref().map(|b| b.describe());
+    if let Some(backend) = backend {
+        simulation.set_vision_backend(backend);
+    }
     let steps = match (args.steps, args.duration) {
         (Some(steps), _) => steps,
         (None, Some(duration)) => crate::world::steps_for(duration, simulation.time_step)?,
@@ -69,6 +77,9 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
             break;
         }
         simulation.step();
+        if let Some(error) = &simulation.vision_error {
+            anyhow::bail!("step {}: {error}", simulation.steps);
+        }
         if let Some(recorder) = &mut recorder {
             recorder
                 .record(&simulation)
@@ -104,6 +115,9 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         );
     }
     println!("world {}: seed {}", args.world.display(), simulation.seed);
+    if let Some(vision) = vision {
+        println!("vision rendered by {vision}");
+    }
     println!(
         "simulated {:.3} s in {} steps of {} ms",
         simulation.time,

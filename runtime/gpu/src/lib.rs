@@ -76,7 +76,6 @@ struct Batch {
     uniform: wgpu::Buffer,
     outputs: wgpu::Buffer,
     staging: wgpu::Buffer,
-    flat: wgpu::Buffer,
     group: wgpu::BindGroup,
 }
 
@@ -395,7 +394,7 @@ impl GpuVision {
             capacity.views * std::mem::size_of::<GpuView>(),
             wgpu::BufferUsages::empty(),
         );
-        let flat = storage("flat", capacity.flat * 4, wgpu::BufferUsages::COPY_SRC);
+        let flat = storage("flat", capacity.flat * 4, wgpu::BufferUsages::empty());
         let outputs = storage("outputs", capacity.outputs * 4, wgpu::BufferUsages::COPY_SRC);
         let uniform = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("batch"),
@@ -447,7 +446,6 @@ impl GpuVision {
             uniform,
             outputs,
             staging,
-            flat,
             group,
         });
         Ok(())
