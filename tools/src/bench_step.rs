@@ -22,6 +22,10 @@ pub struct Args {
     /// Measure the peak memory of running the world (used by the child process).
     #[arg(long, hide = true)]
     memory_child: bool,
+    /// What renders vision devices (`wgpu`: the world as written, stepped with the GPU
+    /// rendering its vision devices; the other configurations are CPU-only).
+    #[arg(long, value_enum, default_value_t)]
+    renderer: crate::vision::RendererKind,
 }
 
 /// Steps per second of a world over at least `millis`.
@@ -71,6 +75,26 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         args.world.display(),
         time_step * 1000.0
     );
+    if let Some(backend) = crate::vision::backend(args.renderer, &compiled, &args.world)? {
+        let describe = backend.describe();
+        let mut simulation = Simulation::new(&compiled, None)?;
+        simulation.set_vision_backend(backend);
+        simulation.run(10);
+        let started = Instant::now();
+        let mut steps = 0u64;
+        while steps < 20 || started.elapsed() < std::time::Duration::from_millis(args.millis) {
+            simulation.run(10);
+            steps += 10;
+        }
+        if let Some(error) = &simulation.vision_error {
+            bail!("{error}");
+        }
+        report(
+            "as written, vision on wgpu (paper optics)",
+            steps as f64 / started.elapsed().as_secs_f64(),
+        );
+        println!("(vision rendered by {describe}; the configurations below use the CPU)");
+    }
     let full = steps_per_second(&compiled, args.millis)?;
     report("as written (IR, ambient, vision every step)", full);
     // The same with every message logged (into memory: the cost of recording, not of a disk).

@@ -33,6 +33,9 @@ pub struct Args {
     /// Render with the ray caster even where the column renderer applies (the reference).
     #[arg(long)]
     rays: bool,
+    /// What renders vision devices (`wgpu`: paper optics on the GPU, every robot in one batch).
+    #[arg(long, value_enum, default_value_t)]
+    renderer: crate::vision::RendererKind,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -65,18 +68,36 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         poses: compiled.rig.robots.iter().map(|r| r.start).collect(),
         floor_y: compiled.rig.robots.iter().map(|r| r.floor_y).collect(),
     };
+    // With the wgpu backend, every robot's device in one batch; the CPU renders otherwise.
+    let mut gpu_luminance = Vec::new();
+    if let Some(mut backend) = crate::vision::backend(args.renderer, compiled, &args.world)? {
+        let requests: Vec<_> = with_vision
+            .iter()
+            .map(|&robot| regatta_runtime::vision::VisionRequest { instance: 0, robot })
+            .collect();
+        let instances = [regatta_runtime::vision::WorldInstance {
+            scene: 0,
+            poses: &poses,
+        }];
+        backend.render(&instances, &requests, &mut gpu_luminance)?;
+        eprintln!("rendered by {}", backend.describe());
+    }
     if args.format == Format::Png {
         std::fs::create_dir_all(&args.out)
             .with_context(|| format!("cannot create {}", args.out.display()))?;
     }
-    for robot in with_vision {
+    for (slot, &robot) in with_vision.iter().enumerate() {
         let rig = &compiled.rig.robots[robot];
+        let from_gpu = gpu_luminance.get(slot);
         let view = renderer.view(&compiled.plan, &poses, robot);
         match rig.turret.as_ref().expect("filtered above") {
             TurretRig::Panoramic(panoramic) => {
                 let mut retina = Panoramic::new(panoramic);
                 let mut output = RetinaOutput::default();
-                retina.update(&renderer, &view, rig.start, rig.floor_y, &mut output);
+                match from_gpu {
+                    Some(luminance) => retina.accept(luminance, &mut output),
+                    None => retina.update(&renderer, &view, rig.start, rig.floor_y, &mut output),
+                }
                 match args.format {
                     Format::Json => {
                         println!("{}", panoramic_json(&rig.name, panoramic.roi, &output))
@@ -93,7 +114,10 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
             TurretRig::Linear(camera) => {
                 let mut k213 = LinearCamera::new(camera);
                 let mut output = LinearCameraOutput::default();
-                k213.update(&renderer, &view, rig.start, rig.floor_y, &mut output);
+                match from_gpu {
+                    Some(luminance) => k213.accept(luminance, &mut output),
+                    None => k213.update(&renderer, &view, rig.start, rig.floor_y, &mut output),
+                }
                 match args.format {
                     Format::Json => println!(
                         "{}",

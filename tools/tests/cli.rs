@@ -710,3 +710,77 @@ fn drive_reports_a_missing_robot_clearly_and_serve_an_unknown_name() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_world_without_vision_never_starts_the_gpu() {
+    let dir = temp_dir("no-vision");
+    let world = dir.join("blind.wbt");
+    std::fs::write(
+        &world,
+        "#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" }\nArena { }\nKhepera { controller \"braitenberg\" }\n",
+    )
+    .unwrap();
+    let output = regatta()
+        .args(["run", world.to_str().unwrap(), "--steps", "20", "--renderer", "wgpu"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(stderr.contains("the GPU is not started"), "{stderr}");
+    assert!(!String::from_utf8_lossy(&output.stdout).contains("vision rendered by"));
+}
+
+#[cfg(not(feature = "wgpu"))]
+#[test]
+fn the_wgpu_renderer_without_the_feature_is_a_clear_error() {
+    let output = regatta()
+        .current_dir(root())
+        .args(["run", "worlds/regatta.wbt", "--steps", "5", "--renderer", "wgpu"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(stderr.contains("built without the wgpu backend"), "{stderr}");
+    assert!(stderr.contains("--features wgpu"), "{stderr}");
+}
+
+/// With the feature: the regatta sails with the GPU rendering its retina (skipped, loudly,
+/// where there is no adapter, unless REGATTA_REQUIRE_GPU=1).
+#[cfg(feature = "wgpu")]
+#[test]
+fn run_and_render_with_wgpu() {
+    let output = regatta()
+        .current_dir(root())
+        .args(["run", "worlds/regatta.wbt", "--duration", "60", "--renderer", "wgpu"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    if !output.status.success()
+        && stderr.contains("no GPU adapter")
+        && std::env::var_os("REGATTA_REQUIRE_GPU").is_none()
+    {
+        eprintln!("skipped: {stderr}");
+        return;
+    }
+    assert!(output.status.success(), "{stderr}");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("vision rendered by wgpu"), "{stdout}");
+    assert!(stderr.contains("renders paper optics"), "{stderr}");
+    // The regatta still emerges: buoys visited in cyclic order.
+    let visits = stdout
+        .split("buoy visits ")
+        .nth(1)
+        .and_then(|s| s.split(':').next())
+        .and_then(|n| n.trim().parse::<u32>().ok())
+        .expect("a buoy visit count");
+    assert!(visits >= 3, "{stdout}");
+    let output = regatta()
+        .current_dir(root())
+        .args(["render", "worlds/k213.wbt", "--renderer", "wgpu", "--format", "json"])
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let json: serde_json::Value =
+        serde_json::from_slice(output.stdout.split(|&b| b == b'\n').next().unwrap()).unwrap();
+    assert_eq!(json["digital"].as_array().unwrap().len(), 64);
+}
