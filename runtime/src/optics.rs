@@ -317,7 +317,8 @@ pub fn flat_samples(samples: usize) -> (Vec<(f64, f64)>, Vec<f64>) {
     for r in 0..FLAT_ROWS {
         for sj in 0..n {
             rows.push(
-                y_extent * (1.0 - 2.0 * (r as f64 + (sj as f64 + 0.5) / n as f64) / FLAT_ROWS as f64),
+                y_extent
+                    * (1.0 - 2.0 * (r as f64 + (sj as f64 + 0.5) / n as f64) / FLAT_ROWS as f64),
             );
         }
     }

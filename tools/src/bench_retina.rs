@@ -74,7 +74,11 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         );
     };
     if args.renderer == crate::vision::RendererKind::Wgpu {
-        let poses = spread_poses(compiled, robot, args.robots.iter().copied().max().unwrap_or(1));
+        let poses = spread_poses(
+            compiled,
+            robot,
+            args.robots.iter().copied().max().unwrap_or(1),
+        );
         let paper = PanoramicRig {
             optics: Optics::Paper,
             ..base.clone()
@@ -238,7 +242,11 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
 }
 
 /// Poses spread over the plan's region, away from walls and static cylinders.
-pub(crate) fn spread_poses(compiled: &regatta_runtime::Compiled, robot: usize, count: usize) -> Vec<Pose2> {
+pub(crate) fn spread_poses(
+    compiled: &regatta_runtime::Compiled,
+    robot: usize,
+    count: usize,
+) -> Vec<Pose2> {
     let region = compiled.plan.region;
     let margin = compiled.rig.robots[robot].body_radius + 0.05;
     let (x0, x1, z0, z1) = (

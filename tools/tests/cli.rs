@@ -721,7 +721,14 @@ fn a_world_without_vision_never_starts_the_gpu() {
     )
     .unwrap();
     let output = regatta()
-        .args(["run", world.to_str().unwrap(), "--steps", "20", "--renderer", "wgpu"])
+        .args([
+            "run",
+            world.to_str().unwrap(),
+            "--steps",
+            "20",
+            "--renderer",
+            "wgpu",
+        ])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
@@ -735,12 +742,22 @@ fn a_world_without_vision_never_starts_the_gpu() {
 fn the_wgpu_renderer_without_the_feature_is_a_clear_error() {
     let output = regatta()
         .current_dir(root())
-        .args(["run", "worlds/regatta.wbt", "--steps", "5", "--renderer", "wgpu"])
+        .args([
+            "run",
+            "worlds/regatta.wbt",
+            "--steps",
+            "5",
+            "--renderer",
+            "wgpu",
+        ])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success());
-    assert!(stderr.contains("built without the wgpu backend"), "{stderr}");
+    assert!(
+        stderr.contains("built without the wgpu backend"),
+        "{stderr}"
+    );
     assert!(stderr.contains("--features wgpu"), "{stderr}");
 }
 
@@ -751,7 +768,14 @@ fn the_wgpu_renderer_without_the_feature_is_a_clear_error() {
 fn run_and_render_with_wgpu() {
     let output = regatta()
         .current_dir(root())
-        .args(["run", "worlds/regatta.wbt", "--duration", "60", "--renderer", "wgpu"])
+        .args([
+            "run",
+            "worlds/regatta.wbt",
+            "--duration",
+            "60",
+            "--renderer",
+            "wgpu",
+        ])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
@@ -776,10 +800,21 @@ fn run_and_render_with_wgpu() {
     assert!(visits >= 3, "{stdout}");
     let output = regatta()
         .current_dir(root())
-        .args(["render", "worlds/k213.wbt", "--renderer", "wgpu", "--format", "json"])
+        .args([
+            "render",
+            "worlds/k213.wbt",
+            "--renderer",
+            "wgpu",
+            "--format",
+            "json",
+        ])
         .output()
         .unwrap();
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
     let json: serde_json::Value =
         serde_json::from_slice(output.stdout.split(|&b| b == b'\n').next().unwrap()).unwrap();
     assert_eq!(json["digital"].as_array().unwrap().len(), 64);

@@ -262,14 +262,22 @@ impl GpuVision {
         self.poses.clear();
         self.outputs.clear();
         for world in instances {
-            let info = self.infos.get(world.scene).ok_or_else(|| VisionError::BadRequest {
-                index: 0,
-                why: format!("scene {} does not exist", world.scene),
-            })?;
+            let info = self
+                .infos
+                .get(world.scene)
+                .ok_or_else(|| VisionError::BadRequest {
+                    index: 0,
+                    why: format!("scene {} does not exist", world.scene),
+                })?;
             let first = (self.poses.len() / 2) as u32;
             let robots = world.poses.poses.len().min(info.robots.len());
             for (r, pose) in world.poses.poses.iter().take(robots).enumerate() {
-                let floor = world.poses.floor_y.get(r).copied().unwrap_or(info.robots[r].0);
+                let floor = world
+                    .poses
+                    .floor_y
+                    .get(r)
+                    .copied()
+                    .unwrap_or(info.robots[r].0);
                 let at = DVec3::new(pose.x, floor, pose.z) - info.origin;
                 self.poses
                     .push([at.x as f32, at.y as f32, at.z as f32, 0.0]);
@@ -315,7 +323,12 @@ impl GpuVision {
                             a: [instance, robot, 0, (outputs + v * FLAT_COLUMNS) as u32],
                             b: [FLAT_PIXELS, *samples, *quantize as u32, flat as u32],
                             c: [*columns, *rows, v as u32, 0],
-                            eye: [eye.x as f32, eye.y as f32, eye.z as f32, pose.heading as f32],
+                            eye: [
+                                eye.x as f32,
+                                eye.y as f32,
+                                eye.z as f32,
+                                pose.heading as f32,
+                            ],
                             geo: [*center as f32, 0.0, 0.0, 0.0],
                         });
                         flat += FLAT_PIXELS as usize;
@@ -336,7 +349,12 @@ impl GpuVision {
                         a: [instance, robot, 1, outputs as u32],
                         b: [*pixels, *samples, 0, 0],
                         c: [0; 4],
-                        eye: [eye.x as f32, eye.y as f32, eye.z as f32, pose.heading as f32],
+                        eye: [
+                            eye.x as f32,
+                            eye.y as f32,
+                            eye.z as f32,
+                            pose.heading as f32,
+                        ],
                         geo: [
                             (field_of_view / 2.0) as f32,
                             width as f32,
@@ -387,7 +405,11 @@ impl GpuVision {
                 mapped_at_creation: false,
             })
         };
-        let instances = storage("instances", capacity.instances * 16, wgpu::BufferUsages::empty());
+        let instances = storage(
+            "instances",
+            capacity.instances * 16,
+            wgpu::BufferUsages::empty(),
+        );
         let poses = storage("poses", capacity.poses * 16, wgpu::BufferUsages::empty());
         let views = storage(
             "views",
@@ -395,7 +417,11 @@ impl GpuVision {
             wgpu::BufferUsages::empty(),
         );
         let flat = storage("flat", capacity.flat * 4, wgpu::BufferUsages::empty());
-        let outputs = storage("outputs", capacity.outputs * 4, wgpu::BufferUsages::COPY_SRC);
+        let outputs = storage(
+            "outputs",
+            capacity.outputs * 4,
+            wgpu::BufferUsages::COPY_SRC,
+        );
         let uniform = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("batch"),
             size: 16,
@@ -524,7 +550,11 @@ impl VisionBackend for GpuVision {
 }
 
 /// Maps `buffer` (a MAP_READ staging buffer) and copies its first `bytes` out as f32.
-fn read_back(device: &wgpu::Device, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<f32>, VisionError> {
+fn read_back(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+    bytes: u64,
+) -> Result<Vec<f32>, VisionError> {
     let slice = buffer.slice(..bytes);
     let (sender, receiver) = mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |result| {
@@ -597,4 +627,3 @@ async fn open_device() -> Result<(wgpu::Device, wgpu::Queue, wgpu::AdapterInfo),
     }
     Err(GpuError::NoAdapter(last_error))
 }
-

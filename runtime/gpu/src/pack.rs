@@ -119,6 +119,14 @@ pub(crate) struct Packed {
     pub infos: Vec<SceneInfo>,
 }
 
+fn flag(on: bool, bit: u32) -> u32 {
+    if on {
+        bit
+    } else {
+        0
+    }
+}
+
 fn f4(v: DVec3, w: f64) -> [f32; 4] {
     [v.x as f32, v.y as f32, v.z as f32, w as f32]
 }
@@ -158,12 +166,12 @@ pub(crate) fn pack(worlds: &[&Compiled]) -> Packed {
                         .triangles
                         .push(f4(mesh.positions[corner as usize], 0.0));
                 }
-                packed.triangles.push(
-                    match mesh.triangle_colors.as_ref().and_then(|c| c.get(t)) {
+                packed
+                    .triangles
+                    .push(match mesh.triangle_colors.as_ref().and_then(|c| c.get(t)) {
                         Some(&color) => rgb4(color, 1.0),
                         None => [0.0; 4],
-                    },
-                );
+                    });
             }
             mesh_ranges.push([first, mesh.triangles.len() as u32]);
         }
@@ -208,9 +216,8 @@ pub(crate) fn pack(worlds: &[&Compiled]) -> Packed {
                     bottom,
                     top,
                 } => {
-                    flags |= (*side as u32) * FLAG_SIDE
-                        | (*bottom as u32) * FLAG_BOTTOM
-                        | (*top as u32) * FLAG_TOP;
+                    flags |=
+                        flag(*side, FLAG_SIDE) | flag(*bottom, FLAG_BOTTOM) | flag(*top, FLAG_TOP);
                     (KIND_CYLINDER, [*radius as f32, *height as f32, 0.0, 0.0])
                 }
                 Shape::Cone {
@@ -219,7 +226,7 @@ pub(crate) fn pack(worlds: &[&Compiled]) -> Packed {
                     side,
                     bottom,
                 } => {
-                    flags |= (*side as u32) * FLAG_SIDE | (*bottom as u32) * FLAG_BOTTOM;
+                    flags |= flag(*side, FLAG_SIDE) | flag(*bottom, FLAG_BOTTOM);
                     (KIND_CONE, [*radius as f32, *height as f32, 0.0, 0.0])
                 }
                 Shape::Sphere { radius } => (KIND_SPHERE, [*radius as f32, 0.0, 0.0, 0.0]),
@@ -235,7 +242,12 @@ pub(crate) fn pack(worlds: &[&Compiled]) -> Packed {
                 params,
                 bounds_min: f4(primitive.bounds.min - shift - pad, 0.0),
                 bounds_max: f4(primitive.bounds.max - shift + pad, 0.0),
-                info: [kind, flags, material_base + primitive.material as u32, owner],
+                info: [
+                    kind,
+                    flags,
+                    material_base + primitive.material as u32,
+                    owner,
+                ],
                 mesh,
             });
         }

@@ -210,9 +210,18 @@ fn retina_test_scenes_agree_within_one_lsb() {
     // The same lit arena 1 km away, and under lights from 1e-9 to 1e9.
     scenes.push((
         "1 km from the origin".into(),
-        lit.replace("Arena { }", "Transform { translation 1000 0 1000 children [ Arena { } ] }")
-            .replace("Buoy { translation 0.2 0 -0.2 }", "Buoy { translation 1000.2 0 999.8 }")
-            .replace("Khepera { controller", "Khepera { translation 1000 0 1000 controller"),
+        lit.replace(
+            "Arena { }",
+            "Transform { translation 1000 0 1000 children [ Arena { } ] }",
+        )
+        .replace(
+            "Buoy { translation 0.2 0 -0.2 }",
+            "Buoy { translation 1000.2 0 999.8 }",
+        )
+        .replace(
+            "Khepera { controller",
+            "Khepera { translation 1000 0 1000 controller",
+        ),
     ));
     for scale in ["1e-9", "1e9"] {
         scenes.push((
@@ -252,8 +261,14 @@ fn the_k213_agrees_with_the_cpu_ray_caster() {
         LinearCamera::new(rig).update(&caster, &view, poses.poses[0], poses.floor_y[0], &mut cpu);
         let mut luminance = Vec::new();
         gpu.render(
-            &[WorldInstance { scene: 0, poses: &poses }],
-            &[VisionRequest { instance: 0, robot: 0 }],
+            &[WorldInstance {
+                scene: 0,
+                poses: &poses,
+            }],
+            &[VisionRequest {
+                instance: 0,
+                robot: 0,
+            }],
             &mut luminance,
         )
         .unwrap();
@@ -289,7 +304,10 @@ fn a_population_renders_in_one_batch_as_each_world_alone() {
     }
     let instances: Vec<_> = worlds
         .iter()
-        .map(|(scene, poses)| WorldInstance { scene: *scene, poses })
+        .map(|(scene, poses)| WorldInstance {
+            scene: *scene,
+            poses,
+        })
         .collect();
     let requests: Vec<_> = (0..worlds.len())
         .map(|instance| VisionRequest { instance, robot: 0 })
@@ -299,15 +317,25 @@ fn a_population_renders_in_one_batch_as_each_world_alone() {
     for (index, (scene, poses)) in worlds.iter().enumerate() {
         let mut alone = Vec::new();
         gpu.render(
-            &[WorldInstance { scene: *scene, poses }],
-            &[VisionRequest { instance: 0, robot: 0 }],
+            &[WorldInstance {
+                scene: *scene,
+                poses,
+            }],
+            &[VisionRequest {
+                instance: 0,
+                robot: 0,
+            }],
             &mut alone,
         )
         .unwrap();
         assert_eq!(alone[0], batched[index], "world {index}");
         assert_eq!(batched[index].len(), 2 * FLAT_COLUMNS);
         let compiled = if *scene == 0 { &regatta } else { &single };
-        let (worst, _, _) = agreement(compiled, &mut gpu_for(compiled), std::slice::from_ref(poses));
+        let (worst, _, _) = agreement(
+            compiled,
+            &mut gpu_for(compiled),
+            std::slice::from_ref(poses),
+        );
         assert!(worst <= 1);
     }
 }
@@ -325,9 +353,36 @@ fn bad_requests_are_errors_not_panics() {
     let poses = start_poses(&compiled);
     let mut out = Vec::new();
     for (instances, request) in [
-        (vec![WorldInstance { scene: 0, poses: &poses }], VisionRequest { instance: 0, robot: 5 }),
-        (vec![WorldInstance { scene: 0, poses: &poses }], VisionRequest { instance: 3, robot: 0 }),
-        (vec![WorldInstance { scene: 9, poses: &poses }], VisionRequest { instance: 0, robot: 0 }),
+        (
+            vec![WorldInstance {
+                scene: 0,
+                poses: &poses,
+            }],
+            VisionRequest {
+                instance: 0,
+                robot: 5,
+            },
+        ),
+        (
+            vec![WorldInstance {
+                scene: 0,
+                poses: &poses,
+            }],
+            VisionRequest {
+                instance: 3,
+                robot: 0,
+            },
+        ),
+        (
+            vec![WorldInstance {
+                scene: 9,
+                poses: &poses,
+            }],
+            VisionRequest {
+                instance: 0,
+                robot: 0,
+            },
+        ),
     ] {
         let error = gpu.render(&instances, &[request], &mut out).unwrap_err();
         assert!(error.to_string().contains("does not exist"), "{error}");
@@ -335,4 +390,3 @@ fn bad_requests_are_errors_not_panics() {
     gpu.render(&[], &[], &mut out).unwrap();
     assert!(out.is_empty());
 }
-
