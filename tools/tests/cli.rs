@@ -819,3 +819,20 @@ fn run_and_render_with_wgpu() {
         serde_json::from_slice(output.stdout.split(|&b| b == b'\n').next().unwrap()).unwrap();
     assert_eq!(json["digital"].as_array().unwrap().len(), 64);
 }
+
+/// No adapter (here: only a backend this platform lacks) is a clear error, never a panic.
+#[cfg(feature = "wgpu")]
+#[test]
+fn no_gpu_adapter_is_a_clear_error() {
+    let output = regatta()
+        .current_dir(root())
+        .env("WGPU_BACKEND", "dx12")
+        .args(["run", "worlds/regatta.wbt", "--steps", "5", "--renderer", "wgpu"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("no GPU adapter"), "{stderr}");
+    assert!(stderr.contains("--renderer cpu"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
