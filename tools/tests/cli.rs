@@ -827,7 +827,14 @@ fn no_gpu_adapter_is_a_clear_error() {
     let output = regatta()
         .current_dir(root())
         .env("WGPU_BACKEND", "dx12")
-        .args(["run", "worlds/regatta.wbt", "--steps", "5", "--renderer", "wgpu"])
+        .args([
+            "run",
+            "worlds/regatta.wbt",
+            "--steps",
+            "5",
+            "--renderer",
+            "wgpu",
+        ])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);

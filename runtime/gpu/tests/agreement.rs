@@ -196,7 +196,7 @@ Khepera {{ controller \"none\" turret PanoramicTurret {{ optics \"paper\" sample
 
 #[test]
 fn retina_test_scenes_agree_within_one_lsb() {
-    let lit = "#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" }\nDirectionalLight { direction 0.3 -1 0.2 }\nPointLight { location 0.2 0.3 0.1 attenuation 0 0 1 castShadows TRUE }\nSpotLight { location -0.3 0.2 0 direction 1 -0.5 0 cutOffAngle 0.6 beamWidth 0.3 }\nArena { }\nBuoy { translation 0.2 0 -0.2 }\nBuoy { translation -0.25 0 0.1 lampColor 0.2 0.4 1 }\nTransform { translation 0 0.03 -0.35 rotation 1 1 0 0.7 children [ Shape { appearance Appearance { material Material { diffuseColor 0.8 0.3 0.2 specularColor 1 1 1 shininess 0.4 } } geometry Sphere { radius 0.04 } } ] }\nTransform { translation 0.3 0.02 0.2 rotation 0 0 1 0.5 children [ Shape { appearance Appearance { material Material { diffuseColor 0.2 0.8 0.3 } } geometry Cone { bottomRadius 0.03 height 0.06 } } ] }\nShape { appearance Appearance { material Material { diffuseColor 0.5 0.5 0.9 } } geometry IndexedFaceSet { coord Coordinate { point [ -0.4 0 -0.4, -0.2 0 -0.45, -0.3 0.08 -0.42 ] } coordIndex [ 0 1 2 -1 ] solid FALSE } }\nKhepera { controller \"none\" turret PanoramicTurret { optics \"paper\" quantizeViews FALSE filters [ \"raw\" \"lowpass\" \"highpass\" \"bandpass\" \"odd\" ] } }\n";
+    let lit = "#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" }\nDirectionalLight { direction 0.3 -1 0.2 }\nPointLight { location 0.2 0.3 0.1 attenuation 0 0 1 castShadows TRUE }\nSpotLight { location -0.3 0.2 0 direction 1 -0.5 0 cutOffAngle 0.6 beamWidth 0.3 }\nArena { wallHeight 0.06 }\nBuoy { translation 0.2 0 -0.2 }\nBuoy { translation -0.25 0 0.1 lampColor 0.2 0.4 1 }\nTransform { translation 0 0.03 -0.35 rotation 1 1 0 0.7 children [ Shape { appearance Appearance { material Material { diffuseColor 0.8 0.3 0.2 specularColor 1 1 1 shininess 0.4 } } geometry Sphere { radius 0.04 } } ] }\nTransform { translation 0.3 0.02 0.2 rotation 0 0 1 0.5 children [ Shape { appearance Appearance { material Material { diffuseColor 0.2 0.8 0.3 } } geometry Cone { bottomRadius 0.03 height 0.06 } } ] }\nShape { appearance Appearance { material Material { diffuseColor 0.5 0.5 0.9 } } geometry IndexedFaceSet { coord Coordinate { point [ -0.4 0 -0.4, -0.2 0 -0.45, -0.3 0.08 -0.42 ] } coordIndex [ 0 1 2 -1 ] solid FALSE } }\nKhepera { controller \"none\" turret PanoramicTurret { optics \"paper\" quantizeViews FALSE filters [ \"raw\" \"lowpass\" \"highpass\" \"bandpass\" \"odd\" ] } }\n";
     let dark = "#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" }\nArena { }\nBuoy { lampColor 0 0 0 }\nKhepera { controller \"none\" turret PanoramicTurret { optics \"paper\" filters [ \"raw\" \"odd\" ] } }\n";
     let uniform = "#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" }\nBackground { skyColor [ 0.4 0.4 0.4 ] }\nKhepera { controller \"none\" turret PanoramicTurret { optics \"paper\" filters [ \"raw\" \"odd\" ] } }\n";
     let mut scenes: Vec<(String, String)> = vec![
@@ -226,9 +226,14 @@ fn retina_test_scenes_agree_within_one_lsb() {
     for scale in ["1e-9", "1e9"] {
         scenes.push((
             format!("lights × {scale}"),
-            dark.replace("Arena { }", &format!("DirectionalLight {{ intensity {scale} ambientIntensity {scale} }}\nArena {{ }}")),
+            // Without the 8-bit frame buffer, which would make these black or white.
+            dark.replace("Arena { }", &format!("DirectionalLight {{ intensity {scale} ambientIntensity {scale} }}\nArena {{ }}"))
+                .replace("optics \"paper\"", "optics \"paper\" quantizeViews FALSE"),
         ));
     }
+    // The lit arena's walls are taller than the retina (0.05 m): with a wall top exactly at eye
+    // level the central flat-view row grazes it, and f32 and f64 may decide that row apart
+    // (ARCHITECTURE.md, invariants). regatta.wbt keeps that knife edge and is compared above.
     for (name, text) in &scenes {
         let compiled = compile_text(text);
         let Some(mut gpu) = gpu(&[&compiled]) else {
