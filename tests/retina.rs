@@ -6,20 +6,12 @@ use regatta_runtime::retina::{
 };
 use regatta_tests::{compile_text, panoramic_at_start};
 
-/// A black world with one emissive vertical stripe `width_deg` wide at azimuth `azimuth_deg`
-/// (counter-clockwise from the robot's forward +x), 0.5 m away.
+/// The stripe world with a Panoramic turret reading the raw filter.
 fn stripe_world(azimuth_deg: f64, width_deg: f64, optics: &str, samples: u32) -> String {
-    let a = azimuth_deg.to_radians();
-    let (x, z) = (0.5 * a.cos(), -0.5 * a.sin());
-    let width = 2.0 * 0.5 * (width_deg.to_radians() / 2.0).tan();
-    format!(
-        "#VRML_SIM R2023b utf8
-WorldInfo {{ coordinateSystem \"NUE\" }}
-Transform {{ translation {x} 0.05 {z} rotation 0 1 0 {a}
-  children [ Shape {{ appearance Appearance {{ material Material {{ diffuseColor 0 0 0 emissiveColor 1 1 1 }} }}
-    geometry Box {{ size 0.001 1 {width} }} }} ] }}
-Khepera {{ controller \"none\" turret PanoramicTurret {{ optics \"{optics}\" samples {samples} filters [ \"raw\" ] }} }}
-"
+    regatta_tests::stripe_world(
+        azimuth_deg,
+        width_deg,
+        &format!("PanoramicTurret {{ optics \"{optics}\" samples {samples} filters [ \"raw\" ] }}"),
     )
 }
 
@@ -390,6 +382,37 @@ Khepera {{ translation {} 0 {} rotation 0 1 0 0.3 controller \"none\" turret Pan
                 );
             }
             assert_eq!(reference.digital, scaled.digital, "scale {scale}");
+        }
+    }
+}
+
+/// Paper optics point-sample both CPU renderers at the same directions, so they must agree:
+/// in regatta.wbt this covers buoys standing on the floor and lamps on buoys (a cap is composited
+/// at its far edge) and walls whose azimuth interval reaches past ±π behind the robot.
+#[test]
+fn column_renderer_equals_the_ray_caster_in_paper_optics() {
+    use regatta_runtime::compile::rig::{Optics, TurretRig};
+    let mut compiled = regatta_tests::compile_world("regatta.wbt");
+    for robot in &mut compiled.rig.robots {
+        if let Some(TurretRig::Panoramic(p)) = &mut robot.turret {
+            p.optics = Optics::Paper;
+            p.quantize_views = false;
+        }
+    }
+    assert_eq!(
+        compiled.plan.renderer,
+        regatta_runtime::compile::plan::RendererChoice::Columns
+    );
+    for k in 0..8 {
+        let mut turned = compiled.clone();
+        turned.rig.robots[0].start.heading += k as f64 * std::f64::consts::TAU / 8.0;
+        let columns = panoramic_at_start(&turned, false);
+        let rays = panoramic_at_start(&turned, true);
+        for (i, (a, b)) in columns.luminance.iter().zip(&rays.luminance).enumerate() {
+            assert!(
+                (a - b).abs() <= 1e-12 * b.abs().max(1e-3),
+                "heading {k}/8, pixel {i}: columns {a}, rays {b}"
+            );
         }
     }
 }

@@ -92,6 +92,24 @@ pub fn compile_world(name: &str) -> regatta_runtime::Compiled {
     regatta_runtime::compile(&checked.scene)
 }
 
+/// A black world with one emissive vertical stripe `width_deg` wide at azimuth `azimuth_deg`
+/// (counter-clockwise from the robot's forward +x), 0.5 m away, seen by a Khepera carrying
+/// `turret` (a turret node, e.g. `PanoramicTurret { optics "exact" }`).
+pub fn stripe_world(azimuth_deg: f64, width_deg: f64, turret: &str) -> String {
+    let a = azimuth_deg.to_radians();
+    let (x, z) = (0.5 * a.cos(), -0.5 * a.sin());
+    let width = 2.0 * 0.5 * (width_deg.to_radians() / 2.0).tan();
+    format!(
+        "#VRML_SIM R2023b utf8
+WorldInfo {{ coordinateSystem \"NUE\" }}
+Transform {{ translation {x} 0.05 {z} rotation 0 1 0 {a}
+  children [ Shape {{ appearance Appearance {{ material Material {{ diffuseColor 0 0 0 emissiveColor 1 1 1 }} }}
+    geometry Box {{ size 0.001 1 {width} }} }} ] }}
+Khepera {{ controller \"none\" turret {turret} }}
+"
+    )
+}
+
 /// Renders robot 0's Panoramic turret at its start pose.
 pub fn panoramic_at_start(
     compiled: &regatta_runtime::Compiled,

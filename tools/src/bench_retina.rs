@@ -74,6 +74,12 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         );
     };
     if args.renderer == crate::vision::RendererKind::Wgpu {
+        // Fails here, before any CPU work, in a build without the backend.
+        drop(crate::vision::backend(
+            args.renderer,
+            compiled,
+            &args.world,
+        )?);
         let poses = spread_poses(
             compiled,
             robot,

@@ -44,8 +44,6 @@ pub enum GpuError {
     NoAdapter(String),
     #[error("the GPU adapter '{adapter}' refused a device: {why}")]
     Device { adapter: String, why: String },
-    #[error("the GPU cannot hold this batch: {0}")]
-    TooLarge(String),
 }
 
 /// A GPU adapter and the vision pipelines, with the scenes it was built for.
@@ -309,26 +307,31 @@ impl GpuVision {
                 .unwrap_or(*floor);
             let instance = request.instance as u32;
             let robot = request.robot as u32;
+            let height = match device {
+                Some(Device::Panoramic { height, .. } | Device::Linear { height, .. }) => *height,
+                None => return Err(bad(format!("robot {} has no vision device", request.robot))),
+            };
+            let eye = DVec3::new(pose.x, floor + height, pose.z) - info.origin;
+            let eye = [
+                eye.x as f32,
+                eye.y as f32,
+                eye.z as f32,
+                pose.heading as f32,
+            ];
             match device {
                 Some(Device::Panoramic {
-                    height,
                     samples,
                     quantize,
                     columns,
                     rows,
+                    ..
                 }) => {
-                    let eye = DVec3::new(pose.x, floor + height, pose.z) - info.origin;
                     for (v, center) in VIEW_CENTERS.iter().enumerate() {
                         self.views.push(GpuView {
                             a: [instance, robot, 0, (outputs + v * FLAT_COLUMNS) as u32],
                             b: [FLAT_PIXELS, *samples, *quantize as u32, flat as u32],
                             c: [*columns, *rows, v as u32, 0],
-                            eye: [
-                                eye.x as f32,
-                                eye.y as f32,
-                                eye.z as f32,
-                                pose.heading as f32,
-                            ],
+                            eye,
                             geo: [*center as f32, 0.0, 0.0, 0.0],
                         });
                         flat += FLAT_PIXELS as usize;
@@ -337,24 +340,18 @@ impl GpuVision {
                     outputs += PIXELS;
                 }
                 Some(Device::Linear {
-                    height,
                     pixels,
                     samples,
                     field_of_view,
                     vertical_field_of_view,
+                    ..
                 }) => {
-                    let eye = DVec3::new(pose.x, floor + height, pose.z) - info.origin;
                     let width = field_of_view / *pixels as f64;
                     self.views.push(GpuView {
                         a: [instance, robot, 1, outputs as u32],
                         b: [*pixels, *samples, 0, 0],
                         c: [0; 4],
-                        eye: [
-                            eye.x as f32,
-                            eye.y as f32,
-                            eye.z as f32,
-                            pose.heading as f32,
-                        ],
+                        eye,
                         geo: [
                             (field_of_view / 2.0) as f32,
                             width as f32,
@@ -365,7 +362,7 @@ impl GpuVision {
                     self.outputs.push((outputs, *pixels as usize));
                     outputs += *pixels as usize;
                 }
-                None => return Err(bad(format!("robot {} has no vision device", request.robot))),
+                None => unreachable!("checked above"),
             }
         }
         Ok((flat, outputs))

@@ -13,11 +13,11 @@ use regatta_runtime::compile::rig::{Optics, TurretRig};
 use regatta_runtime::optics::{flat_samples, warp_coordinates, FLAT_COLUMNS, FLAT_ROWS};
 use regatta_runtime::Compiled;
 
-pub(crate) const KIND_BOX: u32 = 0;
-pub(crate) const KIND_CYLINDER: u32 = 1;
-pub(crate) const KIND_CONE: u32 = 2;
-pub(crate) const KIND_SPHERE: u32 = 3;
-pub(crate) const KIND_MESH: u32 = 4;
+const KIND_BOX: u32 = 0;
+const KIND_CYLINDER: u32 = 1;
+const KIND_CONE: u32 = 2;
+const KIND_SPHERE: u32 = 3;
+const KIND_MESH: u32 = 4;
 const FLAG_SIDE: u32 = 1;
 const FLAG_BOTTOM: u32 = 2;
 const FLAG_TOP: u32 = 4;
@@ -374,10 +374,8 @@ pub(crate) fn pack(worlds: &[&Compiled]) -> Packed {
         }
     }
     // Storage bindings may not be empty.
-    for list in [&mut packed.prims] {
-        if list.is_empty() {
-            list.push(GpuPrim::zeroed());
-        }
+    if packed.prims.is_empty() {
+        packed.prims.push(GpuPrim::zeroed());
     }
     if packed.materials.is_empty() {
         packed.materials.push(GpuMaterial::zeroed());

@@ -178,19 +178,12 @@ fn turned(compiled: &Compiled, headings: usize) -> Vec<Poses> {
         .collect()
 }
 
-/// A black world with an emissive stripe (the retina tests' scene), paper optics.
+/// The retina tests' stripe world, paper optics.
 fn stripe_world(azimuth_deg: f64, samples: u32) -> String {
-    let a = azimuth_deg.to_radians();
-    let (x, z) = (0.5 * a.cos(), -0.5 * a.sin());
-    let width = 2.0 * 0.5 * (1.2f64.to_radians() / 2.0).tan();
-    format!(
-        "#VRML_SIM R2023b utf8
-WorldInfo {{ coordinateSystem \"NUE\" }}
-Transform {{ translation {x} 0.05 {z} rotation 0 1 0 {a}
-  children [ Shape {{ appearance Appearance {{ material Material {{ diffuseColor 0 0 0 emissiveColor 1 1 1 }} }}
-    geometry Box {{ size 0.001 1 {width} }} }} ] }}
-Khepera {{ controller \"none\" turret PanoramicTurret {{ optics \"paper\" samples {samples} filters [ \"raw\" \"lowpass\" \"odd\" ] }} }}
-"
+    regatta_tests::stripe_world(
+        azimuth_deg,
+        1.2,
+        &format!("PanoramicTurret {{ optics \"paper\" samples {samples} filters [ \"raw\" \"lowpass\" \"odd\" ] }}"),
     )
 }
 
@@ -319,6 +312,7 @@ fn a_population_renders_in_one_batch_as_each_world_alone() {
         .collect();
     let mut batched = Vec::new();
     gpu.render(&instances, &requests, &mut batched).unwrap();
+    let mut alone_gpus = [gpu_for(&regatta), gpu_for(&single)];
     for (index, (scene, poses)) in worlds.iter().enumerate() {
         let mut alone = Vec::new();
         gpu.render(
@@ -338,7 +332,7 @@ fn a_population_renders_in_one_batch_as_each_world_alone() {
         let compiled = if *scene == 0 { &regatta } else { &single };
         let (worst, _, _) = agreement(
             compiled,
-            &mut gpu_for(compiled),
+            &mut alone_gpus[*scene],
             std::slice::from_ref(poses),
         );
         assert!(worst <= 1);
