@@ -21,7 +21,7 @@ use crate::render::column::{ColumnFrame, ColumnScene, Look, Strip};
 use crate::render::raycast::{Prepared, RayCaster};
 use crate::render::Poses;
 use crate::retina::{
-    self, calibrate_i_bda, convert_scaled, luminance, normalize, FilterKind, FilterSettings,
+    self, calibrate_i_bda, convert_scaled, luminance, normalize, Filter, FilterKind, FilterSettings,
     HALF_BAND, PIXELS, PIXEL_WIDTH,
 };
 
@@ -175,6 +175,8 @@ pub struct Panoramic {
     strip: Strip,
     settings: FilterSettings,
     i_bda: Vec<(FilterKind, f64)>,
+    /// The enabled filters, built for the retina's length, in the order of `i_bda`.
+    filters: Vec<Filter>,
     luminance: Vec<f64>,
 }
 
@@ -199,11 +201,17 @@ impl Panoramic {
                 )
             })
             .collect();
+        let filters = rig
+            .filters
+            .iter()
+            .map(|k| Filter::new(k, &settings, PIXELS))
+            .collect();
         Panoramic {
             rig: rig.clone(),
             strip: Strip::new(centers, PIXEL_WIDTH, HALF_BAND),
             settings,
             i_bda,
+            filters,
             luminance: vec![0.0; PIXELS],
         }
     }
@@ -273,11 +281,15 @@ impl Panoramic {
             out.i_bda.clone_from(&self.i_bda);
         }
         let (first, last) = self.rig.roi;
-        for (slot, &(kind, i_bda)) in self.i_bda.iter().enumerate() {
+        for (slot, (&(kind, i_bda), filter)) in self.i_bda.iter().zip(&self.filters).enumerate() {
             let (filtered_kind, filtered) = &mut out.filtered[slot];
             *filtered_kind = kind;
             filtered.resize(out.analog.len(), 0.0);
-            retina::apply(kind, &self.settings, &out.analog, filtered);
+            if out.analog.len() == PIXELS {
+                filter.apply(&out.analog, filtered);
+            } else {
+                retina::apply(kind, &self.settings, &out.analog, filtered);
+            }
             let (digital_kind, digital) = &mut out.digital[slot];
             *digital_kind = kind;
             digital.clear();

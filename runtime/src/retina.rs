@@ -115,41 +115,112 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
     true
 }
 
-/// `a = e^(−1/λ)` and `1 − a`, the latter without cancellation for large λ.
-fn decay(lambda: f64) -> (f64, f64) {
-    let lambda = lambda.max(1e-12);
-    (libm::exp(-1.0 / lambda), -libm::expm1(-1.0 / lambda))
+/// A resistive chain's constants for one λ and one length, computed once per setting so that
+/// filtering an image runs no transcendental: `a = e^(−1/λ)`, `1 − a` (without cancellation
+/// for large λ), `aⁿ` and `1 − a²ⁿ` (from λ directly).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Chain {
+    len: usize,
+    a: f64,
+    one_minus_a: f64,
+    a_n: f64,
+    period: f64,
 }
 
-/// The mirrored continuation's weighted sums seen from each end:
-/// `Σ_{k≥0} a^k s_k` for `s` = x[0], x[1], …, x[n−1], x[n−1], …, x[0], x[0], … (left) and
-/// for its mirror image read from the right end. With `L = Σ a^j x[j]` and
-/// `R = Σ a^(n−1−j) x[j]` (two Horner passes), the 2n-periodic sums are
-/// `(L + aⁿ·R) / (1 − a²ⁿ)` and `(R + aⁿ·L) / (1 − a²ⁿ)`, aⁿ and 1 − a²ⁿ from λ directly.
-fn mirrored_tails(x: &[f64], a: f64, lambda: f64) -> (f64, f64) {
-    let n = x.len() as f64;
-    let lambda = lambda.max(1e-12);
-    // Two independent Horner chains in one loop, so that their latencies overlap.
-    let (mut from_right, mut from_left) = (0.0, 0.0);
-    for (&forward, &backward) in x.iter().zip(x.iter().rev()) {
-        from_right = a * from_right + forward;
-        from_left = a * from_left + backward;
+impl Chain {
+    pub fn new(lambda: f64, len: usize) -> Chain {
+        let lambda = lambda.max(1e-12);
+        let n = len as f64;
+        Chain {
+            len,
+            a: libm::exp(-1.0 / lambda),
+            one_minus_a: -libm::expm1(-1.0 / lambda),
+            a_n: libm::exp(-n / lambda),
+            period: -libm::expm1(-2.0 * n / lambda),
+        }
     }
-    let a_n = libm::exp(-n / lambda);
-    let period = -libm::expm1(-2.0 * n / lambda);
-    (
-        (from_left + a_n * from_right) / period,
-        (from_right + a_n * from_left) / period,
-    )
+
+    /// The mirrored continuation's weighted sums seen from each end:
+    /// `Σ_{k≥0} a^k s_k` for `s` = x[0], x[1], …, x[n−1], x[n−1], …, x[0], x[0], … (left)
+    /// and for its mirror image read from the right end. With `L = Σ a^j x[j]` and
+    /// `R = Σ a^(n−1−j) x[j]` (two Horner passes), the 2n-periodic sums are
+    /// `(L + aⁿ·R) / (1 − a²ⁿ)` and `(R + aⁿ·L) / (1 − a²ⁿ)`.
+    fn mirrored_tails(&self, x: &[f64]) -> (f64, f64) {
+        let a = self.a;
+        // Two independent Horner chains in one loop, so that their latencies overlap.
+        let (mut from_right, mut from_left) = (0.0, 0.0);
+        for (&forward, &backward) in x.iter().zip(x.iter().rev()) {
+            from_right = a * from_right + forward;
+            from_left = a * from_left + backward;
+        }
+        (
+            (from_left + self.a_n * from_right) / self.period,
+            (from_right + self.a_n * from_left) / self.period,
+        )
+    }
+
+    /// Lowpass (symmetric exponential kernel `(1−a)/(1+a)·a^|n|`, unit DC gain) in O(n): a
+    /// right-going pass, then a left-going pass over its output. Mirror symmetry of the
+    /// result gives the left pass its start exactly: `y[n−1] = r[n−1]`.
+    pub fn lowpass(&self, x: &[f64], out: &mut [f64]) {
+        let n = x.len().min(out.len());
+        if n == 0 {
+            return;
+        }
+        debug_assert_eq!(n, self.len, "a chain filters images of its own length");
+        let (a, one_minus_a) = (self.a, self.one_minus_a);
+        let (left_tail, _) = self.mirrored_tails(&x[..n]);
+        // The right-going pass in `out`, then the left-going pass over it in place.
+        let mut previous = one_minus_a * left_tail;
+        for (o, &v) in out[..n].iter_mut().zip(&x[..n]) {
+            previous = a * previous + one_minus_a * v;
+            *o = previous;
+        }
+        let mut next = out[n - 1];
+        for o in out[..n - 1].iter_mut().rev() {
+            next = a * next + one_minus_a * *o;
+            *o = next;
+        }
+    }
+
+    /// Odd (derivative): right-going minus left-going unidirectional network, kernel
+    /// `(1−b)·sgn(n)·b^|n|` with `b = e^(−1/λ)`: zero at the centre, zero DC gain,
+    /// antisymmetric. A rising edge to the right gives a positive response just after it.
+    pub fn odd(&self, x: &[f64], out: &mut [f64]) {
+        let n = x.len().min(out.len());
+        if n == 0 {
+            return;
+        }
+        debug_assert_eq!(n, self.len, "a chain filters images of its own length");
+        let (b, one_minus_b) = (self.a, self.one_minus_a);
+        let (left_tail, right_tail) = self.mirrored_tails(&x[..n]);
+        let (x, out) = (&x[..n], &mut out[..n]);
+        let mut previous = one_minus_b * left_tail;
+        for (o, &v) in out.iter_mut().zip(x) {
+            previous = b * previous + one_minus_b * v;
+            *o = previous;
+        }
+        let mut next = one_minus_b * right_tail;
+        for (o, &v) in out.iter_mut().zip(x).rev() {
+            next = b * next + one_minus_b * v;
+            *o -= next;
+        }
+    }
 }
 
-/// Causal pass `y[i] = a·y[i−1] + (1−a)·x[i]` from the mirrored past `tail`.
-fn right_going(x: &[f64], a: f64, one_minus_a: f64, tail: f64, out: &mut [f64]) {
-    let mut previous = one_minus_a * tail;
-    for (o, &v) in out.iter_mut().zip(x) {
-        previous = a * previous + one_minus_a * v;
-        *o = previous;
+/// Lowpass over `x` with decay length `lambda` (see [`Chain::lowpass`]).
+pub fn lowpass(x: &[f64], lambda: f64, out: &mut [f64]) {
+    Chain::new(lambda, x.len()).lowpass(x, out);
+}
+
+/// Highpass: `x − lowpass_λ(x)`.
+pub fn highpass(x: &[f64], lambda: f64, out: &mut [f64]) {
+    let chain = Chain::new(lambda, x.len());
+    Filter {
+        kind: FilterKind::Highpass,
+        chains: (chain, chain),
     }
+    .apply(x, out);
 }
 
 /// Runs `f` with a scratch slice of `n` zeros: on the stack up to 256, else on the heap.
@@ -162,67 +233,19 @@ fn with_scratch<R>(n: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
     }
 }
 
-/// Lowpass (symmetric exponential kernel `(1−a)/(1+a)·a^|n|`, unit DC gain) in O(n): a
-/// right-going pass, then a left-going pass over its output. Mirror symmetry of the result
-/// gives the left pass its start exactly: `y[n−1] = r[n−1]`.
-pub fn lowpass(x: &[f64], lambda: f64, out: &mut [f64]) {
-    let n = x.len();
-    if n == 0 {
-        return;
-    }
-    let (a, one_minus_a) = decay(lambda);
-    let (left_tail, _) = mirrored_tails(x, a, lambda);
-    with_scratch(n, |right| {
-        right_going(x, a, one_minus_a, left_tail, right);
-        let mut next = right[n - 1];
-        out[n - 1] = next;
-        for i in (0..n - 1).rev() {
-            next = a * next + one_minus_a * right[i];
-            out[i] = next;
-        }
-    });
-}
-
-pub fn highpass(x: &[f64], lambda: f64, out: &mut [f64]) {
-    lowpass(x, lambda, out);
-    for (o, &v) in out.iter_mut().zip(x) {
-        *o = v - *o;
-    }
-}
-
 /// Bandpass: `lowpass_λ1(x) − lowpass_λ2(x)`, λ1 < λ2 (a difference of exponentials).
 pub fn bandpass(x: &[f64], lambda1: f64, lambda2: f64, out: &mut [f64]) {
-    lowpass(x, lambda1, out);
-    with_scratch(x.len(), |wide| {
-        lowpass(x, lambda2, wide);
-        for (o, w) in out.iter_mut().zip(wide.iter()) {
-            *o -= w;
-        }
-    });
+    let chains = (Chain::new(lambda1, x.len()), Chain::new(lambda2, x.len()));
+    Filter {
+        kind: FilterKind::Bandpass,
+        chains,
+    }
+    .apply(x, out);
 }
 
-/// Odd (derivative): right-going minus left-going unidirectional network, kernel
-/// `(1−b)·sgn(n)·b^|n|` with `b = e^(−1/λ)`: zero at the centre, zero DC gain, antisymmetric.
-/// A rising edge to the right gives a positive response just after it.
+/// Odd filter over `x` with decay length `lambda` (see [`Chain::odd`]).
 pub fn odd(x: &[f64], lambda: f64, out: &mut [f64]) {
-    let n = x.len();
-    let (b, one_minus_b) = decay(lambda);
-    let (left_tail, right_tail) = mirrored_tails(x, b, lambda);
-    with_scratch(n, |left| {
-        // Both unidirectional networks in one loop: independent chains, overlapping latencies.
-        let mut previous = one_minus_b * left_tail;
-        let mut next = one_minus_b * right_tail;
-        for i in 0..n {
-            previous = b * previous + one_minus_b * x[i];
-            out[i] = previous;
-            let j = n - 1 - i;
-            next = b * next + one_minus_b * x[j];
-            left[j] = next;
-        }
-        for (o, l) in out.iter_mut().zip(left.iter()) {
-            *o -= l;
-        }
-    });
+    Chain::new(lambda, x.len()).odd(x, out);
 }
 
 /// Direct references the fast filters are tested against. They share nothing with the O(n)
@@ -308,15 +331,62 @@ pub struct FilterSettings {
     pub i_bda: Option<f64>,
 }
 
+/// One filter with its chains built for one image length: what a turret runs every update.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Filter {
+    kind: FilterKind,
+    /// The chain of λ (λ1 for the bandpass), and λ2's for the bandpass.
+    chains: (Chain, Chain),
+}
+
+impl Filter {
+    pub fn new(kind: FilterKind, settings: &FilterSettings, len: usize) -> Filter {
+        let chains = match kind {
+            FilterKind::Bandpass => (
+                Chain::new(settings.bandpass.0, len),
+                Chain::new(settings.bandpass.1, len),
+            ),
+            _ => {
+                let chain = Chain::new(settings.lambda, len);
+                (chain, chain)
+            }
+        };
+        Filter { kind, chains }
+    }
+
+    pub fn kind(&self) -> FilterKind {
+        self.kind
+    }
+
+    /// Filters `analog` (of the length the filter was built for) into `out`.
+    pub fn apply(&self, analog: &[f64], out: &mut [f64]) {
+        let (chain, wide_chain) = &self.chains;
+        match self.kind {
+            FilterKind::Raw => out.copy_from_slice(analog),
+            FilterKind::Lowpass => chain.lowpass(analog, out),
+            FilterKind::Highpass => {
+                chain.lowpass(analog, out);
+                for (o, &v) in out.iter_mut().zip(analog) {
+                    *o = v - *o;
+                }
+            }
+            FilterKind::Bandpass => {
+                chain.lowpass(analog, out);
+                with_scratch(analog.len(), |wide| {
+                    wide_chain.lowpass(analog, wide);
+                    for (o, w) in out.iter_mut().zip(wide.iter()) {
+                        *o -= w;
+                    }
+                });
+            }
+            FilterKind::Odd => chain.odd(analog, out),
+        }
+    }
+}
+
 /// Applies one filter to `analog`.
 pub fn apply(kind: FilterKind, settings: &FilterSettings, analog: &[f64], out: &mut [f64]) {
-    match kind {
-        FilterKind::Raw => out.copy_from_slice(analog),
-        FilterKind::Lowpass => lowpass(analog, settings.lambda, out),
-        FilterKind::Highpass => highpass(analog, settings.lambda, out),
-        FilterKind::Bandpass => bandpass(analog, settings.bandpass.0, settings.bandpass.1, out),
-        FilterKind::Odd => odd(analog, settings.lambda, out),
-    }
+    Filter::new(kind, settings, analog.len()).apply(analog, out);
 }
 
 /// I_bda as the paper sets it: the largest |filtered| produced when one photodiode — the
