@@ -89,11 +89,24 @@ pub fn luminance(rgb: [f64; 3]) -> f64 {
 /// mean is zero or not finite: a dark retina has no defined image, never NaN.
 pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
     let n = y.len() as f64;
-    // Scale first so that 1e300-size radiances cannot overflow the sum.
-    let peak = y.iter().fold(
-        0.0f64,
-        |m, &v| if v.is_finite() { m.max(v.abs()) } else { m },
-    );
+    // The usual image has no infinity or NaN: then no element needs its own test.
+    let all_finite = y.iter().fold(true, |all, v| all & v.is_finite());
+    let finite_or_zero = |v: f64| if all_finite || v.is_finite() { v } else { 0.0 };
+    // Scale first so that 1e300-size radiances cannot overflow the sum. The peak in four
+    // lanes: max is exact, so the order does not change it.
+    let mut lanes = [0.0f64; 4];
+    let mut chunks = y.chunks_exact(4);
+    for chunk in &mut chunks {
+        for (lane, &v) in lanes.iter_mut().zip(chunk) {
+            *lane = lane.max(finite_or_zero(v).abs());
+        }
+    }
+    let peak = chunks
+        .remainder()
+        .iter()
+        .fold(lanes[0].max(lanes[1]).max(lanes[2].max(lanes[3])), |m, &v| {
+            m.max(finite_or_zero(v).abs())
+        });
     if peak == 0.0 || !peak.is_finite() {
         analog.iter_mut().for_each(|a| *a = 0.0);
         return false;
@@ -101,7 +114,7 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
     let inverse_peak = 1.0 / peak;
     let mean = y
         .iter()
-        .map(|&v| if v.is_finite() { v * inverse_peak } else { 0.0 })
+        .map(|&v| finite_or_zero(v) * inverse_peak)
         .sum::<f64>()
         / n;
     if mean <= 0.0 {
@@ -110,7 +123,7 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
     }
     let scale = inverse_peak / mean;
     for (a, &v) in analog.iter_mut().zip(y) {
-        *a = if v.is_finite() { v * scale } else { 0.0 };
+        *a = finite_or_zero(v) * scale;
     }
     true
 }
@@ -419,13 +432,11 @@ pub fn convert(filtered: f64, i_bda: f64, bits: u32) -> u16 {
 #[inline]
 pub fn convert_scaled(filtered: f64, half: f64, gain: f64, top: f64) -> u16 {
     let value = half + filtered * gain + 0.5;
-    // NaN fails both tests and reads 0; for values in [0, top] truncation is floor.
-    if value.is_nan() || value < 1.0 {
+    // `min` caps at top; `as` truncates (floor on [0, top]) and saturates negatives to 0.
+    if value.is_nan() {
         0
-    } else if value >= top {
-        top as u16
     } else {
-        value as u16
+        value.min(top) as u16
     }
 }
 

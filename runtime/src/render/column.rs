@@ -14,6 +14,8 @@
 //! precomputed directions, and everything goes through `libm` where a transcendental is
 //! needed: results do not depend on the platform's math library.
 
+use std::sync::Arc;
+
 use glam::{DVec2, DVec3};
 
 use super::{shade, world_lights, Poses, WorldLight};
@@ -124,8 +126,8 @@ pub struct ColumnScene<'g> {
     visible: Vec<bool>,
     /// Primitives attached to robots.
     robot_parts: Vec<usize>,
-    /// Lights and the static objects' shading, when no light moves.
-    cached: Option<(Vec<WorldLight>, Vec<Option<FastShade>>)>,
+    /// Lights and the static objects' shading, when no light moves (shared by every frame).
+    cached: Option<(Arc<[WorldLight]>, Arc<[Option<FastShade>]>)>,
     /// Buffers reused from update to update (a scene renders one view at a time).
     buffers: std::cell::RefCell<RegionBuffers>,
 }
@@ -134,10 +136,46 @@ pub struct ColumnScene<'g> {
 #[derive(Default)]
 struct RegionBuffers {
     bounds: Vec<f64>,
+    /// One region's samples.
     positions: Vec<f64>,
     values: Vec<f64>,
-    regions: Vec<(usize, usize)>,
-    cursors: Vec<usize>,
+    /// The objects facing the eye in one region.
+    facing: Vec<u16>,
+}
+
+/// Integrates linear pieces of a function of azimuth over contiguous pixel windows of equal
+/// width, pixel 0 starting at `origin` and azimuth falling with the index.
+struct Raster<'a> {
+    origin: f64,
+    inverse_width: f64,
+    out: &'a mut [f64],
+}
+
+impl Raster<'_> {
+    /// Adds the mean over each pixel window of `value + slope·(α − x0)` on `[x0, x1]`.
+    #[inline]
+    fn add(&mut self, x0: f64, x1: f64, value: f64, slope: f64) {
+        // In pixel units u = (origin − α)/width, pixel i covering [i, i + 1].
+        let (u0, u1) = (
+            (self.origin - x1) * self.inverse_width,
+            (self.origin - x0) * self.inverse_width,
+        );
+        if u1 <= u0 {
+            return;
+        }
+        let pixels = self.out.len();
+        // α = origin − u·width, so the line is value + slope_u·(u1 − u), slope_u = slope·width.
+        let slope_u = slope / self.inverse_width;
+        let first = (u0.max(0.0) as usize).min(pixels);
+        let last = (libm::ceil(u1).max(0.0) as usize).min(pixels);
+        for (i, out) in self.out[first..last].iter_mut().enumerate() {
+            let i = (first + i) as f64;
+            let (a, b) = (u0.max(i), u1.min(i + 1.0));
+            if b > a {
+                *out += (b - a) * (value + slope_u * (u1 - 0.5 * (a + b)));
+            }
+        }
+    }
 }
 
 /// The fast shading of each object, where it applies.
@@ -163,10 +201,22 @@ fn fast_shades(
 /// One frame for one viewer.
 pub struct ColumnFrame {
     objects: Vec<Upright>,
-    lights: Vec<WorldLight>,
+    lights: Arc<[WorldLight]>,
     /// Per object, when its radiance depends on the normal alone (directional lights only, no
-    /// specular, no shadows): that dependence, precomputed.
+    /// specular, no shadows): that dependence, precomputed. The first objects' come from
+    /// `shared` (the scene's static objects, shaded once), the others' from `flat`.
+    shared: Arc<[Option<FastShade>]>,
     flat: Vec<Option<FastShade>>,
+}
+
+impl ColumnFrame {
+    #[inline]
+    fn fast_shade(&self, object: usize) -> Option<&FastShade> {
+        match self.shared.get(object) {
+            Some(shade) => shade.as_ref(),
+            None => self.flat[object - self.shared.len()].as_ref(),
+        }
+    }
 }
 
 fn upright_of(
@@ -247,6 +297,8 @@ pub struct Strip {
     pub tan_half_band: f64,
     /// cos and sin of each centre.
     directions: Vec<(f64, f64)>,
+    /// Whether the windows tile the strip: centres one width apart, falling.
+    contiguous: bool,
 }
 
 impl Strip {
@@ -255,11 +307,15 @@ impl Strip {
             .iter()
             .map(|&a| (libm::cos(a), libm::sin(a)))
             .collect();
+        let contiguous = centers
+            .windows(2)
+            .all(|pair| ((pair[0] - pair[1]) - width).abs() <= 1e-9 * width);
         Strip {
             centers,
             width,
             tan_half_band: libm::tan(half_band),
             directions,
+            contiguous,
         }
     }
 }
@@ -287,7 +343,7 @@ impl<'g> ColumnScene<'g> {
         let cached = static_lights.then(|| {
             let lights = world_lights(graph, plan, &Poses::default());
             let flat = fast_shades(graph, &statics, &lights);
-            (lights, flat)
+            (Arc::from(lights), Arc::from(flat))
         });
         ColumnScene {
             graph,
@@ -326,15 +382,11 @@ impl<'g> ColumnScene<'g> {
         }
         match &self.cached {
             Some((lights, static_flat)) => {
-                let mut flat = static_flat.clone();
-                flat.extend(fast_shades(
-                    self.graph,
-                    &objects[self.statics.len()..],
-                    lights,
-                ));
+                let flat = fast_shades(self.graph, &objects[self.statics.len()..], lights);
                 ColumnFrame {
                     objects,
                     lights: lights.clone(),
+                    shared: static_flat.clone(),
                     flat,
                 }
             }
@@ -343,7 +395,8 @@ impl<'g> ColumnScene<'g> {
                 let flat = fast_shades(self.graph, &objects, &lights);
                 ColumnFrame {
                     objects,
-                    lights,
+                    lights: Arc::from(lights),
+                    shared: Arc::from([]),
                     flat,
                 }
             }
@@ -443,27 +496,7 @@ impl<'g> ColumnScene<'g> {
             free: Free::new(0.0, 0.0),
         };
         let pixels = strip.centers.len().min(out.len());
-        let evaluate = |alpha: f64, pixel: usize, scratch: &mut Scratch| {
-            let (cos_c, sin_c) = strip.directions[pixel];
-            let (ca, sa) = rotate_small(cos_c, sin_c, alpha - strip.centers[pixel]);
-            // World direction of azimuth heading + alpha: (cos, −sin) in (x, z).
-            let (cw, sw) = (
-                look.cos_h * ca - look.sin_h * sa,
-                look.sin_h * ca + look.cos_h * sa,
-            );
-            self.column(
-                frame,
-                &look,
-                DVec2::new(cw, -sw),
-                alpha,
-                strip.tan_half_band,
-                band,
-                sky,
-                ground,
-                scratch,
-            )
-        };
-        if stride > 1 {
+        if stride > 1 && strip.contiguous {
             self.integrate_regions(
                 &look,
                 frame,
@@ -473,10 +506,11 @@ impl<'g> ColumnScene<'g> {
                 sky,
                 ground,
                 &mut scratch,
-                out,
+                &mut out[..pixels],
             );
             return;
         }
+        let mut facing = Vec::with_capacity(look.objects.len());
         for pixel in 0..pixels {
             // Pieces of the window between silhouette edges, `samples` midpoints each.
             let center = strip.centers[pixel];
@@ -494,9 +528,22 @@ impl<'g> ColumnScene<'g> {
                 };
                 let width = p1 - p0;
                 if width > 0.0 {
+                    look.facing(0.5 * (p0 + p1), &mut facing);
                     for s in 0..samples {
                         let alpha = p0 + (s as f64 + 0.5) / samples as f64 * width;
-                        sum += evaluate(alpha, pixel, &mut scratch) * (width / samples as f64);
+                        let direction = look.turn(strip, pixel, alpha);
+                        let value = self.column(
+                            frame,
+                            &look,
+                            direction,
+                            &facing,
+                            strip.tan_half_band,
+                            band,
+                            sky,
+                            ground,
+                            &mut scratch,
+                        );
+                        sum += value * (width / samples as f64);
                     }
                 }
                 if p1 >= hi {
@@ -510,7 +557,8 @@ impl<'g> ColumnScene<'g> {
 
     /// The strip cut into smooth regions at silhouette edges; each region sampled at about one
     /// column per `stride` pixels (at least once), the integrand modelled as piecewise linear
-    /// between samples, and each pixel window integrated over the regions it overlaps.
+    /// through the samples (extended linearly to the region's ends), and that model integrated
+    /// exactly over each pixel window. Pixels are contiguous windows (`strip.contiguous`).
     #[allow(clippy::too_many_arguments)]
     fn integrate_regions(
         &self,
@@ -524,21 +572,19 @@ impl<'g> ColumnScene<'g> {
         scratch: &mut Scratch,
         out: &mut [f64],
     ) {
-        let pixels = strip.centers.len().min(out.len());
+        let pixels = out.len();
         if pixels == 0 {
             return;
         }
         let width = strip.width;
-        let top = strip.centers[0];
-        let extent_hi = top + width / 2.0;
+        let extent_hi = strip.centers[0] + width / 2.0;
         let extent_lo = strip.centers[pixels - 1] - width / 2.0;
         let mut buffers = self.buffers.borrow_mut();
         let RegionBuffers {
             bounds,
             positions,
             values,
-            regions,
-            cursors,
+            facing,
         } = &mut *buffers;
         // Region bounds, ascending.
         bounds.clear();
@@ -551,10 +597,12 @@ impl<'g> ColumnScene<'g> {
         );
         bounds.push(extent_hi);
         let step = width * stride as f64;
-        // Samples of every region, with (start, count) per region.
-        positions.clear();
-        values.clear();
-        regions.clear();
+        out.fill(0.0);
+        let mut raster = Raster {
+            origin: extent_hi,
+            inverse_width: 1.0 / width,
+            out,
+        };
         for pair in bounds.windows(2) {
             let (r0, r1) = (pair[0], pair[1]);
             let span = r1 - r0;
@@ -563,23 +611,21 @@ impl<'g> ColumnScene<'g> {
             } else {
                 1 + (span / step) as usize
             };
-            regions.push((positions.len(), count));
+            // Between two edges the same objects face the eye.
+            look.facing(0.5 * (r0 + r1), facing);
+            positions.clear();
+            values.clear();
             for i in 0..count {
                 let alpha = r0 + (i as f64 + 0.5) * span / count as f64;
                 // The nearest pixel's direction, turned by the small remainder.
-                let pixel = (((top - alpha) / width).round().max(0.0) as usize).min(pixels - 1);
-                let (cos_c, sin_c) = strip.directions[pixel];
-                let (ca, sa) = rotate_small(cos_c, sin_c, alpha - strip.centers[pixel]);
-                let (cw, sw) = (
-                    look.cos_h * ca - look.sin_h * sa,
-                    look.sin_h * ca + look.cos_h * sa,
-                );
+                let pixel = (((strip.centers[0] - alpha) / width).round().max(0.0) as usize)
+                    .min(pixels - 1);
                 positions.push(alpha);
                 values.push(self.column(
                     frame,
                     look,
-                    DVec2::new(cw, -sw),
-                    alpha,
+                    look.turn(strip, pixel, alpha),
+                    facing,
                     strip.tan_half_band,
                     band,
                     sky,
@@ -587,45 +633,17 @@ impl<'g> ColumnScene<'g> {
                     scratch,
                 ));
             }
-        }
-        // Walk the pixels by rising azimuth, so that the region and each region's sample
-        // cursor only move forward.
-        let inverse_width = 1.0 / width;
-        cursors.clear();
-        cursors.extend(regions.iter().map(|&(start, _)| start));
-        let mut first_region = 0;
-        for pixel in (0..pixels).rev() {
-            let (lo, hi) = (
-                strip.centers[pixel] - width / 2.0,
-                strip.centers[pixel] + width / 2.0,
-            );
-            while first_region + 1 < regions.len() && bounds[first_region + 1] <= lo {
-                first_region += 1;
+            if count == 1 {
+                raster.add(r0, r1, values[0], 0.0);
+                continue;
             }
-            let mut sum = 0.0;
-            let mut region = first_region;
-            while region < regions.len() && bounds[region] < hi {
-                let (a, b) = (bounds[region].max(lo), bounds[region + 1].min(hi));
-                if b > a {
-                    let at = 0.5 * (a + b);
-                    let (start, count) = regions[region];
-                    let value = if count == 1 {
-                        values[start]
-                    } else {
-                        let end = start + count;
-                        let cursor = &mut cursors[region];
-                        while *cursor + 2 < end && positions[*cursor + 1] <= at {
-                            *cursor += 1;
-                        }
-                        let i = (*cursor).min(end - 2);
-                        let f = (at - positions[i]) / (positions[i + 1] - positions[i]);
-                        values[i] + (values[i + 1] - values[i]) * f
-                    };
-                    sum += value * (b - a);
-                }
-                region += 1;
+            // Piece k joins samples k and k + 1; the first and last pieces reach the ends.
+            for k in 0..count - 1 {
+                let x0 = if k == 0 { r0 } else { positions[k] };
+                let x1 = if k + 2 == count { r1 } else { positions[k + 1] };
+                let slope = (values[k + 1] - values[k]) / (positions[k + 1] - positions[k]);
+                raster.add(x0, x1, values[k] + slope * (x0 - positions[k]), slope);
             }
-            out[pixel] = sum * inverse_width;
         }
     }
 
@@ -640,7 +658,9 @@ impl<'g> ColumnScene<'g> {
         out: &mut [[f64; 3]],
     ) {
         let mut segments = Segments::new();
-        self.collect_segments(look, direction, alpha, &mut segments);
+        let mut facing = Vec::new();
+        look.facing(alpha, &mut facing);
+        self.collect_segments(look, direction, &facing, &mut segments);
         for (t, rgb) in tans.iter().zip(out.iter_mut()) {
             *rgb = match segments
                 .as_slice()
@@ -667,15 +687,19 @@ impl<'g> ColumnScene<'g> {
     /// (a buoy on the floor, a lamp on its buoy). Its near part cannot be covered by such an
     /// object, whose silhouette starts at the cap's plane. Geometry below a floor inside
     /// the floor's footprint would show through; closed worlds have none.
-    fn collect_segments(&self, look: &Look, direction: DVec2, alpha: f64, segments: &mut Segments) {
-        for (index, object) in look.objects.iter().enumerate() {
-            if outside(alpha, object.lo, object.hi) {
-                continue;
-            }
+    fn collect_segments(
+        &self,
+        look: &Look,
+        direction: DVec2,
+        facing: &[u16],
+        segments: &mut Segments,
+    ) {
+        for &index in facing {
+            let object = &look.objects[index as usize];
             let Some((t_in, t_out, normal)) = object.relative.cross(direction) else {
                 continue;
             };
-            let id = index as u16;
+            let id = index;
             let (y0, y1) = (object.y0, object.y1);
             if t_in > 0.0 {
                 let inv_in = 1.0 / t_in;
@@ -780,14 +804,15 @@ impl<'g> ColumnScene<'g> {
         }
     }
 
-    /// Mean RGB over the band `[-T, T]` of one column, integrated exactly in angle.
+    /// Mean luminance over the band `[-T, T]` of one column, integrated exactly in angle;
+    /// `facing` lists the objects whose azimuth interval holds the column.
     #[allow(clippy::too_many_arguments)]
     fn column(
         &self,
         frame: &ColumnFrame,
         look: &Look,
         direction: DVec2,
-        alpha: f64,
+        facing: &[u16],
         tan_half: f64,
         band: f64,
         sky: f64,
@@ -796,7 +821,7 @@ impl<'g> ColumnScene<'g> {
     ) -> f64 {
         let Scratch { segments, free } = scratch;
         segments.len = 0;
-        self.collect_segments(look, direction, alpha, segments);
+        self.collect_segments(look, direction, facing, segments);
         free.reset(-tan_half, tan_half);
         let mut sum = 0.0;
         for segment in segments.as_slice() {
@@ -844,7 +869,7 @@ impl<'g> ColumnScene<'g> {
         direction: DVec2,
         t: f64,
     ) -> f64 {
-        if let Some(fast) = &frame.flat[segment.object as usize] {
+        if let Some(fast) = frame.fast_shade(segment.object as usize) {
             return match segment.face {
                 Face::Side(n) => fast.luminance(DVec3::new(n.x, 0.0, n.y)),
                 Face::Cap { up: true, .. } => fast.luminance(DVec3::Y),
@@ -864,7 +889,7 @@ impl<'g> ColumnScene<'g> {
         t: f64,
     ) -> [f64; 3] {
         let object = &frame.objects[segment.object as usize];
-        if let Some(fast) = &frame.flat[segment.object as usize] {
+        if let Some(fast) = frame.fast_shade(segment.object as usize) {
             return match segment.face {
                 Face::Side(n) => fast.radiance(DVec3::new(n.x, 0.0, n.y)),
                 Face::Cap { up: true, .. } => fast.radiance(DVec3::Y),
@@ -1097,6 +1122,32 @@ pub struct Look {
 }
 
 impl Look {
+    /// The objects whose azimuth interval holds relative azimuth `alpha`, in object order.
+    pub fn facing(&self, alpha: f64, out: &mut Vec<u16>) {
+        out.clear();
+        out.extend(
+            self.objects
+                .iter()
+                .enumerate()
+                .filter(|(_, o)| !outside(alpha, o.lo, o.hi))
+                .map(|(index, _)| index as u16),
+        );
+    }
+
+    /// The world direction (x, z) of relative azimuth `alpha`, near `strip`'s pixel `pixel`:
+    /// the pixel centre's direction turned by the small remainder, no transcendental.
+    #[inline]
+    fn turn(&self, strip: &Strip, pixel: usize, alpha: f64) -> DVec2 {
+        let (cos_c, sin_c) = strip.directions[pixel];
+        let (ca, sa) = rotate_small(cos_c, sin_c, alpha - strip.centers[pixel]);
+        // World direction of azimuth heading + alpha: (cos, −sin) in (x, z).
+        let (cw, sw) = (
+            self.cos_h * ca - self.sin_h * sa,
+            self.sin_h * ca + self.cos_h * sa,
+        );
+        DVec2::new(cw, -sw)
+    }
+
     /// The world direction (x, z) of relative azimuth `alpha`.
     pub fn direction(&self, alpha: f64) -> DVec2 {
         let (ca, sa) = (libm::cos(alpha), libm::sin(alpha));
