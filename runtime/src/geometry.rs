@@ -213,6 +213,27 @@ impl Footprint {
         }
     }
 
+    /// Distance from `point` to the shape (0 inside it).
+    pub fn distance(&self, point: DVec2) -> f64 {
+        match *self {
+            Footprint::Circle { center, radius } => ((point - center).length() - radius).max(0.0),
+            Footprint::Rect {
+                center,
+                u,
+                v,
+                half_u,
+                half_v,
+            } => {
+                let offset = point - center;
+                let (du, dv) = (
+                    (offset.dot(u).abs() - half_u).max(0.0),
+                    (offset.dot(v).abs() - half_v).max(0.0),
+                );
+                (du * du + dv * dv).sqrt()
+            }
+        }
+    }
+
     /// Distance along a unit ray to the boundary, if hit at `t ≥ 0` (from inside: 0).
     pub fn ray(&self, origin: DVec2, direction: DVec2) -> Option<f64> {
         match *self {

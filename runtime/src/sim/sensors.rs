@@ -61,7 +61,9 @@ pub fn proximity(
     let origin2 = DVec2::new(origin.x, origin.z);
     let looking = placement.direction_to_world(sensor.direction);
     let direction = DVec2::new(looking.x, looking.z).normalize_or(DVec2::X);
-    // Only obstacles at the sensor's height and within its range can answer any of its rays.
+    // Only obstacles at the sensor's height and within its range can answer any of its rays
+    // (a hit is never nearer than the obstacle; the margin keeps rounding on the safe side).
+    let reach = sensor.range * (1.0 + 1e-9) + 1e-12;
     let mut near = [0u32; 32];
     let mut count = 0;
     let mut overflow = Vec::new();
@@ -69,8 +71,7 @@ pub fn proximity(
         if height < obstacle.y0 || height > obstacle.y1 {
             continue;
         }
-        let (center, radius) = obstacle.shape.bounding_circle();
-        if (center - origin2).length() <= sensor.range + radius {
+        if obstacle.shape.distance(origin2) <= reach {
             if count < near.len() {
                 near[count] = index as u32;
                 count += 1;
@@ -83,6 +84,7 @@ pub fn proximity(
         .iter()
         .chain(&overflow)
         .map(|&i| &slab.obstacles[i as usize]);
+    let far = lookup(&sensor.lookup, f64::INFINITY);
     let (mut value_sum, mut noise_sum, mut weight_sum) = (0.0, 0.0, 0.0);
     for &(_, cos, sin) in &sensor.ray_turns {
         // Counter-clockwise seen from above, in (x, z): the same sense as headings.
@@ -124,7 +126,7 @@ pub fn proximity(
         let (value, noise) = if nearest < sensor.range {
             lookup(&sensor.lookup, nearest * weight)
         } else {
-            lookup(&sensor.lookup, f64::INFINITY)
+            far
         };
         let value = if nearest < sensor.range {
             value * reflectance
