@@ -89,24 +89,33 @@ pub fn luminance(rgb: [f64; 3]) -> f64 {
 /// mean is zero or not finite: a dark retina has no defined image, never NaN.
 pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
     let n = y.len() as f64;
-    // The usual image has no infinity or NaN: then no element needs its own test.
-    let all_finite = y.iter().fold(true, |all, v| all & v.is_finite());
-    let finite_or_zero = |v: f64| if all_finite || v.is_finite() { v } else { 0.0 };
-    // Scale first so that 1e300-size radiances cannot overflow the sum. The peak in four
-    // lanes: max is exact, so the order does not change it.
+    // The usual image is finite: a peak that is finite and a sum that is not NaN prove it,
+    // and then no element needs its own test. The peak in four lanes: max is exact, so
+    // the order does not change it.
     let mut lanes = [0.0f64; 4];
     let mut chunks = y.chunks_exact(4);
     for chunk in &mut chunks {
         for (lane, &v) in lanes.iter_mut().zip(chunk) {
-            *lane = lane.max(finite_or_zero(v).abs());
+            *lane = lane.max(v.abs());
         }
     }
     let peak = chunks
         .remainder()
         .iter()
         .fold(lanes[0].max(lanes[1]).max(lanes[2].max(lanes[3])), |m, &v| {
-            m.max(finite_or_zero(v).abs())
+            m.max(v.abs())
         });
+    if peak > 0.0 && peak.is_finite() {
+        let inverse_peak = 1.0 / peak;
+        let sum = y.iter().map(|&v| v * inverse_peak).sum::<f64>();
+        if !sum.is_nan() {
+            return scale_by_mean(y, analog, inverse_peak, sum / n);
+        }
+    }
+    // Some photocurrent is infinite or NaN: those read 0.
+    let finite_or_zero = |v: f64| if v.is_finite() { v } else { 0.0 };
+    // Scale first so that 1e300-size radiances cannot overflow the sum.
+    let peak = y.iter().fold(0.0f64, |m, &v| m.max(finite_or_zero(v).abs()));
     if peak == 0.0 || !peak.is_finite() {
         analog.iter_mut().for_each(|a| *a = 0.0);
         return false;
@@ -124,6 +133,19 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
     let scale = inverse_peak / mean;
     for (a, &v) in analog.iter_mut().zip(y) {
         *a = finite_or_zero(v) * scale;
+    }
+    true
+}
+
+/// `analog = y / mean` from the mean of `y` scaled by `inverse_peak` (all finite).
+fn scale_by_mean(y: &[f64], analog: &mut [f64], inverse_peak: f64, mean: f64) -> bool {
+    if mean <= 0.0 {
+        analog.iter_mut().for_each(|a| *a = 0.0);
+        return false;
+    }
+    let scale = inverse_peak / mean;
+    for (a, &v) in analog.iter_mut().zip(y) {
+        *a = v * scale;
     }
     true
 }

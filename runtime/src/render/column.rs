@@ -65,6 +65,9 @@ struct FastShade {
     base: [f64; 3],
     lights: [([f64; 3], DVec3); MAX_FAST_LIGHTS],
     count: usize,
+    /// Luminance of `base` and of each light's coefficient.
+    base_luminance: f64,
+    light_luminance: [f64; MAX_FAST_LIGHTS],
 }
 
 impl FastShade {
@@ -73,8 +76,11 @@ impl FastShade {
             base: material.emissive,
             lights: [([0.0; 3], DVec3::ZERO); MAX_FAST_LIGHTS],
             count: 0,
+            base_luminance: 0.0,
+            light_luminance: [0.0; MAX_FAST_LIGHTS],
         };
         if material.unlit {
+            fast.base_luminance = luminance(fast.base);
             return fast;
         }
         for light in lights {
@@ -90,17 +96,22 @@ impl FastShade {
                 coefficient[k] = light.color[k] * light.intensity * material.diffuse[k];
             }
             fast.lights[fast.count] = (coefficient, -direction);
+            fast.light_luminance[fast.count] = luminance(coefficient);
             fast.count += 1;
         }
+        fast.base_luminance = luminance(fast.base);
         fast
     }
 
     /// Luminance of [`FastShade::radiance`] (linear, so it regroups the same way).
     #[inline]
     fn luminance(&self, normal: DVec3) -> f64 {
-        let mut out = luminance(self.base);
-        for (coefficient, to_light) in &self.lights[..self.count] {
-            out += luminance(*coefficient) * normal.dot(*to_light).max(0.0);
+        let mut out = self.base_luminance;
+        for ((_, to_light), coefficient) in self.lights[..self.count]
+            .iter()
+            .zip(&self.light_luminance)
+        {
+            out += coefficient * normal.dot(*to_light).max(0.0);
         }
         out
     }
@@ -168,12 +179,28 @@ impl Raster<'_> {
         let slope_u = slope / self.inverse_width;
         let first = (u0.max(0.0) as usize).min(pixels);
         let last = (libm::ceil(u1).max(0.0) as usize).min(pixels);
-        for (i, out) in self.out[first..last].iter_mut().enumerate() {
-            let i = (first + i) as f64;
+        if first >= last {
+            return;
+        }
+        // Windows the piece covers whole take the line's value at their centre; the one or
+        // two it covers in part, the mean over the part times its share.
+        let partial = |i: usize| {
+            let i = i as f64;
             let (a, b) = (u0.max(i), u1.min(i + 1.0));
             if b > a {
-                *out += (b - a) * (value + slope_u * (u1 - 0.5 * (a + b)));
+                (b - a) * (value + slope_u * (u1 - 0.5 * (a + b)))
+            } else {
+                0.0
             }
+        };
+        self.out[first] += partial(first);
+        if last - first == 1 {
+            return;
+        }
+        self.out[last - 1] += partial(last - 1);
+        for (i, out) in self.out[first + 1..last - 1].iter_mut().enumerate() {
+            let center = (first + 1 + i) as f64 + 0.5;
+            *out += value + slope_u * (u1 - center);
         }
     }
 }
@@ -277,9 +304,15 @@ fn rotate_small(cos_base: f64, sin_base: f64, delta: f64) -> (f64, f64) {
 }
 
 /// Wraps an angle to (−π, π].
+#[inline]
 fn wrap(angle: f64) -> f64 {
     let two_pi = 2.0 * std::f64::consts::PI;
-    let mut a = angle % two_pi;
+    // Within a turn the remainder is the angle itself: skip the division.
+    let mut a = if angle.abs() < two_pi {
+        angle
+    } else {
+        angle % two_pi
+    };
     if a <= -std::f64::consts::PI {
         a += two_pi;
     } else if a > std::f64::consts::PI {
