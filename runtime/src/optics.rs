@@ -21,8 +21,8 @@ use crate::render::column::{ColumnFrame, ColumnScene, Look, Strip};
 use crate::render::raycast::{Prepared, RayCaster};
 use crate::render::Poses;
 use crate::retina::{
-    self, calibrate_i_bda, convert_scaled, luminance, normalize, Filter, FilterKind, FilterSettings,
-    HALF_BAND, PIXELS, PIXEL_WIDTH,
+    self, calibrate_i_bda, convert_scaled, luminance, normalize, Filter, FilterKind,
+    FilterSettings, HALF_BAND, PIXELS, PIXEL_WIDTH,
 };
 
 /// Flat-view geometry of paper optics.

@@ -99,12 +99,10 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
             *lane = lane.max(v.abs());
         }
     }
-    let peak = chunks
-        .remainder()
-        .iter()
-        .fold(lanes[0].max(lanes[1]).max(lanes[2].max(lanes[3])), |m, &v| {
-            m.max(v.abs())
-        });
+    let peak = chunks.remainder().iter().fold(
+        lanes[0].max(lanes[1]).max(lanes[2].max(lanes[3])),
+        |m, &v| m.max(v.abs()),
+    );
     if peak > 0.0 && peak.is_finite() {
         let inverse_peak = 1.0 / peak;
         let sum = y.iter().map(|&v| v * inverse_peak).sum::<f64>();
@@ -115,7 +113,9 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
     // Some photocurrent is infinite or NaN: those read 0.
     let finite_or_zero = |v: f64| if v.is_finite() { v } else { 0.0 };
     // Scale first so that 1e300-size radiances cannot overflow the sum.
-    let peak = y.iter().fold(0.0f64, |m, &v| m.max(finite_or_zero(v).abs()));
+    let peak = y
+        .iter()
+        .fold(0.0f64, |m, &v| m.max(finite_or_zero(v).abs()));
     if peak == 0.0 || !peak.is_finite() {
         analog.iter_mut().for_each(|a| *a = 0.0);
         return false;

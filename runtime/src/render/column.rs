@@ -107,9 +107,8 @@ impl FastShade {
     #[inline]
     fn luminance(&self, normal: DVec3) -> f64 {
         let mut out = self.base_luminance;
-        for ((_, to_light), coefficient) in self.lights[..self.count]
-            .iter()
-            .zip(&self.light_luminance)
+        for ((_, to_light), coefficient) in
+            self.lights[..self.count].iter().zip(&self.light_luminance)
         {
             out += coefficient * normal.dot(*to_light).max(0.0);
         }

@@ -154,6 +154,21 @@ pub struct Simulation<'c> {
     pub steps: u64,
     pub time_step: f64,
     pub seed: u64,
+    /// Buffers a step fills and the next reuses: stepping allocates nothing once warm.
+    scratch: StepScratch,
+}
+
+/// A step's working buffers.
+#[derive(Default)]
+struct StepScratch {
+    poses: Poses,
+    placements: Vec<crate::compile::rig::Placement>,
+    /// The plan's lights in the world, kept from step to step when none is on a robot.
+    lights: Vec<crate::render::WorldLight>,
+    lights_move: bool,
+    requests: Vec<VisionRequest>,
+    speeds: Vec<(f64, f64)>,
+    touched: Vec<Vec<bool>>,
 }
 
 impl<'c> Simulation<'c> {
@@ -239,7 +254,15 @@ impl<'c> Simulation<'c> {
             steps: 0,
             time_step,
             seed,
+            scratch: StepScratch::default(),
         };
+        let plan = &compiled.plan;
+        simulation.scratch.lights_move = plan
+            .lights
+            .iter()
+            .any(|&l| compiled.graph.lights[l].owner != crate::compile::graph::Owner::Static);
+        simulation.scratch.lights =
+            crate::render::world_lights(&compiled.graph, plan, &simulation.poses());
         simulation.track_visits();
         Ok(simulation)
     }
@@ -326,21 +349,43 @@ impl<'c> Simulation<'c> {
     }
 
     fn update_sensors(&mut self, t: f64) {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        self.update_sensors_with(t, &mut scratch);
+        self.scratch = scratch;
+    }
+
+    fn update_sensors_with(&mut self, t: f64, scratch: &mut StepScratch) {
         let compiled = self.compiled;
-        let poses = self.poses();
-        let placements: Vec<_> = poses
-            .poses
-            .iter()
-            .zip(&poses.floor_y)
-            .map(|(p, &y)| p.placement(y))
-            .collect();
-        // Ambient sensors read the plan's lights, placed once per step.
-        let lights = if self.robots.iter().any(|r| !r.ambient_due.is_empty()) {
-            crate::render::world_lights(&compiled.graph, &compiled.plan, &poses)
-        } else {
-            Vec::new()
-        };
-        let mut requests = Vec::new();
+        let StepScratch {
+            poses,
+            placements,
+            lights,
+            lights_move,
+            requests,
+            ..
+        } = scratch;
+        poses.poses.clear();
+        poses.poses.extend(self.robots.iter().map(|r| r.pose));
+        poses.floor_y.clear();
+        poses
+            .floor_y
+            .extend(compiled.rig.robots.iter().map(|r| r.floor_y));
+        let poses = &*poses;
+        placements.clear();
+        placements.extend(
+            poses
+                .poses
+                .iter()
+                .zip(&poses.floor_y)
+                .map(|(p, &y)| p.placement(y)),
+        );
+        let placements = &*placements;
+        // Ambient sensors read the plan's lights, placed once per step where they move.
+        if *lights_move && self.robots.iter().any(|r| !r.ambient_due.is_empty()) {
+            *lights = crate::render::world_lights(&compiled.graph, &compiled.plan, poses);
+        }
+        let lights = &*lights;
+        requests.clear();
         for (index, robot) in self.robots.iter_mut().enumerate() {
             let rig = &compiled.rig.robots[index];
             for (s, sensor) in rig.distance_sensors.iter().enumerate().take(8) {
@@ -360,9 +405,9 @@ impl<'c> Simulation<'c> {
                 if due(&mut robot.ambient_due[s], t, sensor.period) {
                     robot.updated.ambient = true;
                     robot.ambient[s] = sensors::ambient(
-                        &lights,
+                        lights,
                         &self.slab,
-                        &placements,
+                        placements,
                         index,
                         sensor,
                         &mut robot.ambient_streams[s],
@@ -387,7 +432,7 @@ impl<'c> Simulation<'c> {
                 if let Some(turret) = &mut robot.panoramic {
                     if due(&mut turret.due, t, turret.model.rig.period) {
                         robot.updated.vision = true;
-                        let view = renderer.view(&compiled.plan, &poses, index);
+                        let view = renderer.view(&compiled.plan, poses, index);
                         turret.model.update(
                             renderer,
                             &view,
@@ -400,7 +445,7 @@ impl<'c> Simulation<'c> {
                 if let Some(camera) = &mut robot.linear_camera {
                     if due(&mut camera.due, t, camera.model.rig.period) {
                         robot.updated.vision = true;
-                        let view = renderer.view(&compiled.plan, &poses, index);
+                        let view = renderer.view(&compiled.plan, poses, index);
                         camera.model.update(
                             renderer,
                             &view,
@@ -418,11 +463,8 @@ impl<'c> Simulation<'c> {
         let Some(backend) = &mut self.vision else {
             return;
         };
-        let instances = [WorldInstance {
-            scene: 0,
-            poses: &poses,
-        }];
-        if let Err(error) = backend.render(&instances, &requests, &mut self.vision_buffers) {
+        let instances = [WorldInstance { scene: 0, poses }];
+        if let Err(error) = backend.render(&instances, requests, &mut self.vision_buffers) {
             self.vision_error = Some(error);
             return;
         }
@@ -440,24 +482,21 @@ impl<'c> Simulation<'c> {
     fn move_robots(&mut self) {
         let dt = self.time_step;
         let rigs = &self.compiled.rig.robots;
+        let mut speeds = std::mem::take(&mut self.scratch.speeds);
+        let mut touched = std::mem::take(&mut self.scratch.touched);
         // Wheel speeds (m/s) of every robot for this step.
-        let speeds: Vec<(f64, f64)> = self
-            .robots
-            .iter_mut()
-            .zip(rigs)
-            .map(|(robot, rig)| {
-                let to_metres = 100.0 / rig.encoder_resolution;
-                let clamp = |command: i32| {
-                    (command as f64 * to_metres).clamp(-rig.max_speed, rig.max_speed)
-                };
-                let (mut left, mut right) = (clamp(robot.command.0), clamp(robot.command.1));
-                if rig.wheel_speed_noise > 0.0 {
-                    left *= 1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian();
-                    right *= 1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian();
-                }
-                (left, right)
-            })
-            .collect();
+        speeds.clear();
+        speeds.extend(self.robots.iter_mut().zip(rigs).map(|(robot, rig)| {
+            let to_metres = 100.0 / rig.encoder_resolution;
+            let clamp =
+                |command: i32| (command as f64 * to_metres).clamp(-rig.max_speed, rig.max_speed);
+            let (mut left, mut right) = (clamp(robot.command.0), clamp(robot.command.1));
+            if rig.wheel_speed_noise > 0.0 {
+                left *= 1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian();
+                right *= 1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian();
+            }
+            (left, right)
+        }));
         // Sub-steps short enough that no body crosses half its radius in one: no tunnelling.
         let sub_steps = speeds
             .iter()
@@ -469,8 +508,11 @@ impl<'c> Simulation<'c> {
             .unwrap_or(1)
             .clamp(1, 256);
         let h = dt / sub_steps as f64;
-        let mut touched =
-            vec![vec![false; self.slab.obstacles.len() + rigs.len()]; self.robots.len()];
+        touched.resize_with(self.robots.len(), Vec::new);
+        for row in &mut touched {
+            row.clear();
+            row.resize(self.slab.obstacles.len() + rigs.len(), false);
+        }
         for _ in 0..sub_steps {
             for ((robot, rig), &(left, right)) in self.robots.iter_mut().zip(rigs).zip(&speeds) {
                 robot.pose = kinematics::advance(robot.pose, left, right, rig.axle_length, h);
@@ -479,7 +521,7 @@ impl<'c> Simulation<'c> {
             }
             self.resolve_collisions(&mut touched);
         }
-        for (robot, touched) in self.robots.iter_mut().zip(touched) {
+        for (robot, touched) in self.robots.iter_mut().zip(&touched) {
             let contacts = &mut robot.contacts;
             let any = touched.iter().any(|&t| t);
             for (k, &now) in touched.iter().enumerate() {
@@ -499,8 +541,10 @@ impl<'c> Simulation<'c> {
             } else {
                 contacts.current = 0.0;
             }
-            contacts.touching = touched;
+            contacts.touching.clone_from(touched);
         }
+        self.scratch.speeds = speeds;
+        self.scratch.touched = touched;
     }
 
     /// Pushes bodies out of obstacles and out of each other.
