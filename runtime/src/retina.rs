@@ -152,15 +152,20 @@ fn scale_by_mean(y: &[f64], analog: &mut [f64], inverse_peak: f64, mean: f64) ->
 
 /// A resistive chain's constants for one λ and one length, computed once per setting so that
 /// filtering an image runs no transcendental: `a = e^(−1/λ)`, `1 − a` (without cancellation
-/// for large λ), `aⁿ` and `1 − a²ⁿ` (from λ directly).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// for large λ), `aⁿ` and `1 − a²ⁿ`, and the powers `a^k` for k = 0…n + 1 (each from λ
+/// directly).
+#[derive(Clone, Debug, PartialEq)]
 pub struct Chain {
     len: usize,
     a: f64,
     one_minus_a: f64,
     a_n: f64,
     period: f64,
+    powers: Vec<f64>,
 }
+
+/// Independent blocks a recursion is cut into, so that their dependency chains overlap.
+const BLOCKS: usize = 4;
 
 impl Chain {
     pub fn new(lambda: f64, len: usize) -> Chain {
@@ -172,25 +177,69 @@ impl Chain {
             one_minus_a: -libm::expm1(-1.0 / lambda),
             a_n: libm::exp(-n / lambda),
             period: -libm::expm1(-2.0 * n / lambda),
+            powers: (0..len + 2)
+                .map(|k| libm::exp(-(k as f64) / lambda))
+                .collect(),
         }
     }
 
-    /// The mirrored continuation's weighted sums seen from each end:
-    /// `Σ_{k≥0} a^k s_k` for `s` = x[0], x[1], …, x[n−1], x[n−1], …, x[0], x[0], … (left)
-    /// and for its mirror image read from the right end. With `L = Σ a^j x[j]` and
-    /// `R = Σ a^(n−1−j) x[j]` (two Horner passes), the 2n-periodic sums are
-    /// `(L + aⁿ·R) / (1 − a²ⁿ)` and `(R + aⁿ·L) / (1 − a²ⁿ)`.
-    fn mirrored_tails(&self, x: &[f64]) -> (f64, f64) {
-        let a = self.a;
-        // Two independent Horner chains in one loop, so that their latencies overlap.
-        let (mut from_right, mut from_left) = (0.0, 0.0);
-        for (&forward, &backward) in x.iter().zip(x.iter().rev()) {
-            from_right = a * from_right + forward;
-            from_left = a * from_left + backward;
+    /// The zero-state recursion `y[p] = a·y[p−1] + (1−a)·x[p]`, y[−1] = 0, in place, `p`
+    /// running forward or (REVERSE) from the last element down.
+    ///
+    /// The chain is cut into [`BLOCKS`] blocks run side by side from zero, whose dependency
+    /// chains overlap in the pipeline; each block then receives the previous block's true
+    /// end value `e` as `a^(i+1)·e` at its i-th element. The result equals the sequential
+    /// recursion up to rounding.
+    fn recursion<const REVERSE: bool>(&self, data: &mut [f64]) {
+        let n = data.len();
+        let (a, c) = (self.a, self.one_minus_a);
+        let at = |p: usize| if REVERSE { n - 1 - p } else { p };
+        if n < 4 * BLOCKS {
+            let mut state = 0.0;
+            for p in 0..n {
+                state = a * state + c * data[at(p)];
+                data[at(p)] = state;
+            }
+            return;
         }
+        let block = n.div_ceil(BLOCKS);
+        let lengths: [usize; BLOCKS] =
+            std::array::from_fn(|k| n.saturating_sub(k * block).min(block));
+        let common = lengths[BLOCKS - 1];
+        let mut state = [0.0; BLOCKS];
+        for i in 0..common {
+            for (k, s) in state.iter_mut().enumerate() {
+                let p = at(k * block + i);
+                *s = a * *s + c * data[p];
+                data[p] = *s;
+            }
+        }
+        for i in common..block {
+            for (k, s) in state.iter_mut().enumerate() {
+                if i < lengths[k] {
+                    let p = at(k * block + i);
+                    *s = a * *s + c * data[p];
+                    data[p] = *s;
+                }
+            }
+        }
+        for k in 1..BLOCKS {
+            let carry = data[at(k * block - 1)];
+            for i in 0..lengths[k] {
+                data[at(k * block + i)] += self.powers[i + 1] * carry;
+            }
+        }
+    }
+
+    /// The recursions from each end over the mirrored continuation of `x` (period 2n), as
+    /// they leave the image: `c·Σ_{k≥0} a^k s_k` for `s` = x[0], x[1], …, x[n−1], x[n−1], …
+    /// (the right-going pass's start) and its mirror image (the left-going pass's). With
+    /// `L = Σ a^j x[j]` and `R = Σ a^(n−1−j) x[j]` they are `c·(L + aⁿ·R) / (1 − a²ⁿ)` and
+    /// `c·(R + aⁿ·L) / (1 − a²ⁿ)`; the zero-state passes end on `c·R` and `c·L`.
+    fn mirrored_starts(&self, c_r: f64, c_l: f64) -> (f64, f64) {
         (
-            (from_left + self.a_n * from_right) / self.period,
-            (from_right + self.a_n * from_left) / self.period,
+            (c_l + self.a_n * c_r) / self.period,
+            (c_r + self.a_n * c_l) / self.period,
         )
     }
 
@@ -203,18 +252,23 @@ impl Chain {
             return;
         }
         debug_assert_eq!(n, self.len, "a chain filters images of its own length");
-        let (a, one_minus_a) = (self.a, self.one_minus_a);
-        let (left_tail, _) = self.mirrored_tails(&x[..n]);
-        // The right-going pass in `out`, then the left-going pass over it in place.
-        let mut previous = one_minus_a * left_tail;
-        for (o, &v) in out[..n].iter_mut().zip(&x[..n]) {
-            previous = a * previous + one_minus_a * v;
-            *o = previous;
-        }
-        let mut next = out[n - 1];
-        for o in out[..n - 1].iter_mut().rev() {
-            next = a * next + one_minus_a * *o;
-            *o = next;
+        let (x, out) = (&x[..n], &mut out[..n]);
+        // c·L from a left-going zero-state pass over a copy, c·R from the right-going one.
+        with_scratch(n, |left| {
+            left.copy_from_slice(x);
+            self.recursion::<true>(left);
+            out.copy_from_slice(x);
+            self.recursion::<false>(out);
+            let (start, _) = self.mirrored_starts(out[n - 1], left[0]);
+            for (i, o) in out.iter_mut().enumerate() {
+                *o += self.powers[i + 1] * start;
+            }
+        });
+        // The left-going pass over the right-going output, from y[n−1] = r[n−1].
+        let end = out[n - 1];
+        self.recursion::<true>(&mut out[..n - 1]);
+        for (i, o) in out[..n - 1].iter_mut().enumerate() {
+            *o += self.powers[n - 1 - i] * end;
         }
     }
 
@@ -227,19 +281,19 @@ impl Chain {
             return;
         }
         debug_assert_eq!(n, self.len, "a chain filters images of its own length");
-        let (b, one_minus_b) = (self.a, self.one_minus_a);
-        let (left_tail, right_tail) = self.mirrored_tails(&x[..n]);
         let (x, out) = (&x[..n], &mut out[..n]);
-        let mut previous = one_minus_b * left_tail;
-        for (o, &v) in out.iter_mut().zip(x) {
-            previous = b * previous + one_minus_b * v;
-            *o = previous;
-        }
-        let mut next = one_minus_b * right_tail;
-        for (o, &v) in out.iter_mut().zip(x).rev() {
-            next = b * next + one_minus_b * v;
-            *o -= next;
-        }
+        with_scratch(n, |left| {
+            left.copy_from_slice(x);
+            self.recursion::<true>(left);
+            out.copy_from_slice(x);
+            self.recursion::<false>(out);
+            let (right_start, left_start) = self.mirrored_starts(out[n - 1], left[0]);
+            for (i, (o, l)) in out.iter_mut().zip(left.iter()).enumerate() {
+                let right_going = *o + self.powers[i + 1] * right_start;
+                let left_going = *l + self.powers[n - i] * left_start;
+                *o = right_going - left_going;
+            }
+        });
     }
 }
 
@@ -253,7 +307,7 @@ pub fn highpass(x: &[f64], lambda: f64, out: &mut [f64]) {
     let chain = Chain::new(lambda, x.len());
     Filter {
         kind: FilterKind::Highpass,
-        chains: (chain, chain),
+        chains: (chain.clone(), chain),
     }
     .apply(x, out);
 }
@@ -367,7 +421,7 @@ pub struct FilterSettings {
 }
 
 /// One filter with its chains built for one image length: what a turret runs every update.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Filter {
     kind: FilterKind,
     /// The chain of λ (λ1 for the bandpass), and λ2's for the bandpass.
@@ -383,7 +437,7 @@ impl Filter {
             ),
             _ => {
                 let chain = Chain::new(settings.lambda, len);
-                (chain, chain)
+                (chain.clone(), chain)
             }
         };
         Filter { kind, chains }
