@@ -163,8 +163,9 @@ impl Controller for Braitenberg {
 /// patch is.
 pub fn light_maxima(odd: &[u16], bits: u32, min_contrast: f64) -> Vec<f64> {
     let zero = ((1u32 << bits) - 1) as f64 / 2.0;
-    // Lobes as (sign, first index, last index).
-    let mut lobes: Vec<(i8, usize, usize)> = Vec::new();
+    let mut maxima = Vec::new();
+    // The lobe growing, as (sign, last index): when the next one starts, the pair is known.
+    let mut growing: Option<(i8, usize)> = None;
     for (i, &d) in odd.iter().enumerate() {
         let value = d as f64 - zero;
         let sign = if value <= -min_contrast {
@@ -172,21 +173,21 @@ pub fn light_maxima(odd: &[u16], bits: u32, min_contrast: f64) -> Vec<f64> {
         } else if value >= min_contrast {
             1
         } else {
-            0
-        };
-        if sign == 0 {
             continue;
-        }
-        match lobes.last_mut() {
-            Some((s, _, last)) if *s == sign && *last + 1 == i => *last = i,
-            _ => lobes.push((sign, i, i)),
+        };
+        match &mut growing {
+            Some((s, last)) if *s == sign && *last + 1 == i => *last = i,
+            _ => {
+                if let Some((-1, last)) = growing {
+                    if sign > 0 {
+                        maxima.push((last as f64 + 1.0 + i as f64) / 2.0);
+                    }
+                }
+                growing = Some((sign, i));
+            }
         }
     }
-    lobes
-        .windows(2)
-        .filter(|pair| pair[0].0 < 0 && pair[1].0 > 0)
-        .map(|pair| (pair[0].2 as f64 + 1.0 + pair[1].1 as f64) / 2.0)
-        .collect()
+    maxima
 }
 
 /// The paper's regatta controller.

@@ -552,6 +552,8 @@ impl<'c> Simulation<'c> {
         let rigs = &self.compiled.rig.robots;
         let statics = self.slab.obstacles.len();
         for _ in 0..3 {
+            // A pass that pushes nothing leaves the next one nothing new to find.
+            let mut pushed = false;
             for (index, robot) in self.robots.iter_mut().enumerate() {
                 let rig = &rigs[index];
                 let (floor, top) = (rig.floor_y, rig.floor_y + rig.body_height);
@@ -567,6 +569,7 @@ impl<'c> Simulation<'c> {
                         robot.pose.x = moved.x;
                         robot.pose.z = moved.y;
                         touched[index][k] = true;
+                        pushed = true;
                     } else if obstacle
                         .shape
                         .penetration(center, rig.body_radius + 1e-6)
@@ -594,8 +597,12 @@ impl<'c> Simulation<'c> {
                         self.robots[b].pose.z -= half.y;
                         touched[a][statics + b] = true;
                         touched[b][statics + a] = true;
+                        pushed = true;
                     }
                 }
+            }
+            if !pushed {
+                break;
             }
         }
     }
