@@ -105,7 +105,20 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
     );
     if peak > 0.0 && peak.is_finite() {
         let inverse_peak = 1.0 / peak;
-        let sum = y.iter().map(|&v| v * inverse_peak).sum::<f64>();
+        // Four partial sums: a chain of 150 dependent additions would dominate the stage.
+        let mut partial = [0.0f64; 4];
+        let mut chunks = y.chunks_exact(4);
+        for chunk in &mut chunks {
+            for (sum, &v) in partial.iter_mut().zip(chunk) {
+                *sum += v * inverse_peak;
+            }
+        }
+        let sum = chunks
+            .remainder()
+            .iter()
+            .fold((partial[0] + partial[1]) + (partial[2] + partial[3]), |s, &v| {
+                s + v * inverse_peak
+            });
         if !sum.is_nan() {
             return scale_by_mean(y, analog, inverse_peak, sum / n);
         }
