@@ -164,28 +164,20 @@ impl Controller for Braitenberg {
 pub fn light_maxima(odd: &[u16], bits: u32, min_contrast: f64) -> Vec<f64> {
     let zero = ((1u32 << bits) - 1) as f64 / 2.0;
     let mut maxima = Vec::new();
-    // The lobe growing, as (sign, last index): when the next one starts, the pair is known.
-    let mut growing: Option<(i8, usize)> = None;
+    // A positive lobe starts where the nearest lobe pixel before it is negative; that pixel
+    // ends the negative lobe. Branch-free but for the rare maximum: the signs are noisy.
+    let (mut last_sign, mut last_index) = (0i8, 0usize);
     for (i, &d) in odd.iter().enumerate() {
         let value = d as f64 - zero;
-        let sign = if value <= -min_contrast {
-            -1
-        } else if value >= min_contrast {
-            1
-        } else {
-            continue;
-        };
-        match &mut growing {
-            Some((s, last)) if *s == sign && *last + 1 == i => *last = i,
-            _ => {
-                if let Some((-1, last)) = growing {
-                    if sign > 0 {
-                        maxima.push((last as f64 + 1.0 + i as f64) / 2.0);
-                    }
-                }
-                growing = Some((sign, i));
-            }
+        let negative = value <= -min_contrast;
+        let positive = !negative & (value >= min_contrast);
+        let sign = positive as i8 - negative as i8;
+        if (sign == 1) & (last_sign == -1) {
+            maxima.push((last_index as f64 + 1.0 + i as f64) / 2.0);
         }
+        let lobe = sign != 0;
+        last_sign = if lobe { sign } else { last_sign };
+        last_index = if lobe { i } else { last_index };
     }
     maxima
 }
