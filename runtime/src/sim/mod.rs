@@ -167,6 +167,8 @@ struct StepScratch {
     lights: Vec<crate::render::WorldLight>,
     lights_move: bool,
     requests: Vec<VisionRequest>,
+    /// One robot's obstacles its IR sensors could see.
+    nearby: Vec<u32>,
     speeds: Vec<(f64, f64)>,
     touched: Vec<Vec<bool>>,
 }
@@ -362,6 +364,7 @@ impl<'c> Simulation<'c> {
             lights,
             lights_move,
             requests,
+            nearby,
             ..
         } = scratch;
         poses.poses.clear();
@@ -388,12 +391,23 @@ impl<'c> Simulation<'c> {
         requests.clear();
         for (index, robot) in self.robots.iter_mut().enumerate() {
             let rig = &compiled.rig.robots[index];
+            let mut nearby_found = false;
             for (s, sensor) in rig.distance_sensors.iter().enumerate().take(8) {
                 if due(&mut robot.ir_due[s], t, sensor.period) {
+                    if !nearby_found {
+                        sensors::nearby_obstacles(
+                            &self.slab,
+                            &placements[index],
+                            &rig.distance_sensors,
+                            nearby,
+                        );
+                        nearby_found = true;
+                    }
                     robot.updated.proximity = true;
                     robot.proximity[s] = sensors::proximity(
                         &self.slab,
-                        &placements,
+                        nearby,
+                        placements,
                         index,
                         &compiled.rig.robots,
                         sensor,

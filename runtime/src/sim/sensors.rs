@@ -46,9 +46,37 @@ pub fn lookup(table: &[[f64; 3]], x: f64) -> (f64, f64) {
     (last[1], last[2])
 }
 
-/// One proximity reading, 0…1023.
+/// The slab's obstacles that any of a robot's IR sensors could see: those within the
+/// farthest sensor's offset plus its range of the robot's centre (a superset of what each
+/// sensor's own test keeps, by the triangle inequality), into `nearby`.
+pub fn nearby_obstacles(
+    slab: &Slab,
+    placement: &Placement,
+    sensors: &[DistanceSensorRig],
+    nearby: &mut Vec<u32>,
+) {
+    nearby.clear();
+    let reach = sensors
+        .iter()
+        .map(|s| DVec2::new(s.position.x, s.position.z).length() + s.range)
+        .fold(0.0f64, f64::max);
+    let reach = reach * (1.0 + 1e-9) + 1e-9;
+    let center = DVec2::new(placement.x, placement.z);
+    nearby.extend(
+        slab.obstacles
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.shape.distance(center) <= reach)
+            .map(|(index, _)| index as u32),
+    );
+}
+
+/// One proximity reading, 0…1023; `nearby` lists the obstacles worth testing (see
+/// [`nearby_obstacles`]).
+#[allow(clippy::too_many_arguments)]
 pub fn proximity(
     slab: &Slab,
+    nearby: &[u32],
     placements: &[Placement],
     robot: usize,
     rigs: &[RobotRig],
@@ -67,16 +95,17 @@ pub fn proximity(
     let mut near = [0u32; 32];
     let mut count = 0;
     let mut overflow = Vec::new();
-    for (index, obstacle) in slab.obstacles.iter().enumerate() {
+    for &index in nearby {
+        let obstacle = &slab.obstacles[index as usize];
         if height < obstacle.y0 || height > obstacle.y1 {
             continue;
         }
         if obstacle.shape.distance(origin2) <= reach {
             if count < near.len() {
-                near[count] = index as u32;
+                near[count] = index;
                 count += 1;
             } else {
-                overflow.push(index as u32);
+                overflow.push(index);
             }
         }
     }
@@ -140,7 +169,7 @@ pub fn proximity(
     let mean = value_sum / weight_sum;
     let spread = noise_sum / weight_sum;
     let reading = mean + spread * stream.gaussian();
-    libm::round(reading).clamp(0.0, 1023.0) as u16
+    to_reading(reading)
 }
 
 /// One ambient light reading, 0…1023.
@@ -177,7 +206,16 @@ pub fn ambient(
     }
     let (value, noise) = lookup(&sensor.lookup, irradiance);
     let reading = value * (1.0 + noise * stream.gaussian());
-    libm::round(reading).clamp(0.0, 1023.0) as u16
+    to_reading(reading)
+}
+
+/// `round(x)` clamped to 0…1023 (NaN reads 0); halves round up, as `round` does for the
+/// non-negative values that remain.
+#[inline]
+fn to_reading(x: f64) -> u16 {
+    let clamped = x.clamp(0.0, 1023.0);
+    let whole = clamped as u16;
+    whole + (clamped - whole as f64 >= 0.5) as u16
 }
 
 /// Whether an obstacle at the sensor's height stands between the sensor and a light.
