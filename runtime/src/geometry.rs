@@ -331,17 +331,33 @@ pub fn rect_slabs(
     half_u: f64,
     half_v: f64,
 ) -> Option<(f64, f64, (usize, f64))> {
+    rect_slabs_inverse(pu, pv, (du, 1.0 / du), (dv, 1.0 / dv), half_u, half_v)
+}
+
+/// [`rect_slabs`] with each direction component given with its reciprocal, for callers that
+/// share reciprocals between rectangles of the same axes.
+#[inline]
+pub fn rect_slabs_inverse(
+    pu: f64,
+    pv: f64,
+    (du, inverse_u): (f64, f64),
+    (dv, inverse_v): (f64, f64),
+    half_u: f64,
+    half_v: f64,
+) -> Option<(f64, f64, (usize, f64))> {
     let mut t_in = f64::NEG_INFINITY;
     let mut t_out = f64::INFINITY;
     let mut face = (0, 0.0);
-    for (axis, (p, d, h)) in [(pu, du, half_u), (pv, dv, half_v)].into_iter().enumerate() {
+    for (axis, (p, d, inverse, h)) in [(pu, du, inverse_u, half_u), (pv, dv, inverse_v, half_v)]
+        .into_iter()
+        .enumerate()
+    {
         if d.abs() < 1e-300 {
             if p.abs() > h {
                 return None;
             }
             continue;
         }
-        let inverse = 1.0 / d;
         let (a, b) = ((-h - p) * inverse, (h - p) * inverse);
         let (near, far) = if a < b { (a, b) } else { (b, a) };
         if near > t_in {

@@ -726,9 +726,10 @@ impl<'g> ColumnScene<'g> {
         facing: &[u16],
         segments: &mut Segments,
     ) {
+        let inverse = DVec2::ONE / direction;
         for &index in facing {
             let object = &look.objects[index as usize];
-            let Some((t_in, t_out, normal)) = object.relative.cross(direction) else {
+            let Some((t_in, t_out, normal)) = object.relative.cross(direction, inverse) else {
                 continue;
             };
             let id = index;
@@ -1073,9 +1074,10 @@ enum Relative {
 }
 
 impl Relative {
-    /// Entry and exit distances of the horizontal ray, with the entry normal.
+    /// Entry and exit distances of the horizontal ray, with the entry normal; `inverse` holds
+    /// the reciprocals of `direction`'s components.
     #[inline]
-    fn cross(&self, direction: DVec2) -> Option<(f64, f64, DVec2)> {
+    fn cross(&self, direction: DVec2, inverse: DVec2) -> Option<(f64, f64, DVec2)> {
         match *self {
             Relative::Circle { oc, c, radius, .. } => {
                 let b = oc.dot(direction);
@@ -1098,14 +1100,26 @@ impl Relative {
                 half_u,
                 half_v,
             } => {
-                let (t_in, t_out, (axis, sign)) = crate::geometry::rect_slabs(
-                    pu,
-                    pv,
-                    direction.dot(u),
-                    direction.dot(v),
-                    half_u,
-                    half_v,
-                )?;
+                let (t_in, t_out, (axis, sign)) = if u == DVec2::X && v == DVec2::Y {
+                    // Axis-aligned (the usual arena): the column's shared reciprocals.
+                    crate::geometry::rect_slabs_inverse(
+                        pu,
+                        pv,
+                        (direction.x, inverse.x),
+                        (direction.y, inverse.y),
+                        half_u,
+                        half_v,
+                    )?
+                } else {
+                    crate::geometry::rect_slabs(
+                        pu,
+                        pv,
+                        direction.dot(u),
+                        direction.dot(v),
+                        half_u,
+                        half_v,
+                    )?
+                };
                 if t_out <= 0.0 {
                     return None;
                 }
