@@ -113,12 +113,10 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
                 *sum += v * inverse_peak;
             }
         }
-        let sum = chunks
-            .remainder()
-            .iter()
-            .fold((partial[0] + partial[1]) + (partial[2] + partial[3]), |s, &v| {
-                s + v * inverse_peak
-            });
+        let sum = chunks.remainder().iter().fold(
+            (partial[0] + partial[1]) + (partial[2] + partial[3]),
+            |s, &v| s + v * inverse_peak,
+        );
         if !sum.is_nan() {
             return scale_by_mean(y, analog, inverse_peak, sum / n);
         }

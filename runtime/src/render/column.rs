@@ -137,10 +137,13 @@ pub struct ColumnScene<'g> {
     /// Primitives attached to robots.
     robot_parts: Vec<usize>,
     /// Lights and the static objects' shading, when no light moves (shared by every frame).
-    cached: Option<(Arc<[WorldLight]>, Arc<[Option<FastShade>]>)>,
+    cached: Option<StaticShading>,
     /// Buffers reused from update to update (a scene renders one view at a time).
     buffers: std::cell::RefCell<RegionBuffers>,
 }
+
+/// The lights and the static objects' fast shading of a scene whose lights do not move.
+type StaticShading = (Arc<[WorldLight]>, Arc<[Option<FastShade>]>);
 
 /// The region sampler's buffers.
 #[derive(Default)]
