@@ -859,6 +859,20 @@ impl<'g> ColumnScene<'g> {
         segments.len = 0;
         self.collect_segments(look, direction, facing, segments);
         free.reset(-tan_half, tan_half);
+        // The band's edges and the horizon are where most pieces start or end: their angles
+        // are known (band_atan is odd, band = 2·band_atan(T)).
+        let half_band = 0.5 * band;
+        let angle = |x: f64| {
+            if x == tan_half {
+                half_band
+            } else if x == -tan_half {
+                -half_band
+            } else if x == 0.0 {
+                0.0
+            } else {
+                band_atan(x)
+            }
+        };
         let mut sum = 0.0;
         for segment in segments.as_slice() {
             if free.is_empty() {
@@ -871,20 +885,19 @@ impl<'g> ColumnScene<'g> {
             let mut covered = 0.0;
             let mut middle = 0.0;
             free.take(a, b, |x0, x1| {
-                let weight = band_atan(x1) - band_atan(x0);
+                let weight = angle(x1) - angle(x0);
                 middle += 0.5 * (x0 + x1) * weight;
                 covered += weight;
             });
             if covered > 0.0 {
                 // One radiance per visible part of a face, at its weighted middle.
-                sum +=
-                    self.segment_luminance(frame, segment, look.eye, direction, middle / covered)
-                        * covered;
+                sum += self.segment_luminance(frame, segment, look.eye, direction, middle, covered)
+                    * covered;
             }
         }
         for &(x0, x1) in free.as_slice() {
             // Sky above the horizon, ground (if any) below.
-            let (a0, a1) = (band_atan(x0), band_atan(x1));
+            let (a0, a1) = (angle(x0), angle(x1));
             if x0 >= 0.0 {
                 sum += sky * (a1 - a0);
             } else if x1 <= 0.0 {
@@ -896,14 +909,16 @@ impl<'g> ColumnScene<'g> {
         sum / band
     }
 
-    /// Luminance of a segment's face at tan-elevation `t` (the fast path skips RGB).
+    /// Luminance of a segment's face at tan-elevation `middle / covered` (the fast path skips
+    /// RGB, and the point: its radiance depends on the normal alone).
     fn segment_luminance(
         &self,
         frame: &ColumnFrame,
         segment: &Segment,
         eye: DVec3,
         direction: DVec2,
-        t: f64,
+        middle: f64,
+        covered: f64,
     ) -> f64 {
         if let Some(fast) = frame.fast_shade(segment.object as usize) {
             return match segment.face {
@@ -912,7 +927,7 @@ impl<'g> ColumnScene<'g> {
                 Face::Cap { up: false, .. } => fast.luminance(DVec3::NEG_Y),
             };
         }
-        luminance(self.shade_segment(frame, segment, eye, direction, t))
+        luminance(self.shade_segment(frame, segment, eye, direction, middle / covered))
     }
 
     /// Radiance of a segment's face at tan-elevation `t`.
