@@ -733,6 +733,32 @@ mod tests {
     }
 
     #[test]
+    fn footprint_distance_is_zero_inside_and_euclidean_outside() {
+        let circle = Footprint::Circle {
+            center: DVec2::new(1.0, 0.0),
+            radius: 0.5,
+        };
+        assert_eq!(circle.distance(DVec2::new(1.2, 0.0)), 0.0);
+        assert!((circle.distance(DVec2::new(3.0, 0.0)) - 1.5).abs() < 1e-15);
+        let (c, s) = (0.6, 0.8);
+        let rect = Footprint::Rect {
+            center: DVec2::ZERO,
+            u: DVec2::new(c, s),
+            v: DVec2::new(-s, c),
+            half_u: 1.0,
+            half_v: 0.5,
+        };
+        assert_eq!(rect.distance(DVec2::new(0.3, 0.1)), 0.0);
+        // 2 beyond the u face and 1 beyond the v face: the corner is √5 away.
+        let point = DVec2::new(c, s) * 3.0 + DVec2::new(-s, c) * 1.5;
+        assert!((rect.distance(point) - 5f64.sqrt()).abs() < 1e-12);
+        // A ray never hits nearer than the distance (what IR culling relies on).
+        let from = DVec2::new(-3.0, 0.2);
+        let hit = rect.ray(from, DVec2::X).unwrap();
+        assert!(hit >= rect.distance(from));
+    }
+
+    #[test]
     fn primitives_are_hit_exactly() {
         let hit = ray_box(
             &ray([-5.0, 0.0, 0.0], [1.0, 0.0, 0.0]),

@@ -242,12 +242,20 @@ impl Chain {
         }
     }
 
-    /// The recursions from each end over the mirrored continuation of `x` (period 2n), as
-    /// they leave the image: `c·Σ_{k≥0} a^k s_k` for `s` = x[0], x[1], …, x[n−1], x[n−1], …
-    /// (the right-going pass's start) and its mirror image (the left-going pass's). With
-    /// `L = Σ a^j x[j]` and `R = Σ a^(n−1−j) x[j]` they are `c·(L + aⁿ·R) / (1 − a²ⁿ)` and
-    /// `c·(R + aⁿ·L) / (1 − a²ⁿ)`; the zero-state passes end on `c·R` and `c·L`.
-    fn mirrored_starts(&self, c_r: f64, c_l: f64) -> (f64, f64) {
+    /// Runs both zero-state passes over `x` (right-going into `right`, left-going into
+    /// `left`) and returns where the true passes start: the recursions from each end over
+    /// the mirrored continuation of `x` (period 2n) as they leave the image, `c·Σ_{k≥0} a^k
+    /// s_k` for `s` = x[0], x[1], …, x[n−1], x[n−1], … (right-going) and its mirror image
+    /// (left-going). With `L = Σ a^j x[j]` and `R = Σ a^(n−1−j) x[j]` they are
+    /// `c·(L + aⁿ·R) / (1 − a²ⁿ)` and `c·(R + aⁿ·L) / (1 − a²ⁿ)`; the zero-state passes end
+    /// on `c·R` and `c·L`.
+    fn zero_state_passes(&self, x: &[f64], right: &mut [f64], left: &mut [f64]) -> (f64, f64) {
+        let n = x.len();
+        left.copy_from_slice(x);
+        self.recursion::<true>(left);
+        right.copy_from_slice(x);
+        self.recursion::<false>(right);
+        let (c_r, c_l) = (right[n - 1], left[0]);
         (
             (c_l + self.a_n * c_r) / self.period,
             (c_r + self.a_n * c_l) / self.period,
@@ -264,13 +272,8 @@ impl Chain {
         }
         debug_assert_eq!(n, self.len, "a chain filters images of its own length");
         let (x, out) = (&x[..n], &mut out[..n]);
-        // c·L from a left-going zero-state pass over a copy, c·R from the right-going one.
         with_scratch(n, |left| {
-            left.copy_from_slice(x);
-            self.recursion::<true>(left);
-            out.copy_from_slice(x);
-            self.recursion::<false>(out);
-            let (start, _) = self.mirrored_starts(out[n - 1], left[0]);
+            let (start, _) = self.zero_state_passes(x, out, left);
             for (i, o) in out.iter_mut().enumerate() {
                 *o += self.powers[i + 1] * start;
             }
@@ -294,11 +297,7 @@ impl Chain {
         debug_assert_eq!(n, self.len, "a chain filters images of its own length");
         let (x, out) = (&x[..n], &mut out[..n]);
         with_scratch(n, |left| {
-            left.copy_from_slice(x);
-            self.recursion::<true>(left);
-            out.copy_from_slice(x);
-            self.recursion::<false>(out);
-            let (right_start, left_start) = self.mirrored_starts(out[n - 1], left[0]);
+            let (right_start, left_start) = self.zero_state_passes(x, out, left);
             for (i, (o, l)) in out.iter_mut().zip(left.iter()).enumerate() {
                 let right_going = *o + self.powers[i + 1] * right_start;
                 let left_going = *l + self.powers[n - i] * left_start;
@@ -536,6 +535,19 @@ mod tests {
         assert!((pixel_azimuth(0) - 119.2f64.to_radians()).abs() < 1e-12);
         assert!(pixel_azimuth(74) > 0.0 && pixel_azimuth(75) < 0.0);
         assert!((pixel_azimuth(74) + pixel_azimuth(75)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn non_finite_photocurrents_read_zero() {
+        let mut analog = [0.0; 4];
+        assert!(normalize(&[2.0, f64::NAN, 6.0, f64::INFINITY], &mut analog));
+        assert_eq!(analog, [1.0, 0.0, 3.0, 0.0], "the mean of 2, 0, 6, 0 is 2");
+        assert!(!normalize(
+            &[f64::INFINITY, f64::NAN, 0.0, 0.0],
+            &mut analog
+        ));
+        assert_eq!(analog, [0.0; 4]);
+        assert!(!normalize(&[0.0; 4], &mut analog));
     }
 
     #[test]

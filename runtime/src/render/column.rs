@@ -693,9 +693,11 @@ impl<'g> ColumnScene<'g> {
         out: &mut [[f64; 3]],
     ) {
         let mut segments = Segments::new();
-        let mut facing = Vec::new();
-        look.facing(alpha, &mut facing);
-        self.collect_segments(look, direction, &facing, &mut segments);
+        {
+            let mut buffers = self.buffers.borrow_mut();
+            look.facing(alpha, &mut buffers.facing);
+            self.collect_segments(look, direction, &buffers.facing, &mut segments);
+        }
         for (t, rgb) in tans.iter().zip(out.iter_mut()) {
             *rgb = match segments
                 .as_slice()

@@ -241,6 +241,17 @@ mod tests {
     use super::*;
 
     #[test]
+    fn readings_round_like_libm_and_clamp() {
+        for x in [
+            -3.0, -0.5, -0.2, 0.0, 0.49, 0.5, 1.5, 2.5, 511.499, 1022.5, 1023.4, 5e3,
+        ] {
+            let expected = libm::round(x).clamp(0.0, 1023.0) as u16;
+            assert_eq!(to_reading(x), expected, "{x}");
+        }
+        assert_eq!(to_reading(f64::NAN), 0);
+    }
+
+    #[test]
     fn lookup_interpolates_and_clamps() {
         let table = [[0.0, 1023.0, 0.0], [0.02, 1023.0, 0.01], [0.04, 0.0, 0.0]];
         assert_eq!(lookup(&table, -1.0).0, 1023.0);
