@@ -162,24 +162,64 @@ impl Controller for Braitenberg {
 /// midway between them (in pixel-edge units from the region's first pixel), however wide the
 /// patch is.
 pub fn light_maxima(odd: &[u16], bits: u32, min_contrast: f64) -> Vec<f64> {
-    let zero = ((1u32 << bits) - 1) as f64 / 2.0;
     let mut maxima = Vec::new();
-    // A positive lobe starts where the nearest lobe pixel before it is negative; that pixel
-    // ends the negative lobe. Branch-free but for the rare maximum: the signs are noisy.
-    let (mut last_sign, mut last_index) = (0i8, 0usize);
-    for (i, &d) in odd.iter().enumerate() {
-        let value = d as f64 - zero;
-        let negative = value <= -min_contrast;
-        let positive = !negative & (value >= min_contrast);
-        let sign = positive as i8 - negative as i8;
-        if (sign == 1) & (last_sign == -1) {
-            maxima.push((last_index as f64 + 1.0 + i as f64) / 2.0);
+    for_each_light_maximum(odd, bits, min_contrast, |p| maxima.push(p));
+    maxima
+}
+
+/// The maximum of [`light_maxima`] nearest `centre` (the first of equals), without listing them.
+pub fn nearest_light_maximum(
+    odd: &[u16],
+    bits: u32,
+    min_contrast: f64,
+    centre: f64,
+) -> Option<f64> {
+    let mut nearest: Option<f64> = None;
+    for_each_light_maximum(odd, bits, min_contrast, |p| {
+        let offset = p - centre;
+        if nearest.is_none_or(|n| offset.abs() < n.abs()) {
+            nearest = Some(offset);
         }
-        let lobe = sign != 0;
-        last_sign = if lobe { sign } else { last_sign };
+    });
+    nearest.map(|offset| offset + centre)
+}
+
+/// Calls `visit` on each maximum of [`light_maxima`], in pixel order.
+fn for_each_light_maximum(odd: &[u16], bits: u32, min_contrast: f64, mut visit: impl FnMut(f64)) {
+    let zero = ((1u32 << bits) - 1) as f64 / 2.0;
+    let negative = |d: u32| d as f64 - zero <= -min_contrast;
+    let positive = |d: u32| !negative(d) && d as f64 - zero >= min_contrast;
+    // Both tests are monotone in the digital value: negative on a prefix of 0…65535, positive
+    // on a suffix. Found once with the float tests themselves, they become integer compares.
+    let negative_below = partition_point_u16(negative);
+    let positive_from = partition_point_u16(|d| !positive(d));
+    // A positive lobe starts a maximum where the nearest lobe pixel before it is negative;
+    // that pixel ends the negative lobe. Branch-free but for the rare maximum.
+    let (mut last_negative, mut last_index) = (false, 0usize);
+    for (i, &d) in odd.iter().enumerate() {
+        let negative = (d as u32) < negative_below;
+        let positive = (d as u32) >= positive_from;
+        if positive & last_negative {
+            visit((last_index + 1 + i) as f64 / 2.0);
+        }
+        let lobe = negative | positive;
+        last_negative = if lobe { negative } else { last_negative };
         last_index = if lobe { i } else { last_index };
     }
-    maxima
+}
+
+/// The number of values in 0…65535 that satisfy `holds`, which holds on a prefix of them.
+fn partition_point_u16(holds: impl Fn(u32) -> bool) -> u32 {
+    let (mut lo, mut hi) = (0u32, 1u32 << 16);
+    while lo < hi {
+        let middle = (lo + hi) / 2;
+        if holds(middle) {
+            lo = middle + 1;
+        } else {
+            hi = middle;
+        }
+    }
+    lo
 }
 
 /// The paper's regatta controller.
@@ -203,11 +243,14 @@ impl Controller for Regatta {
         let (first, _) = turret.region_of_interest()?;
         let bits = turret.bits()?;
         let centre = crate::retina::PIXELS as f64 / 2.0;
-        let nearest = light_maxima(&odd, bits, self.parameters.min_contrast)
-            .into_iter()
-            .map(|p| p + first as f64 - centre)
-            .min_by(|a, b| a.abs().total_cmp(&b.abs()));
-        if let Some(offset) = nearest {
+        let nearest = nearest_light_maximum(
+            &odd,
+            bits,
+            self.parameters.min_contrast,
+            centre - first as f64,
+        );
+        if let Some(maximum) = nearest {
+            let offset = maximum + first as f64 - centre;
             // Right of centre (positive) turns right: left wheel faster.
             left += self.parameters.light_gain * offset;
             right -= self.parameters.light_gain * offset;
@@ -271,5 +314,56 @@ mod tests {
         // Flicker between 31 and 32 is not a light.
         let flicker: Vec<u16> = (0..150).map(|i| if i % 2 == 0 { 31 } else { 32 }).collect();
         assert!(light_maxima(&flicker, 6, 1.5).is_empty());
+    }
+
+    /// The float tests of the lobes, pixel by pixel: what the integer thresholds replace.
+    fn maxima_by_float_tests(odd: &[u16], bits: u32, min_contrast: f64) -> Vec<f64> {
+        let zero = ((1u32 << bits) - 1) as f64 / 2.0;
+        let mut maxima = Vec::new();
+        let mut last: Option<(bool, usize)> = None;
+        for (i, &d) in odd.iter().enumerate() {
+            let value = d as f64 - zero;
+            let negative = value <= -min_contrast;
+            let positive = !negative && value >= min_contrast;
+            if positive && matches!(last, Some((true, _))) {
+                let (_, j) = last.unwrap();
+                maxima.push((j as f64 + 1.0 + i as f64) / 2.0);
+            }
+            if negative || positive {
+                last = Some((negative, i));
+            }
+        }
+        maxima
+    }
+
+    #[test]
+    fn integer_lobe_thresholds_agree_with_the_float_tests() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        for bits in [1, 2, 6, 8, 12, 16] {
+            for min_contrast in [-2.0, 0.0, 0.5, 1.0, 1.5, 2.25, 7.0, 1e9, f64::NAN] {
+                for _ in 0..20 {
+                    let top = (1u64 << bits) - 1;
+                    let odd: Vec<u16> = (0..150)
+                        .map(|_| {
+                            state ^= state << 13;
+                            state ^= state >> 7;
+                            state ^= state << 17;
+                            (state % (top + 1)) as u16
+                        })
+                        .collect();
+                    let expected = maxima_by_float_tests(&odd, bits, min_contrast);
+                    assert_eq!(light_maxima(&odd, bits, min_contrast), expected);
+                    let centre = 61.5;
+                    let nearest = expected
+                        .iter()
+                        .copied()
+                        .min_by(|a, b| (a - centre).abs().total_cmp(&(b - centre).abs()));
+                    assert_eq!(
+                        nearest_light_maximum(&odd, bits, min_contrast, centre),
+                        nearest
+                    );
+                }
+            }
+        }
     }
 }
