@@ -200,9 +200,11 @@ impl Raster<'_> {
             return;
         }
         self.out[last - 1] += partial(last - 1);
-        for (i, out) in self.out[first + 1..last - 1].iter_mut().enumerate() {
-            let center = (first + 1 + i) as f64 + 0.5;
+        // Centres counted in f64: exact for integers, and no integer conversion per pixel.
+        let mut center = (first + 1) as f64 + 0.5;
+        for out in &mut self.out[first + 1..last - 1] {
             *out += value + slope_u * (u1 - center);
+            center += 1.0;
         }
     }
 }
@@ -442,10 +444,16 @@ impl<'g> ColumnScene<'g> {
     /// relative to the eye, computed once per update.
     pub fn look(&self, frame: &ColumnFrame, eye: DVec3, heading: f64) -> Look {
         let eye2 = DVec2::new(eye.x, eye.z);
-        let mut objects = Vec::with_capacity(frame.objects.len());
+        let mut objects: Vec<EyeObject> = Vec::with_capacity(frame.objects.len());
         let mut breaks = Vec::with_capacity(frame.objects.len() * 2);
+        let mut previous: Option<(&Upright, Option<(f64, f64)>)> = None;
         for object in &frame.objects {
-            let interval = azimuth_interval(object, eye2, heading);
+            // A lamp on its buoy has the buoy's footprint: its interval is the buoy's.
+            let interval = match previous {
+                Some((before, interval)) if before.footprint == object.footprint => interval,
+                _ => azimuth_interval(object, eye2, heading),
+            };
+            previous = Some((object, interval));
             if let Some((lo, hi)) = interval {
                 // An interval may reach past ±π; its edges are where a column of (−π, π] meets them.
                 breaks.push(wrap(lo));
@@ -490,7 +498,7 @@ impl<'g> ColumnScene<'g> {
                 bottom: object.bottom,
             });
         }
-        breaks.sort_by(f64::total_cmp);
+        sort_small(&mut breaks);
         // A lamp on its buoy shares the buoy's silhouette: one edge is enough.
         breaks.dedup();
         Look {
@@ -700,7 +708,6 @@ impl<'g> ColumnScene<'g> {
         }
         for (t, rgb) in tans.iter().zip(out.iter_mut()) {
             *rgb = match segments
-                .as_slice()
                 .iter()
                 .find(|s| s.t0 <= *t && *t <= s.t1)
             {
@@ -876,7 +883,7 @@ impl<'g> ColumnScene<'g> {
             }
         };
         let mut sum = 0.0;
-        for segment in segments.as_slice() {
+        for segment in segments.iter() {
             if free.is_empty() {
                 break;
             }
@@ -977,6 +984,19 @@ impl<'g> ColumnScene<'g> {
         let material = &self.graph.materials[self.graph.primitives[object.primitive].material];
         let mut none = |_: DVec3, _: &LightKind| false;
         shade(material, None, point, normal, eye, &frame.lights, &mut none)
+    }
+}
+
+/// Sorts a few finite numbers ascending (insertion sort: the edges of a dozen objects).
+fn sort_small(values: &mut [f64]) {
+    for i in 1..values.len() {
+        let value = values[i];
+        let mut j = i;
+        while j > 0 && values[j - 1] > value {
+            values[j] = values[j - 1];
+            j -= 1;
+        }
+        values[j] = value;
     }
 }
 
@@ -1229,9 +1249,12 @@ impl Look {
 /// likely hidden).
 const MAX_SEGMENTS: usize = 32;
 
-/// A column's segments, kept sorted by depth on insertion, on the stack.
+/// A column's segments on the stack, with their order by depth kept on insertion (indices
+/// move, not segments).
 struct Segments {
     items: [Segment; MAX_SEGMENTS],
+    /// Indices into `items`, front to back.
+    order: [u8; MAX_SEGMENTS],
     len: usize,
 }
 
@@ -1245,6 +1268,7 @@ impl Segments {
                 object: 0,
                 face: Face::Cap { y: 0.0, up: true },
             }; MAX_SEGMENTS],
+            order: [0; MAX_SEGMENTS],
             len: 0,
         }
     }
@@ -1252,24 +1276,34 @@ impl Segments {
     #[inline]
     fn insert(&mut self, segment: Segment) {
         let mut i = self.len;
-        while i > 0
-            && (self.items[i - 1].depth > segment.depth
-                || (self.items[i - 1].depth == segment.depth
-                    && self.items[i - 1].object > segment.object))
-        {
+        while i > 0 && {
+            let before = &self.items[self.order[i - 1] as usize];
+            before.depth > segment.depth
+                || (before.depth == segment.depth && before.object > segment.object)
+        } {
             i -= 1;
         }
         if i >= MAX_SEGMENTS {
             return;
         }
+        // When full, the farthest segment's slot takes the new one.
+        let slot = if self.len < MAX_SEGMENTS {
+            self.len
+        } else {
+            self.order[MAX_SEGMENTS - 1] as usize
+        };
         let end = self.len.min(MAX_SEGMENTS - 1);
-        self.items.copy_within(i..end, i + 1);
-        self.items[i] = segment;
+        self.order.copy_within(i..end, i + 1);
+        self.order[i] = slot as u8;
+        self.items[slot] = segment;
         self.len = (self.len + 1).min(MAX_SEGMENTS);
     }
 
-    fn as_slice(&self) -> &[Segment] {
-        &self.items[..self.len]
+    /// The segments front to back.
+    fn iter(&self) -> impl Iterator<Item = &Segment> {
+        self.order[..self.len]
+            .iter()
+            .map(|&slot| &self.items[slot as usize])
     }
 }
 
