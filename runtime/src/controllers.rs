@@ -109,6 +109,7 @@ pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, Control
         "regatta" => Ok(Box::new(Regatta {
             parameters: Parameters::parse(name, args)?,
             enabled: false,
+            odd: Vec::new(),
         })),
         other => Err(ControllerError::Unknown(other.to_owned())),
     }
@@ -226,6 +227,8 @@ fn partition_point_u16(holds: impl Fn(u32) -> bool) -> u32 {
 pub struct Regatta {
     pub parameters: Parameters,
     enabled: bool,
+    /// The odd filter's last reading, its buffer reused.
+    odd: Vec<u16>,
 }
 
 impl Controller for Regatta {
@@ -239,12 +242,12 @@ impl Controller for Regatta {
             turret.enable_filter(FilterKind::Odd)?;
             self.enabled = true;
         }
-        let odd = turret.read(FilterKind::Odd)?;
+        turret.read_into(FilterKind::Odd, &mut self.odd)?;
         let (first, _) = turret.region_of_interest()?;
         let bits = turret.bits()?;
         let centre = crate::retina::PIXELS as f64 / 2.0;
         let nearest = nearest_light_maximum(
-            &odd,
+            &self.odd,
             bits,
             self.parameters.min_contrast,
             centre - first as f64,

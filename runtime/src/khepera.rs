@@ -62,6 +62,11 @@ pub trait PanoramicTurret {
     fn disable_filter(&mut self, filter: FilterKind) -> Result<(), KheperaError>;
     /// One filter's converted output over the region of interest; an error if not enabled.
     fn read(&mut self, filter: FilterKind) -> Result<Vec<u16>, KheperaError>;
+    /// [`PanoramicTurret::read`] into `out`, which a robot may fill without allocating.
+    fn read_into(&mut self, filter: FilterKind, out: &mut Vec<u16>) -> Result<(), KheperaError> {
+        *out = self.read(filter)?;
+        Ok(())
+    }
     /// Sets the space constant λ (pixels) of the lowpass, highpass and odd networks; the API's
     /// spatial cutoff is 1/λ.
     fn set_lambda(&mut self, lambda: f64) -> Result<(), KheperaError>;

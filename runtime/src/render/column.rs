@@ -131,7 +131,8 @@ impl FastShade {
 /// The upright objects of a graph, with robot parts placed per frame.
 pub struct ColumnScene<'g> {
     graph: &'g RenderGraph,
-    statics: Vec<Upright>,
+    /// The static objects, shared by every frame.
+    statics: Arc<[Upright]>,
     /// Whether each primitive is in the plan's visible set.
     visible: Vec<bool>,
     /// Primitives attached to robots.
@@ -140,6 +141,8 @@ pub struct ColumnScene<'g> {
     cached: Option<StaticShading>,
     /// Buffers reused from update to update (a scene renders one view at a time).
     buffers: std::cell::RefCell<RegionBuffers>,
+    /// The last update's eye, its buffers reused by the next.
+    spare_look: std::cell::Cell<Option<Look>>,
 }
 
 /// The lights and the static objects' fast shading of a scene whose lights do not move.
@@ -231,7 +234,9 @@ fn fast_shades(
 
 /// One frame for one viewer.
 pub struct ColumnFrame {
-    objects: Vec<Upright>,
+    /// The scene's static objects, then the robot parts placed for this frame.
+    statics: Arc<[Upright]>,
+    parts: Vec<Upright>,
     lights: Arc<[WorldLight]>,
     /// Per object, when its radiance depends on the normal alone (directional lights only, no
     /// specular, no shadows): that dependence, precomputed. The first objects' come from
@@ -241,6 +246,19 @@ pub struct ColumnFrame {
 }
 
 impl ColumnFrame {
+    /// Object `index`: static objects first, then robot parts.
+    #[inline]
+    fn object(&self, index: usize) -> &Upright {
+        match self.statics.get(index) {
+            Some(object) => object,
+            None => &self.parts[index - self.statics.len()],
+        }
+    }
+
+    fn objects(&self) -> impl Iterator<Item = &Upright> {
+        self.statics.iter().chain(&self.parts)
+    }
+
     #[inline]
     fn fast_shade(&self, object: usize) -> Option<&FastShade> {
         match self.shared.get(object) {
@@ -359,7 +377,7 @@ impl Strip {
 
 impl<'g> ColumnScene<'g> {
     pub fn new(graph: &'g RenderGraph, plan: &Plan) -> ColumnScene<'g> {
-        let statics: Vec<Upright> = plan
+        let statics: Arc<[Upright]> = plan
             .visible
             .iter()
             .filter(|&&p| graph.primitives[p].owner == Owner::Static)
@@ -389,12 +407,13 @@ impl<'g> ColumnScene<'g> {
             robot_parts,
             cached,
             buffers: Default::default(),
+            spare_look: Default::default(),
         }
     }
 
     /// Places other robots' visible parts and the viewer's own visible parts.
     pub fn prepare(&self, plan: &Plan, poses: &Poses, viewer: Option<usize>) -> ColumnFrame {
-        let mut objects = self.statics.clone();
+        let mut parts = Vec::new();
         for &index in &self.robot_parts {
             let primitive = &self.graph.primitives[index];
             let Owner::Robot(robot) = primitive.owner else {
@@ -413,15 +432,16 @@ impl<'g> ColumnScene<'g> {
             if wanted {
                 let frame = poses.frame(robot).then(&primitive.frame);
                 if let Some(upright) = upright_of(self.graph, index, &frame) {
-                    objects.push(upright);
+                    parts.push(upright);
                 }
             }
         }
         match &self.cached {
             Some((lights, static_flat)) => {
-                let flat = fast_shades(self.graph, &objects[self.statics.len()..], lights);
+                let flat = fast_shades(self.graph, &parts, lights);
                 ColumnFrame {
-                    objects,
+                    statics: self.statics.clone(),
+                    parts,
                     lights: lights.clone(),
                     shared: static_flat.clone(),
                     flat,
@@ -429,9 +449,11 @@ impl<'g> ColumnScene<'g> {
             }
             None => {
                 let lights = world_lights(self.graph, plan, poses);
-                let flat = fast_shades(self.graph, &objects, &lights);
+                let mut flat = fast_shades(self.graph, &self.statics, &lights);
+                flat.extend(fast_shades(self.graph, &parts, &lights));
                 ColumnFrame {
-                    objects,
+                    statics: self.statics.clone(),
+                    parts,
                     lights: Arc::from(lights),
                     shared: Arc::from([]),
                     flat,
@@ -443,11 +465,21 @@ impl<'g> ColumnScene<'g> {
     /// What depends on the eye alone: each object's azimuth interval and its footprint
     /// relative to the eye, computed once per update.
     pub fn look(&self, frame: &ColumnFrame, eye: DVec3, heading: f64) -> Look {
+        let mut look = Look::default();
+        self.look_into(frame, eye, heading, &mut look);
+        look
+    }
+
+    /// [`ColumnScene::look`] into `look`, reusing its buffers.
+    fn look_into(&self, frame: &ColumnFrame, eye: DVec3, heading: f64, look: &mut Look) {
         let eye2 = DVec2::new(eye.x, eye.z);
-        let mut objects: Vec<EyeObject> = Vec::with_capacity(frame.objects.len());
-        let mut breaks = Vec::with_capacity(frame.objects.len() * 2);
+        let Look {
+            objects, breaks, ..
+        } = look;
+        objects.clear();
+        breaks.clear();
         let mut previous: Option<(&Upright, Option<(f64, f64)>)> = None;
-        for object in &frame.objects {
+        for object in frame.objects() {
             // A lamp on its buoy has the buoy's footprint: its interval is the buoy's.
             let interval = match previous {
                 Some((before, interval)) if before.footprint == object.footprint => interval,
@@ -498,17 +530,13 @@ impl<'g> ColumnScene<'g> {
                 bottom: object.bottom,
             });
         }
-        sort_small(&mut breaks);
+        sort_small(breaks);
         // A lamp on its buoy shares the buoy's silhouette: one edge is enough.
         breaks.dedup();
-        Look {
-            eye,
-            heading,
-            cos_h: libm::cos(heading),
-            sin_h: libm::sin(heading),
-            objects,
-            breaks,
-        }
+        look.eye = eye;
+        look.heading = heading;
+        look.cos_h = libm::cos(heading);
+        look.sin_h = libm::sin(heading);
     }
 
     /// Mean linear RGB over each pixel of `strip`, seen from `eye` facing `heading`.
@@ -529,7 +557,8 @@ impl<'g> ColumnScene<'g> {
     ) {
         let samples = samples.max(1);
         let stride = stride.max(1);
-        let look = self.look(frame, eye, heading);
+        let mut look = self.spare_look.take().unwrap_or_default();
+        self.look_into(frame, eye, heading, &mut look);
         let half = strip.width / 2.0;
         let band = 2.0 * band_atan(strip.tan_half_band);
         let sky = luminance(self.background(1.0));
@@ -551,6 +580,7 @@ impl<'g> ColumnScene<'g> {
                 &mut scratch,
                 &mut out[..pixels],
             );
+            self.spare_look.set(Some(look));
             return;
         }
         let mut facing = Vec::with_capacity(look.objects.len());
@@ -596,6 +626,7 @@ impl<'g> ColumnScene<'g> {
             }
             out[pixel] = sum / strip.width;
         }
+        self.spare_look.set(Some(look));
     }
 
     /// The strip cut into smooth regions at silhouette edges; each region sampled at about one
@@ -948,7 +979,7 @@ impl<'g> ColumnScene<'g> {
         direction: DVec2,
         t: f64,
     ) -> [f64; 3] {
-        let object = &frame.objects[segment.object as usize];
+        let object = frame.object(segment.object as usize);
         if let Some(fast) = frame.fast_shade(segment.object as usize) {
             return match segment.face {
                 Face::Side(n) => fast.radiance(DVec3::new(n.x, 0.0, n.y)),
@@ -1196,6 +1227,7 @@ impl Relative {
 }
 
 /// Everything about one eye, for one update.
+#[derive(Default)]
 pub struct Look {
     eye: DVec3,
     #[allow(dead_code)]

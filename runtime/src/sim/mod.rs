@@ -760,16 +760,20 @@ impl PanoramicTurret for PanoramicState {
     }
 
     fn read(&mut self, filter: FilterKind) -> Result<Vec<u16>, KheperaError> {
+        let mut out = Vec::new();
+        self.read_into(filter, &mut out)?;
+        Ok(out)
+    }
+
+    fn read_into(&mut self, filter: FilterKind, out: &mut Vec<u16>) -> Result<(), KheperaError> {
         if !self.model.rig.filters.contains(filter) {
             return Err(KheperaError::FilterNotEnabled(filter.name()));
         }
-        Ok(self
-            .output
-            .digital
-            .iter()
-            .find(|(k, _)| *k == filter)
-            .map(|(_, d)| d.clone())
-            .unwrap_or_default())
+        out.clear();
+        if let Some((_, digital)) = self.output.digital.iter().find(|(k, _)| *k == filter) {
+            out.extend_from_slice(digital);
+        }
+        Ok(())
     }
 
     fn set_lambda(&mut self, lambda: f64) -> Result<(), KheperaError> {
