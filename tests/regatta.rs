@@ -106,6 +106,8 @@ fn the_same_seed_gives_the_same_run_and_another_seed_another() {
     let compiled = compile_world("regatta.wbt");
     let run = |seed: u64| {
         let mut simulation = Simulation::new(&compiled, Some(seed)).unwrap();
+        // The regatta controller reads no ambient light: refresh it anyway, to see its noise.
+        simulation.sense_everything();
         simulation.run(2000);
         let r = &simulation.robots[0];
         (r.pose, r.proximity, r.ambient, r.visits.sequence.clone())
@@ -123,6 +125,36 @@ fn the_same_seed_gives_the_same_run_and_another_seed_another() {
         format!("{:?}", c.2),
         "noise streams follow the seed"
     );
+}
+
+#[test]
+fn sensors_nobody_reads_are_skipped_without_changing_the_run() {
+    let compiled = compile_world("regatta.wbt");
+    let run = |everything: bool| {
+        let mut simulation = Simulation::new(&compiled, None).unwrap();
+        if everything {
+            simulation.sense_everything();
+        }
+        simulation.run(1000);
+        let r = &simulation.robots[0];
+        (r.pose, r.proximity, r.ambient, r.updated.ambient)
+    };
+    let (skipped, everything) = (run(false), run(true));
+    // The regatta controller reads IR and the retina only: ambient light is never computed.
+    assert_eq!((skipped.2, skipped.3), ([0; 8], false));
+    assert!(everything.3 && everything.2.iter().all(|&v| v > 0));
+    // Its noise stream is its own: skipping it moves nothing else.
+    assert_eq!(format!("{:?}", skipped.0), format!("{:?}", everything.0));
+    assert_eq!(skipped.1, everything.1);
+    // A controller that reads what it did not declare gets an error, not stale values.
+    let mut simulation = Simulation::new(&compiled, None).unwrap();
+    simulation.step();
+    use regatta_runtime::khepera::{Khepera, KheperaError};
+    assert!(matches!(
+        simulation.khepera(0).ambient(),
+        Err(KheperaError::NotSensed(_))
+    ));
+    assert!(simulation.khepera(0).proximity().is_ok());
 }
 
 #[test]
@@ -201,7 +233,7 @@ fn logs_do_not_depend_on_how_many_threads_run_worlds() {
             steps_requested: 200,
         };
         let mut sink = std::io::Cursor::new(Vec::new());
-        let mut recorder = Recorder::new(&mut sink, &simulation, &run).unwrap();
+        let mut recorder = Recorder::new(&mut sink, &mut simulation, &run).unwrap();
         for _ in 0..200 {
             simulation.step();
             recorder.record(&simulation).unwrap();

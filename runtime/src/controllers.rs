@@ -10,7 +10,7 @@
 //!   steers the robot by `lightGain` pulses/10 ms per pixel of distance from the centre, added
 //!   to the network's output.
 
-use crate::khepera::{Controller, Khepera, KheperaError};
+use crate::khepera::{Controller, Khepera, KheperaError, Senses};
 use crate::retina::FilterKind;
 
 /// K-Team's weights, sensors 0…7 (khepera.md).
@@ -115,7 +115,8 @@ pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, Control
     }
 }
 
-/// Does nothing: the robot stays where it is.
+/// Does nothing: the robot stays where it is. Its sensors are all refreshed (it declares
+/// every one): a robot without a controller is how a world shows what its sensors read.
 pub struct Idle;
 
 impl Controller for Idle {
@@ -152,6 +153,13 @@ impl Controller for Braitenberg {
         let proximity = robot.proximity()?;
         let (left, right) = braitenberg_speeds(&proximity, &self.parameters);
         robot.set_speed(to_command(left), to_command(right))
+    }
+
+    fn senses(&self) -> Senses {
+        Senses {
+            proximity: true,
+            ..Senses::NONE
+        }
     }
 }
 
@@ -259,6 +267,14 @@ impl Controller for Regatta {
             right -= self.parameters.light_gain * offset;
         }
         robot.set_speed(to_command(left), to_command(right))
+    }
+
+    fn senses(&self) -> Senses {
+        Senses {
+            proximity: true,
+            vision: true,
+            ..Senses::NONE
+        }
     }
 }
 

@@ -24,6 +24,42 @@ pub enum KheperaError {
     Link(String),
     #[error("the robot answered {got:?} to {command:?}")]
     Protocol { command: String, got: String },
+    #[error("the {0} is not refreshed for this controller: declare it in Controller::senses")]
+    NotSensed(&'static str),
+}
+
+/// The sensors a controller reads. A simulation refreshes only these (and whatever a log
+/// records), so a scene pays for no sensor nobody reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Senses {
+    pub proximity: bool,
+    pub ambient: bool,
+    /// The turret's vision device (Panoramic or K213).
+    pub vision: bool,
+}
+
+impl Senses {
+    /// Every sensor: what a controller reads unless it says otherwise.
+    pub const ALL: Senses = Senses {
+        proximity: true,
+        ambient: true,
+        vision: true,
+    };
+    /// No sensor.
+    pub const NONE: Senses = Senses {
+        proximity: false,
+        ambient: false,
+        vision: false,
+    };
+
+    /// The sensors either set holds.
+    pub fn union(self, other: Senses) -> Senses {
+        Senses {
+            proximity: self.proximity | other.proximity,
+            ambient: self.ambient | other.ambient,
+            vision: self.vision | other.vision,
+        }
+    }
 }
 
 /// What an LED does.
@@ -93,4 +129,10 @@ pub trait LinearCameraTurret {
 /// A controller: called once per step with the robot to read and drive.
 pub trait Controller: Send {
     fn step(&mut self, robot: &mut dyn Khepera) -> Result<(), KheperaError>;
+
+    /// The sensors [`Controller::step`] reads; a simulated robot refreshes no other (reading
+    /// one is then [`KheperaError::NotSensed`]). Every sensor unless a controller narrows it.
+    fn senses(&self) -> Senses {
+        Senses::ALL
+    }
 }

@@ -286,8 +286,16 @@ impl<'a> CdrReader<'a> {
 }
 
 impl<W: Write + Seek> Recorder<W> {
-    /// Starts a log for `simulation`, writing the header, metadata, schemas and channels.
-    pub fn new(sink: W, simulation: &Simulation, run: &RunInfo) -> Result<Recorder<W>, LogError> {
+    /// Starts a log for `simulation`, writing the header, metadata, schemas and channels. From
+    /// now on the simulation refreshes every sensor, read or not, so that the log holds them
+    /// all (see [`Simulation::sense_everything`]).
+    pub fn new(
+        sink: W,
+        simulation: &mut Simulation,
+        run: &RunInfo,
+    ) -> Result<Recorder<W>, LogError> {
+        simulation.sense_everything();
+        let simulation = &*simulation;
         let options = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Zstd))
             .chunk_size(Some(4 << 20))

@@ -65,7 +65,7 @@ pub fn replay(args: ReplayArgs) -> anyhow::Result<Outcome> {
     let compiled = compile_embedded(&contents.run)?;
     let mut simulation = Simulation::new(&compiled, Some(contents.run.seed))?;
     let mut buffer = std::io::Cursor::new(Vec::new());
-    let mut recorder = Recorder::new(&mut buffer, &simulation, &contents.run)?;
+    let mut recorder = Recorder::new(&mut buffer, &mut simulation, &contents.run)?;
     for _ in 0..steps {
         simulation.step();
         recorder.record(&simulation)?;

@@ -58,7 +58,7 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 path,
                 &args.world,
                 &loaded,
-                &simulation,
+                &mut simulation,
                 args.lenient,
                 steps,
             )

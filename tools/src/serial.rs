@@ -76,7 +76,7 @@ pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
                 path,
                 &args.world,
                 &loaded,
-                &simulation,
+                &mut simulation,
                 args.lenient,
                 max_steps.unwrap_or(0),
             )

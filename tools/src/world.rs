@@ -79,7 +79,7 @@ pub fn create_recorder(
     path: &Path,
     world: &Path,
     loaded: &Loaded,
-    simulation: &regatta_runtime::sim::Simulation,
+    simulation: &mut regatta_runtime::sim::Simulation,
     lenient: bool,
     steps_requested: u64,
 ) -> anyhow::Result<Recorder<std::io::BufWriter<std::fs::File>>> {

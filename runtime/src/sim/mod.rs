@@ -14,7 +14,7 @@ use crate::compile::rig::{Pose2, RobotRig, TurretRig};
 use crate::compile::Compiled;
 use crate::controllers;
 use crate::khepera::{
-    Controller, Khepera, KheperaError, LedAction, LinearCameraTurret, PanoramicTurret,
+    Controller, Khepera, KheperaError, LedAction, LinearCameraTurret, PanoramicTurret, Senses,
 };
 use crate::optics::{LinearCamera, LinearCameraOutput, Panoramic, Renderer, RetinaOutput};
 use crate::render::Poses;
@@ -86,6 +86,8 @@ pub struct PanoramicState {
     pub model: Panoramic,
     pub output: RetinaOutput,
     due: f64,
+    /// Whether the turret is refreshed (someone reads it).
+    sensed: bool,
 }
 
 /// The K213 of a simulated robot.
@@ -93,6 +95,8 @@ pub struct LinearCameraState {
     pub model: LinearCamera,
     pub output: LinearCameraOutput,
     due: f64,
+    /// Whether the camera is refreshed (someone reads it).
+    sensed: bool,
 }
 
 /// One simulated robot.
@@ -107,6 +111,8 @@ pub struct RobotState {
     pub travel: (f64, f64),
     counter_offset: (i64, i64),
     pub leds: [bool; 2],
+    /// The sensors refreshed in the last step: those the controller reads, or all.
+    pub senses: Senses,
     pub proximity: [u16; 8],
     pub ambient: [u16; 8],
     ir_due: Vec<f64>,
@@ -154,6 +160,8 @@ pub struct Simulation<'c> {
     pub steps: u64,
     pub time_step: f64,
     pub seed: u64,
+    /// Sensors refreshed whether or not a controller reads them (what a log records).
+    pub always_sensed: Senses,
     /// Buffers a step fills and the next reuses: stepping allocates nothing once warm.
     scratch: StepScratch,
 }
@@ -203,6 +211,7 @@ impl<'c> Simulation<'c> {
                 travel: (0.0, 0.0),
                 counter_offset: (0, 0),
                 leds: [false; 2],
+                senses: Senses::ALL,
                 proximity: [0; 8],
                 ambient: [0; 8],
                 ir_due: vec![0.0; rig.distance_sensors.len()],
@@ -219,6 +228,7 @@ impl<'c> Simulation<'c> {
                         model: Panoramic::new(p),
                         output: RetinaOutput::default(),
                         due: 0.0,
+                        sensed: true,
                     }),
                     _ => None,
                 },
@@ -227,6 +237,7 @@ impl<'c> Simulation<'c> {
                         model: LinearCamera::new(c),
                         output: LinearCameraOutput::default(),
                         due: 0.0,
+                        sensed: true,
                     }),
                     _ => None,
                 },
@@ -256,6 +267,7 @@ impl<'c> Simulation<'c> {
             steps: 0,
             time_step,
             seed,
+            always_sensed: Senses::NONE,
             scratch: StepScratch::default(),
         };
         let plan = &compiled.plan;
@@ -273,6 +285,12 @@ impl<'c> Simulation<'c> {
     /// the CPU renderer.
     pub fn set_vision_backend(&mut self, backend: Box<dyn VisionBackend + 'c>) {
         self.vision = Some(backend);
+    }
+
+    /// Refreshes every sensor from now on, whether or not a controller reads it: what a log
+    /// records. Other robots' readings and noise streams do not change.
+    pub fn sense_everything(&mut self) {
+        self.always_sensed = Senses::ALL;
     }
 
     /// Replaces a robot's controller (a library user's own).
@@ -300,6 +318,16 @@ impl<'c> Simulation<'c> {
         let t = self.time;
         for robot in &mut self.robots {
             robot.updated = Updated::default();
+            // A robot driven from outside may read anything.
+            let reads = robot.controller.as_ref().map_or(Senses::ALL, |c| c.senses());
+            robot.senses = reads.union(self.always_sensed);
+            let vision = robot.senses.vision;
+            if let Some(turret) = &mut robot.panoramic {
+                turret.sensed = vision;
+            }
+            if let Some(camera) = &mut robot.linear_camera {
+                camera.sensed = vision;
+            }
         }
         self.update_sensors(t);
     }
@@ -384,7 +412,12 @@ impl<'c> Simulation<'c> {
         );
         let placements = &*placements;
         // Ambient sensors read the plan's lights, placed once per step where they move.
-        if *lights_move && self.robots.iter().any(|r| !r.ambient_due.is_empty()) {
+        if *lights_move
+            && self
+                .robots
+                .iter()
+                .any(|r| r.senses.ambient && !r.ambient_due.is_empty())
+        {
             *lights = crate::render::world_lights(&compiled.graph, &compiled.plan, poses);
         }
         let lights = &*lights;
@@ -392,7 +425,14 @@ impl<'c> Simulation<'c> {
         for (index, robot) in self.robots.iter_mut().enumerate() {
             let rig = &compiled.rig.robots[index];
             let mut nearby_found = false;
-            for (s, sensor) in rig.distance_sensors.iter().enumerate().take(8) {
+            let senses = robot.senses;
+            let proximity_sensors = if senses.proximity { 8 } else { 0 };
+            for (s, sensor) in rig
+                .distance_sensors
+                .iter()
+                .enumerate()
+                .take(proximity_sensors)
+            {
                 if due(&mut robot.ir_due[s], t, sensor.period) {
                     if !nearby_found {
                         sensors::nearby_obstacles(
@@ -415,7 +455,8 @@ impl<'c> Simulation<'c> {
                     );
                 }
             }
-            for (s, sensor) in rig.light_sensors.iter().enumerate().take(8) {
+            let ambient_sensors = if senses.ambient { 8 } else { 0 };
+            for (s, sensor) in rig.light_sensors.iter().enumerate().take(ambient_sensors) {
                 if due(&mut robot.ambient_due[s], t, sensor.period) {
                     robot.updated.ambient = true;
                     robot.ambient[s] = sensors::ambient(
@@ -427,6 +468,9 @@ impl<'c> Simulation<'c> {
                         &mut robot.ambient_streams[s],
                     );
                 }
+            }
+            if !senses.vision {
+                continue;
             }
             if self.vision.is_some() {
                 let due_now = match (&mut robot.panoramic, &mut robot.linear_camera) {
@@ -692,10 +736,16 @@ impl Khepera for SimulatedKhepera<'_> {
     }
 
     fn proximity(&mut self) -> Result<[u16; 8], KheperaError> {
+        if !self.robot.senses.proximity {
+            return Err(KheperaError::NotSensed("proximity sensors"));
+        }
         Ok(self.robot.proximity)
     }
 
     fn ambient(&mut self) -> Result<[u16; 8], KheperaError> {
+        if !self.robot.senses.ambient {
+            return Err(KheperaError::NotSensed("ambient light sensors"));
+        }
         Ok(self.robot.ambient)
     }
 
@@ -766,6 +816,9 @@ impl PanoramicTurret for PanoramicState {
     }
 
     fn read_into(&mut self, filter: FilterKind, out: &mut Vec<u16>) -> Result<(), KheperaError> {
+        if !self.sensed {
+            return Err(KheperaError::NotSensed("Panoramic turret"));
+        }
         if !self.model.rig.filters.contains(filter) {
             return Err(KheperaError::FilterNotEnabled(filter.name()));
         }
@@ -827,10 +880,16 @@ impl PanoramicTurret for PanoramicState {
 
 impl LinearCameraTurret for LinearCameraState {
     fn pixels(&mut self) -> Result<Vec<u16>, KheperaError> {
+        if !self.sensed {
+            return Err(KheperaError::NotSensed("K213 camera"));
+        }
         Ok(self.output.digital.clone())
     }
 
     fn light_level(&mut self) -> Result<u16, KheperaError> {
+        if !self.sensed {
+            return Err(KheperaError::NotSensed("K213 camera"));
+        }
         Ok(self.output.light_level)
     }
 }
