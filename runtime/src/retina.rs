@@ -263,11 +263,24 @@ impl Chain {
             let block = n.div_ceil(BLOCKS);
             let lengths: [usize; BLOCKS] =
                 std::array::from_fn(|k| n.saturating_sub(k * block).min(block));
+            let common = lengths[BLOCKS - 1];
             let (mut forward, mut backward) = ([0.0; BLOCKS], [0.0; BLOCKS]);
-            for i in 0..block {
-                for k in 0..BLOCKS {
-                    if i < lengths[k] {
-                        let p = k * block + i;
+            {
+                // Block k forward covers [k·block, k·block + len); backward, the mirror image.
+                let start = |k: usize| k * block;
+                for i in 0..common {
+                    for k in 0..BLOCKS {
+                        let p = start(k) + i;
+                        forward[k] = a * forward[k] + c * x[p];
+                        right[p] = forward[k];
+                        let q = n - 1 - p;
+                        backward[k] = a * backward[k] + c * x[q];
+                        left[q] = backward[k];
+                    }
+                }
+                for i in common..block {
+                    for k in 0..BLOCKS - 1 {
+                        let p = start(k) + i;
                         forward[k] = a * forward[k] + c * x[p];
                         right[p] = forward[k];
                         let q = n - 1 - p;

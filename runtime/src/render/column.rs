@@ -68,6 +68,9 @@ struct FastShade {
     /// Luminance of `base` and of each light's coefficient.
     base_luminance: f64,
     light_luminance: [f64; MAX_FAST_LIGHTS],
+    /// Luminance of a face looking up, and down.
+    up_luminance: f64,
+    down_luminance: f64,
 }
 
 impl FastShade {
@@ -78,9 +81,13 @@ impl FastShade {
             count: 0,
             base_luminance: 0.0,
             light_luminance: [0.0; MAX_FAST_LIGHTS],
+            up_luminance: 0.0,
+            down_luminance: 0.0,
         };
         if material.unlit {
             fast.base_luminance = luminance(fast.base);
+            fast.up_luminance = fast.base_luminance;
+            fast.down_luminance = fast.base_luminance;
             return fast;
         }
         for light in lights {
@@ -100,6 +107,8 @@ impl FastShade {
             fast.count += 1;
         }
         fast.base_luminance = luminance(fast.base);
+        fast.up_luminance = fast.luminance(DVec3::Y);
+        fast.down_luminance = fast.luminance(DVec3::NEG_Y);
         fast
     }
 
@@ -243,6 +252,8 @@ pub struct ColumnFrame {
     /// `shared` (the scene's static objects, shaded once), the others' from `flat`.
     shared: Arc<[Option<FastShade>]>,
     flat: Vec<Option<FastShade>>,
+    /// Whether every object has fast shading.
+    all_fast: bool,
 }
 
 impl ColumnFrame {
@@ -436,7 +447,7 @@ impl<'g> ColumnScene<'g> {
                 }
             }
         }
-        match &self.cached {
+        let mut frame = match &self.cached {
             Some((lights, static_flat)) => {
                 let flat = fast_shades(self.graph, &parts, lights);
                 ColumnFrame {
@@ -445,6 +456,7 @@ impl<'g> ColumnScene<'g> {
                     lights: lights.clone(),
                     shared: static_flat.clone(),
                     flat,
+                    all_fast: false,
                 }
             }
             None => {
@@ -457,9 +469,12 @@ impl<'g> ColumnScene<'g> {
                     lights: Arc::from(lights),
                     shared: Arc::from([]),
                     flat,
+                    all_fast: false,
                 }
             }
-        }
+        };
+        frame.all_fast = frame.shared.iter().chain(&frame.flat).all(Option::is_some);
+        frame
     }
 
     /// What depends on the eye alone: each object's azimuth interval and its footprint
@@ -565,6 +580,7 @@ impl<'g> ColumnScene<'g> {
         let ground = luminance(self.background(-1.0));
         let mut scratch = Scratch {
             segments: Segments::new(),
+            lit: LitSegments::new(),
             free: Free::new(0.0, 0.0),
         };
         let pixels = strip.centers.len().min(out.len());
@@ -767,7 +783,7 @@ impl<'g> ColumnScene<'g> {
         look: &Look,
         direction: DVec2,
         facing: &[u16],
-        segments: &mut Segments,
+        segments: &mut impl SegmentSink,
     ) {
         let inverse = DVec2::ONE / direction;
         for &index in facing {
@@ -895,58 +911,28 @@ impl<'g> ColumnScene<'g> {
         ground: f64,
         scratch: &mut Scratch,
     ) -> f64 {
-        let Scratch { segments, free } = scratch;
+        let Scratch {
+            segments,
+            lit,
+            free,
+        } = scratch;
+        let band = Band {
+            tan_half,
+            band,
+            sky,
+            ground,
+        };
+        if frame.all_fast {
+            // Every face's luminance is known when its segment is made: no faces kept.
+            lit.len = 0;
+            self.collect_segments(look, direction, facing, &mut LitSink { lit, frame });
+            return band.composite(lit.as_slice(), free, |segment, _, _| segment.luminance);
+        }
         segments.len = 0;
         self.collect_segments(look, direction, facing, segments);
-        free.reset(-tan_half, tan_half);
-        // The band's edges and the horizon are where most pieces start or end: their angles
-        // are known (band_atan is odd, band = 2·band_atan(T)).
-        let half_band = 0.5 * band;
-        let angle = |x: f64| {
-            if x == tan_half {
-                half_band
-            } else if x == -tan_half {
-                -half_band
-            } else if x == 0.0 {
-                0.0
-            } else {
-                band_atan(x)
-            }
-        };
-        let mut sum = 0.0;
-        for segment in segments.iter() {
-            if free.is_empty() {
-                break;
-            }
-            let (a, b) = (segment.t0.max(-tan_half), segment.t1.min(tan_half));
-            if a >= b {
-                continue;
-            }
-            let mut covered = 0.0;
-            let mut middle = 0.0;
-            free.take(a, b, |x0, x1| {
-                let weight = angle(x1) - angle(x0);
-                middle += 0.5 * (x0 + x1) * weight;
-                covered += weight;
-            });
-            if covered > 0.0 {
-                // One radiance per visible part of a face, at its weighted middle.
-                sum += self.segment_luminance(frame, segment, look.eye, direction, middle, covered)
-                    * covered;
-            }
-        }
-        for &(x0, x1) in free.as_slice() {
-            // Sky above the horizon, ground (if any) below.
-            let (a0, a1) = (angle(x0), angle(x1));
-            if x0 >= 0.0 {
-                sum += sky * (a1 - a0);
-            } else if x1 <= 0.0 {
-                sum += ground * (a1 - a0);
-            } else {
-                sum += ground * -a0 + sky * a1;
-            }
-        }
-        sum / band
+        band.composite(segments.iter(), free, |segment, middle, covered| {
+            self.segment_luminance(frame, segment, look.eye, direction, middle, covered)
+        })
     }
 
     /// Luminance of a segment's face at tan-elevation `middle / covered` (the fast path skips
@@ -1342,7 +1328,187 @@ impl Segments {
 /// Per-column buffers, allocated once per strip.
 struct Scratch {
     segments: Segments,
+    lit: LitSegments,
     free: Free,
+}
+
+/// Where [`ColumnScene::collect_segments`] puts a column's segments.
+trait SegmentSink {
+    fn insert(&mut self, segment: Segment);
+}
+
+impl SegmentSink for Segments {
+    #[inline]
+    fn insert(&mut self, segment: Segment) {
+        Segments::insert(self, segment)
+    }
+}
+
+/// A segment whose face's luminance is known (fast shading).
+#[derive(Clone, Copy, Debug, Default)]
+struct Lit {
+    depth: f64,
+    t0: f64,
+    t1: f64,
+    luminance: f64,
+}
+
+impl Extent for Lit {
+    #[inline]
+    fn extent(&self) -> (f64, f64) {
+        (self.t0, self.t1)
+    }
+}
+
+impl Extent for Segment {
+    #[inline]
+    fn extent(&self) -> (f64, f64) {
+        (self.t0, self.t1)
+    }
+}
+
+/// A column's lit segments on the stack, sorted front to back on insertion. Segments come in
+/// object order, so equal depths keep object order, as in [`Segments`].
+struct LitSegments {
+    items: [Lit; MAX_SEGMENTS],
+    len: usize,
+}
+
+impl LitSegments {
+    fn new() -> LitSegments {
+        LitSegments {
+            items: [Lit::default(); MAX_SEGMENTS],
+            len: 0,
+        }
+    }
+
+    #[inline]
+    fn insert(&mut self, segment: Lit) {
+        let mut i = self.len;
+        while i > 0 && self.items[i - 1].depth > segment.depth {
+            i -= 1;
+        }
+        if i >= MAX_SEGMENTS {
+            return;
+        }
+        let end = self.len.min(MAX_SEGMENTS - 1);
+        self.items.copy_within(i..end, i + 1);
+        self.items[i] = segment;
+        self.len = (self.len + 1).min(MAX_SEGMENTS);
+    }
+
+    fn as_slice(&self) -> &[Lit] {
+        &self.items[..self.len]
+    }
+}
+
+/// Lights each segment as it comes, from its object's fast shading.
+struct LitSink<'a> {
+    lit: &'a mut LitSegments,
+    frame: &'a ColumnFrame,
+}
+
+impl SegmentSink for LitSink<'_> {
+    #[inline]
+    fn insert(&mut self, segment: Segment) {
+        let Some(fast) = self.frame.fast_shade(segment.object as usize) else {
+            return;
+        };
+        let luminance = match segment.face {
+            Face::Side(n) => fast.luminance(DVec3::new(n.x, 0.0, n.y)),
+            Face::Cap { up: true, .. } => fast.up_luminance,
+            Face::Cap { up: false, .. } => fast.down_luminance,
+        };
+        self.lit.insert(Lit {
+            depth: segment.depth,
+            t0: segment.t0,
+            t1: segment.t1,
+            luminance,
+        });
+    }
+}
+
+/// A segment's tan-elevation interval.
+trait Extent {
+    fn extent(&self) -> (f64, f64);
+}
+
+/// The elevation band of a column and what lies beyond every object.
+struct Band {
+    tan_half: f64,
+    /// The band's angle, 2·atan(tan_half).
+    band: f64,
+    sky: f64,
+    ground: f64,
+}
+
+impl Band {
+    /// Mean luminance over the band of segments sorted front to back, integrated exactly in
+    /// angle; `luminance(segment, middle, covered)` gives a face's luminance from the visible
+    /// parts' angle-weighted tan-elevation sum and their angle.
+    #[inline]
+    fn composite<'s, S: Extent + 's>(
+        &self,
+        segments: impl IntoIterator<Item = &'s S>,
+        free: &mut Free,
+        mut luminance: impl FnMut(&S, f64, f64) -> f64,
+    ) -> f64 {
+        let Band {
+            tan_half,
+            band,
+            sky,
+            ground,
+        } = *self;
+        free.reset(-tan_half, tan_half);
+        // The band's edges and the horizon are where most pieces start or end: their angles
+        // are known (band_atan is odd, band = 2·band_atan(T)).
+        let half_band = 0.5 * band;
+        let angle = |x: f64| {
+            if x == tan_half {
+                half_band
+            } else if x == -tan_half {
+                -half_band
+            } else if x == 0.0 {
+                0.0
+            } else {
+                band_atan(x)
+            }
+        };
+        let mut sum = 0.0;
+        for segment in segments {
+            if free.is_empty() {
+                break;
+            }
+            let (t0, t1) = segment.extent();
+            let (a, b) = (t0.max(-tan_half), t1.min(tan_half));
+            if a >= b {
+                continue;
+            }
+            let mut covered = 0.0;
+            let mut middle = 0.0;
+            free.take(a, b, |x0, x1| {
+                let weight = angle(x1) - angle(x0);
+                middle += 0.5 * (x0 + x1) * weight;
+                covered += weight;
+            });
+            if covered > 0.0 {
+                // One radiance per visible part of a face, at its weighted middle.
+                sum += luminance(segment, middle, covered) * covered;
+            }
+        }
+        for &(x0, x1) in free.as_slice() {
+            // Sky above the horizon, ground (if any) below.
+            let (a0, a1) = (angle(x0), angle(x1));
+            if x0 >= 0.0 {
+                sum += sky * (a1 - a0);
+            } else if x1 <= 0.0 {
+                sum += ground * (a1 - a0);
+            } else {
+                sum += ground * -a0 + sky * a1;
+            }
+        }
+        sum / band
+    }
 }
 
 /// Free (uncovered) tan-intervals of a band, sorted and disjoint, on the stack. Each segment
