@@ -1133,7 +1133,7 @@ enum Relative {
 impl Relative {
     /// Entry and exit distances of the horizontal ray, with the entry normal; `inverse` holds
     /// the reciprocals of `direction`'s components.
-    #[inline]
+    #[inline(always)]
     fn cross(&self, direction: DVec2, inverse: DVec2) -> Option<(f64, f64, DVec2)> {
         match *self {
             Relative::Circle { oc, c, radius, .. } => {
@@ -1159,14 +1159,18 @@ impl Relative {
             } => {
                 let (t_in, t_out, (axis, sign)) = if u == DVec2::X && v == DVec2::Y {
                     // Axis-aligned (the usual arena): the column's shared reciprocals.
-                    crate::geometry::rect_slabs_inverse(
+                    if direction.x.abs() >= 1e-300 && direction.y.abs() >= 1e-300 {
+                        axis_slabs(pu, pv, direction, inverse, half_u, half_v)?
+                    } else {
+                        crate::geometry::rect_slabs_inverse(
                         pu,
                         pv,
                         (direction.x, inverse.x),
-                        (direction.y, inverse.y),
-                        half_u,
-                        half_v,
-                    )?
+                            (direction.y, inverse.y),
+                            half_u,
+                            half_v,
+                        )?
+                    }
                 } else {
                     crate::geometry::rect_slabs(
                         pu,
@@ -1210,6 +1214,35 @@ impl Relative {
             }
         }
     }
+}
+
+/// [`crate::geometry::rect_slabs_inverse`] for a direction with no zero component, in
+/// straight-line code (the same operations, so the same results).
+#[inline(always)]
+fn axis_slabs(
+    pu: f64,
+    pv: f64,
+    direction: DVec2,
+    inverse: DVec2,
+    half_u: f64,
+    half_v: f64,
+) -> Option<(f64, f64, (usize, f64))> {
+    let ordered = |a: f64, b: f64| if a < b { (a, b) } else { (b, a) };
+    let (near_u, far_u) = ordered((-half_u - pu) * inverse.x, (half_u - pu) * inverse.x);
+    let (near_v, far_v) = ordered((-half_v - pv) * inverse.y, (half_v - pv) * inverse.y);
+    let facing = |d: f64| if d > 0.0 { -1.0 } else { 1.0 };
+    let mut t_in = f64::NEG_INFINITY;
+    let mut face = (0, 0.0);
+    if near_u > t_in {
+        t_in = near_u;
+        face = (0, facing(direction.x));
+    }
+    if near_v > t_in {
+        t_in = near_v;
+        face = (1, facing(direction.y));
+    }
+    let t_out = f64::INFINITY.min(far_u).min(far_v);
+    (t_in <= t_out && t_out >= 0.0).then_some((t_in, t_out, face))
 }
 
 /// Everything about one eye, for one update.
@@ -1385,16 +1418,21 @@ impl LitSegments {
     #[inline]
     fn insert(&mut self, segment: Lit) {
         let mut i = self.len;
+        if i == MAX_SEGMENTS {
+            // Full: the farthest goes, unless the new one is farther still.
+            if self.items[i - 1].depth <= segment.depth {
+                return;
+            }
+            i -= 1;
+        } else {
+            self.len += 1;
+        }
+        // Shifted one by one: a few moves, no call to memmove.
         while i > 0 && self.items[i - 1].depth > segment.depth {
+            self.items[i] = self.items[i - 1];
             i -= 1;
         }
-        if i >= MAX_SEGMENTS {
-            return;
-        }
-        let end = self.len.min(MAX_SEGMENTS - 1);
-        self.items.copy_within(i..end, i + 1);
         self.items[i] = segment;
-        self.len = (self.len + 1).min(MAX_SEGMENTS);
     }
 
     fn as_slice(&self) -> &[Lit] {
