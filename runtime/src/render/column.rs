@@ -1593,9 +1593,13 @@ impl Free {
             visit(c0, c1);
             match (x0 < c0, c1 < x1) {
                 (true, true) => {
-                    // Split in two.
+                    // Split in two; the few intervals after it shift one by one (no memmove).
                     if self.len < self.items.len() {
-                        self.items.copy_within(i + 1..self.len, i + 2);
+                        let mut j = self.len;
+                        while j > i + 1 {
+                            self.items[j] = self.items[j - 1];
+                            j -= 1;
+                        }
                         self.items[i] = (x0, c0);
                         self.items[i + 1] = (c1, x1);
                         self.len += 1;
@@ -1613,7 +1617,9 @@ impl Free {
                     return;
                 }
                 (false, false) => {
-                    self.items.copy_within(i + 1..self.len, i);
+                    for j in i..self.len - 1 {
+                        self.items[j] = self.items[j + 1];
+                    }
                     self.len -= 1;
                 }
             }
