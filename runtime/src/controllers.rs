@@ -203,17 +203,21 @@ fn for_each_light_maximum(odd: &[u16], bits: u32, min_contrast: f64, mut visit: 
     let negative_below = partition_point_u16(negative);
     let positive_from = partition_point_u16(|d| !positive(d));
     // A positive lobe starts a maximum where the nearest lobe pixel before it is negative;
-    // that pixel ends the negative lobe. Branch-free but for the rare maximum.
+    // that pixel ends the negative lobe. Lobes come in runs (the filter smooths), so branches
+    // predict well and keep the loop free of a chain of selects from pixel to pixel.
     let (mut last_negative, mut last_index) = (false, 0usize);
     for (i, &d) in odd.iter().enumerate() {
-        let negative = (d as u32) < negative_below;
-        let positive = (d as u32) >= positive_from;
-        if positive & last_negative {
-            visit((last_index + 1 + i) as f64 / 2.0);
+        let d = d as u32;
+        if d < negative_below {
+            last_negative = true;
+            last_index = i;
+        } else if d >= positive_from {
+            if last_negative {
+                visit((last_index + 1 + i) as f64 / 2.0);
+            }
+            last_negative = false;
+            last_index = i;
         }
-        let lobe = negative | positive;
-        last_negative = if lobe { negative } else { last_negative };
-        last_index = if lobe { i } else { last_index };
     }
 }
 

@@ -708,8 +708,7 @@ impl<'g> ColumnScene<'g> {
             for i in 0..count {
                 let alpha = r0 + (i as f64 + 0.5) * span / count as f64;
                 // The nearest pixel's direction, turned by the small remainder.
-                let pixel = (((strip.centers[0] - alpha) / width).round().max(0.0) as usize)
-                    .min(pixels - 1);
+                let pixel = nearest_index((strip.centers[0] - alpha) / width).min(pixels - 1);
                 positions.push(alpha);
                 values.push(self.column(
                     frame,
@@ -1002,6 +1001,14 @@ impl<'g> ColumnScene<'g> {
         let mut none = |_: DVec3, _: &LightKind| false;
         shade(material, None, point, normal, eye, &frame.lights, &mut none)
     }
+}
+
+/// `x.round().max(0.0) as usize` without a call to the C library's `round` (which the
+/// baseline x86-64 target has no instruction for): halves round up, negatives and NaN give 0.
+#[inline]
+fn nearest_index(x: f64) -> usize {
+    let whole = x as usize;
+    whole.saturating_add((x - whole as f64 >= 0.5) as usize)
 }
 
 /// Sorts a few finite numbers ascending (insertion sort: the edges of a dozen objects).
@@ -1636,6 +1643,13 @@ mod tests {
         for i in -100..=100 {
             let t = i as f64 * 0.002;
             assert!((band_atan(t) - libm::atan(t)).abs() < 1e-10, "{t}");
+        }
+    }
+
+    #[test]
+    fn nearest_index_rounds_like_round() {
+        for x in [-2.5, -0.5, -0.2, 0.0, 0.2, 0.5, 0.7, 1.5, 2.4999, 2.5, 149.5, 1e30, f64::NAN] {
+            assert_eq!(nearest_index(x), (x.round().max(0.0)) as usize, "{x}");
         }
     }
 
