@@ -203,21 +203,23 @@ fn for_each_light_maximum(odd: &[u16], bits: u32, min_contrast: f64, mut visit: 
     let negative_below = partition_point_u16(negative);
     let positive_from = partition_point_u16(|d| !positive(d));
     // A positive lobe starts a maximum where the nearest lobe pixel before it is negative;
-    // that pixel ends the negative lobe. Lobes come in runs (the filter smooths), so branches
-    // predict well and keep the loop free of a chain of selects from pixel to pixel.
+    // that pixel ends the negative lobe. Most pixels are in no lobe: a plain search skips
+    // them, with no state carried from pixel to pixel.
+    let in_lobe = |d: u16| (d as u32) < negative_below || (d as u32) >= positive_from;
     let (mut last_negative, mut last_index) = (false, 0usize);
-    for (i, &d) in odd.iter().enumerate() {
-        let d = d as u32;
-        if d < negative_below {
+    let mut i = 0;
+    while let Some(skipped) = odd[i..].iter().position(|&d| in_lobe(d)) {
+        i += skipped;
+        if (odd[i] as u32) < negative_below {
             last_negative = true;
-            last_index = i;
-        } else if d >= positive_from {
+        } else {
             if last_negative {
                 visit((last_index + 1 + i) as f64 / 2.0);
             }
             last_negative = false;
-            last_index = i;
         }
+        last_index = i;
+        i += 1;
     }
 }
 
