@@ -173,6 +173,7 @@ struct RegionBuffers {
 struct Raster<'a> {
     origin: f64,
     inverse_width: f64,
+    width: f64,
     out: &'a mut [f64],
 }
 
@@ -190,9 +191,12 @@ impl Raster<'_> {
         }
         let pixels = self.out.len();
         // α = origin − u·width, so the line is value + slope_u·(u1 − u), slope_u = slope·width.
-        let slope_u = slope / self.inverse_width;
+        let slope_u = slope * self.width;
         let first = (u0.max(0.0) as usize).min(pixels);
-        let last = (libm::ceil(u1).max(0.0) as usize).min(pixels);
+        // ⌈u1⌉ without a libm call: u1 > 0 here (u1 > u0, and a piece left of the strip
+        // ends at u1 ≤ 0 only when empty below).
+        let whole = u1.max(0.0) as usize;
+        let last = whole.saturating_add((u1 > whole as f64) as usize).min(pixels);
         if first >= last {
             return;
         }
@@ -687,10 +691,12 @@ impl<'g> ColumnScene<'g> {
         );
         bounds.push(extent_hi);
         let step = width * stride as f64;
+        let inverse_width = 1.0 / width;
         out.fill(0.0);
         let mut raster = Raster {
             origin: extent_hi,
-            inverse_width: 1.0 / width,
+            inverse_width,
+            width,
             out,
         };
         for pair in bounds.windows(2) {
@@ -705,10 +711,14 @@ impl<'g> ColumnScene<'g> {
             look.facing(0.5 * (r0 + r1), facing);
             positions.clear();
             values.clear();
-            for i in 0..count {
-                let alpha = r0 + (i as f64 + 0.5) * span / count as f64;
+            let piece = span / count as f64;
+            let mut middle = 0.5;
+            for _ in 0..count {
+                let alpha = r0 + middle * piece;
+                middle += 1.0;
                 // The nearest pixel's direction, turned by the small remainder.
-                let pixel = nearest_index((strip.centers[0] - alpha) / width).min(pixels - 1);
+                let pixel =
+                    nearest_index((strip.centers[0] - alpha) * inverse_width).min(pixels - 1);
                 positions.push(alpha);
                 values.push(self.column(
                     frame,
