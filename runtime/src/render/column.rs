@@ -152,6 +152,8 @@ pub struct ColumnScene<'g> {
     buffers: std::cell::RefCell<RegionBuffers>,
     /// The last update's eye, its buffers reused by the next.
     spare_look: std::cell::Cell<Option<Look>>,
+    /// The last update's column buffers (a few kB, not cleared between updates).
+    spare_scratch: std::cell::Cell<Option<Box<Scratch>>>,
 }
 
 /// The lights and the static objects' fast shading of a scene whose lights do not move.
@@ -423,6 +425,7 @@ impl<'g> ColumnScene<'g> {
             cached,
             buffers: Default::default(),
             spare_look: Default::default(),
+            spare_scratch: Default::default(),
         }
     }
 
@@ -582,11 +585,13 @@ impl<'g> ColumnScene<'g> {
         let band = 2.0 * band_atan(strip.tan_half_band);
         let sky = luminance(self.background(1.0));
         let ground = luminance(self.background(-1.0));
-        let mut scratch = Scratch {
-            segments: Segments::new(),
-            lit: LitSegments::new(),
-            free: Free::new(0.0, 0.0),
-        };
+        let mut scratch = self.spare_scratch.take().unwrap_or_else(|| {
+            Box::new(Scratch {
+                segments: Segments::new(),
+                lit: LitSegments::new(),
+                free: Free::new(0.0, 0.0),
+            })
+        });
         let pixels = strip.centers.len().min(out.len());
         if stride > 1 && strip.contiguous {
             self.integrate_regions(
@@ -601,6 +606,7 @@ impl<'g> ColumnScene<'g> {
                 &mut out[..pixels],
             );
             self.spare_look.set(Some(look));
+            self.spare_scratch.set(Some(scratch));
             return;
         }
         let mut facing = Vec::with_capacity(look.objects.len());
@@ -647,6 +653,7 @@ impl<'g> ColumnScene<'g> {
             out[pixel] = sum / strip.width;
         }
         self.spare_look.set(Some(look));
+        self.spare_scratch.set(Some(scratch));
     }
 
     /// The strip cut into smooth regions at silhouette edges; each region sampled at about one
