@@ -264,30 +264,63 @@ impl Chain {
             let lengths: [usize; BLOCKS] =
                 std::array::from_fn(|k| n.saturating_sub(k * block).min(block));
             let common = lengths[BLOCKS - 1];
-            let (mut forward, mut backward) = ([0.0; BLOCKS], [0.0; BLOCKS]);
+            // Block k forward covers [k·block, k·block + len_k); backward, its mirror image,
+            // read from its end. Slices cut to the lengths the loops run keep every index in
+            // bounds by construction (no checks in the loops).
+            let (x_lo, x_hi) = x.split_at(2 * block);
+            let (x0, x1) = x_lo.split_at(block);
+            let (x2, x3) = x_hi.split_at(block);
+            let (right_lo, right_hi) = right[..n].split_at_mut(2 * block);
+            let (r0, r1) = right_lo.split_at_mut(block);
+            let (r2, r3) = right_hi.split_at_mut(block);
+            let (left_lo, left_hi) = left[..n].split_at_mut(n - 2 * block);
+            let (l3, l2) = left_lo.split_at_mut(n - 3 * block);
+            let (l1, l0) = left_hi.split_at_mut(block);
+            let (y_lo, y_hi) = x.split_at(n - 2 * block);
+            let (y3, y2) = y_lo.split_at(n - 3 * block);
+            let (y1, y0) = y_hi.split_at(block);
+            let mut forward = [0.0; BLOCKS];
+            let mut backward = [0.0; BLOCKS];
+            macro_rules! sweep {
+                ($range:expr, $len:expr, $([$k:expr, $x:ident, $r:ident, $y:ident, $l:ident]),+) => {
+                    $(
+                        let ($x, $r) = (&$x[..$len], &mut $r[..$len]);
+                        let (skip_y, skip_l) = ($y.len() - $len, $l.len() - $len);
+                        let ($y, $l) = (&$y[skip_y..], &mut $l[skip_l..]);
+                    )+
+                    for i in $range {
+                        $(
+                            forward[$k] = a * forward[$k] + c * $x[i];
+                            $r[i] = forward[$k];
+                            let j = $len - 1 - i;
+                            backward[$k] = a * backward[$k] + c * $y[j];
+                            $l[j] = backward[$k];
+                        )+
+                    }
+                };
+            }
             {
-                // Block k forward covers [k·block, k·block + len); backward, the mirror image.
-                let start = |k: usize| k * block;
-                for i in 0..common {
-                    for k in 0..BLOCKS {
-                        let p = start(k) + i;
-                        forward[k] = a * forward[k] + c * x[p];
-                        right[p] = forward[k];
-                        let q = n - 1 - p;
-                        backward[k] = a * backward[k] + c * x[q];
-                        left[q] = backward[k];
-                    }
-                }
-                for i in common..block {
-                    for k in 0..BLOCKS - 1 {
-                        let p = start(k) + i;
-                        forward[k] = a * forward[k] + c * x[p];
-                        right[p] = forward[k];
-                        let q = n - 1 - p;
-                        backward[k] = a * backward[k] + c * x[q];
-                        left[q] = backward[k];
-                    }
-                }
+                sweep!(
+                    0..common,
+                    common,
+                    [0, x0, r0, y0, l0],
+                    [1, x1, r1, y1, l1],
+                    [2, x2, r2, y2, l2],
+                    [3, x3, r3, y3, l3]
+                );
+            }
+            {
+                // The first three blocks are longer than the last by a pixel or two.
+                let (x0, r0, y0, l0) = (&x0[common..], &mut r0[common..], &y0[..block - common], &mut l0[..block - common]);
+                let (x1, r1, y1, l1) = (&x1[common..], &mut r1[common..], &y1[..block - common], &mut l1[..block - common]);
+                let (x2, r2, y2, l2) = (&x2[common..], &mut r2[common..], &y2[..block - common], &mut l2[..block - common]);
+                sweep!(
+                    0..block - common,
+                    block - common,
+                    [0, x0, r0, y0, l0],
+                    [1, x1, r1, y1, l1],
+                    [2, x2, r2, y2, l2]
+                );
             }
             for k in 1..BLOCKS {
                 let carry = right[k * block - 1];
