@@ -1395,7 +1395,7 @@ trait SegmentSink {
 }
 
 impl SegmentSink for Segments {
-    #[inline]
+    #[inline(always)]
     fn insert(&mut self, segment: Segment) {
         Segments::insert(self, segment)
     }
@@ -1471,7 +1471,7 @@ struct LitSink<'a> {
 }
 
 impl SegmentSink for LitSink<'_> {
-    #[inline]
+    #[inline(always)]
     fn insert(&mut self, segment: Segment) {
         let Some(fast) = self.frame.fast_shade(segment.object as usize) else {
             return;
