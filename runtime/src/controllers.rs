@@ -205,21 +205,27 @@ fn for_each_light_maximum(odd: &[u16], bits: u32, min_contrast: f64, mut visit: 
     // A positive lobe starts a maximum where the nearest lobe pixel before it is negative;
     // that pixel ends the negative lobe. Most pixels are in no lobe: a plain search skips
     // them, with no state carried from pixel to pixel.
-    let in_lobe = |d: u16| (d as u32) < negative_below || (d as u32) >= positive_from;
+    let is_negative = |d: u16| (d as u32) < negative_below;
+    let is_positive = |d: u16| (d as u32) >= positive_from;
     let (mut last_negative, mut last_index) = (false, 0usize);
     let mut i = 0;
-    while let Some(skipped) = odd[i..].iter().position(|&d| in_lobe(d)) {
+    while let Some(skipped) = odd[i..]
+        .iter()
+        .position(|&d| is_negative(d) | is_positive(d))
+    {
         i += skipped;
-        if (odd[i] as u32) < negative_below {
-            last_negative = true;
-        } else {
-            if last_negative {
-                visit((last_index + 1 + i) as f64 / 2.0);
-            }
-            last_negative = false;
+        // A lobe is a run of one sign: skip to its end in one search too.
+        let negative = is_negative(odd[i]);
+        let run = odd[i..]
+            .iter()
+            .position(|&d| if negative { !is_negative(d) } else { !is_positive(d) })
+            .unwrap_or(odd.len() - i);
+        if !negative && last_negative {
+            visit((last_index + 1 + i) as f64 / 2.0);
         }
-        last_index = i;
-        i += 1;
+        last_negative = negative;
+        last_index = i + run - 1;
+        i += run;
     }
 }
 
