@@ -218,7 +218,13 @@ fn for_each_light_maximum(odd: &[u16], bits: u32, min_contrast: f64, mut visit: 
         let negative = is_negative(odd[i]);
         let run = odd[i..]
             .iter()
-            .position(|&d| if negative { !is_negative(d) } else { !is_positive(d) })
+            .position(|&d| {
+                if negative {
+                    !is_negative(d)
+                } else {
+                    !is_positive(d)
+                }
+            })
             .unwrap_or(odd.len() - i);
         if !negative && last_negative {
             visit((last_index + 1 + i) as f64 / 2.0);

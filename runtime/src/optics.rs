@@ -32,7 +32,8 @@ const VIEW_HALF_WIDTH: f64 = std::f64::consts::FRAC_PI_3; // 60°
 
 /// The renderer a scene's plan chose, ready for frames.
 pub enum Renderer<'g> {
-    Columns(ColumnScene<'g>),
+    /// Boxed: the column renderer keeps its buffers, the ray caster only references.
+    Columns(Box<ColumnScene<'g>>),
     Rays(RayCaster<'g>),
 }
 
@@ -48,7 +49,7 @@ impl<'g> Renderer<'g> {
         if force_rays || plan.renderer != RendererChoice::Columns {
             Renderer::Rays(RayCaster::new(graph, plan))
         } else {
-            Renderer::Columns(ColumnScene::new(graph, plan))
+            Renderer::Columns(Box::new(ColumnScene::new(graph, plan)))
         }
     }
 

@@ -311,9 +311,24 @@ impl Chain {
             }
             {
                 // The first three blocks are longer than the last by a pixel or two.
-                let (x0, r0, y0, l0) = (&x0[common..], &mut r0[common..], &y0[..block - common], &mut l0[..block - common]);
-                let (x1, r1, y1, l1) = (&x1[common..], &mut r1[common..], &y1[..block - common], &mut l1[..block - common]);
-                let (x2, r2, y2, l2) = (&x2[common..], &mut r2[common..], &y2[..block - common], &mut l2[..block - common]);
+                let (x0, r0, y0, l0) = (
+                    &x0[common..],
+                    &mut r0[common..],
+                    &y0[..block - common],
+                    &mut l0[..block - common],
+                );
+                let (x1, r1, y1, l1) = (
+                    &x1[common..],
+                    &mut r1[common..],
+                    &y1[..block - common],
+                    &mut l1[..block - common],
+                );
+                let (x2, r2, y2, l2) = (
+                    &x2[common..],
+                    &mut r2[common..],
+                    &y2[..block - common],
+                    &mut l2[..block - common],
+                );
                 sweep!(
                     0..block - common,
                     block - common,

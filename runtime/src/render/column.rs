@@ -198,7 +198,9 @@ impl Raster<'_> {
         // ⌈u1⌉ without a libm call: u1 > 0 here (u1 > u0, and a piece left of the strip
         // ends at u1 ≤ 0 only when empty below).
         let whole = u1.max(0.0) as usize;
-        let last = whole.saturating_add((u1 > whole as f64) as usize).min(pixels);
+        let last = whole
+            .saturating_add((u1 > whole as f64) as usize)
+            .min(pixels);
         if first >= last {
             return;
         }
@@ -770,10 +772,7 @@ impl<'g> ColumnScene<'g> {
             self.collect_segments(look, direction, &buffers.facing, &mut segments);
         }
         for (t, rgb) in tans.iter().zip(out.iter_mut()) {
-            *rgb = match segments
-                .iter()
-                .find(|s| s.t0 <= *t && *t <= s.t1)
-            {
+            *rgb = match segments.iter().find(|s| s.t0 <= *t && *t <= s.t1) {
                 Some(segment) => self.shade_segment(frame, segment, look.eye, direction, *t),
                 None => self.background(*t),
             };
@@ -1187,9 +1186,9 @@ impl Relative {
                         axis_slabs(pu, pv, direction, inverse, half_u, half_v)?
                     } else {
                         crate::geometry::rect_slabs_inverse(
-                        pu,
-                        pv,
-                        (direction.x, inverse.x),
+                            pu,
+                            pv,
+                            (direction.x, inverse.x),
                             (direction.y, inverse.y),
                             half_u,
                             half_v,
@@ -1665,7 +1664,21 @@ mod tests {
 
     #[test]
     fn nearest_index_rounds_like_round() {
-        for x in [-2.5, -0.5, -0.2, 0.0, 0.2, 0.5, 0.7, 1.5, 2.4999, 2.5, 149.5, 1e30, f64::NAN] {
+        for x in [
+            -2.5,
+            -0.5,
+            -0.2,
+            0.0,
+            0.2,
+            0.5,
+            0.7,
+            1.5,
+            2.4999,
+            2.5,
+            149.5,
+            1e30,
+            f64::NAN,
+        ] {
             assert_eq!(nearest_index(x), (x.round().max(0.0)) as usize, "{x}");
         }
     }

@@ -319,7 +319,10 @@ impl<'c> Simulation<'c> {
         for robot in &mut self.robots {
             robot.updated = Updated::default();
             // A robot driven from outside may read anything.
-            let reads = robot.controller.as_ref().map_or(Senses::ALL, |c| c.senses());
+            let reads = robot
+                .controller
+                .as_ref()
+                .map_or(Senses::ALL, |c| c.senses());
             robot.senses = reads.union(self.always_sensed);
             let vision = robot.senses.vision;
             if let Some(turret) = &mut robot.panoramic {
