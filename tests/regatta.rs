@@ -155,6 +155,19 @@ fn sensors_nobody_reads_are_skipped_without_changing_the_run() {
         Err(KheperaError::NotSensed(_))
     ));
     assert!(simulation.khepera(0).proximity().is_ok());
+    // The Braitenberg controller reads IR only: a turret it carries is not refreshed either.
+    let compiled = compile_text(
+        "#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" }\nKhepera { controller \"braitenberg\" turret PanoramicTurret { } }\n",
+    );
+    let mut simulation = Simulation::new(&compiled, None).unwrap();
+    simulation.step();
+    assert!(!simulation.robots[0].updated.vision);
+    let mut khepera = simulation.khepera(0);
+    let turret = khepera.panoramic().expect("the world mounts a turret");
+    assert!(matches!(
+        turret.read(regatta_runtime::retina::FilterKind::Raw),
+        Err(KheperaError::NotSensed(_))
+    ));
 }
 
 #[test]

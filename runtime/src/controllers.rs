@@ -185,12 +185,11 @@ pub fn nearest_light_maximum(
 ) -> Option<f64> {
     let mut nearest: Option<f64> = None;
     for_each_light_maximum(odd, bits, min_contrast, |p| {
-        let offset = p - centre;
-        if nearest.is_none_or(|n| offset.abs() < n.abs()) {
-            nearest = Some(offset);
+        if nearest.is_none_or(|n| (p - centre).abs() < (n - centre).abs()) {
+            nearest = Some(p);
         }
     });
-    nearest.map(|offset| offset + centre)
+    nearest
 }
 
 /// Calls `visit` on each maximum of [`light_maxima`], in pixel order.
