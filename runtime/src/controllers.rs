@@ -10,6 +10,8 @@
 //!   steers the robot by `lightGain` pulses/10 ms per pixel of distance from the centre, added
 //!   to the network's output.
 
+use std::ops::ControlFlow;
+
 use crate::khepera::{Controller, Khepera, KheperaError, Senses};
 use crate::retina::FilterKind;
 
@@ -108,6 +110,7 @@ pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, Control
         })),
         "regatta" => Ok(Box::new(Regatta {
             parameters: Parameters::parse(name, args)?,
+            thresholds: None,
             enabled: false,
             odd: Vec::new(),
         })),
@@ -172,7 +175,10 @@ impl Controller for Braitenberg {
 /// patch is.
 pub fn light_maxima(odd: &[u16], bits: u32, min_contrast: f64) -> Vec<f64> {
     let mut maxima = Vec::new();
-    for_each_light_maximum(odd, bits, min_contrast, |p| maxima.push(p));
+    LobeThresholds::new(bits, min_contrast).for_each_maximum(odd, |p| {
+        maxima.push(p);
+        ControlFlow::Continue(())
+    });
     maxima
 }
 
@@ -183,54 +189,84 @@ pub fn nearest_light_maximum(
     min_contrast: f64,
     centre: f64,
 ) -> Option<f64> {
-    let mut nearest: Option<f64> = None;
-    for_each_light_maximum(odd, bits, min_contrast, |p| {
-        if nearest.is_none_or(|n| (p - centre).abs() < (n - centre).abs()) {
-            nearest = Some(p);
-        }
-    });
-    nearest
+    LobeThresholds::new(bits, min_contrast).nearest_maximum(odd, centre)
 }
 
-/// Calls `visit` on each maximum of [`light_maxima`], in pixel order.
-fn for_each_light_maximum(odd: &[u16], bits: u32, min_contrast: f64, mut visit: impl FnMut(f64)) {
-    let zero = ((1u32 << bits) - 1) as f64 / 2.0;
-    let negative = |d: u32| d as f64 - zero <= -min_contrast;
-    let positive = |d: u32| !negative(d) && d as f64 - zero >= min_contrast;
-    // Both tests are monotone in the digital value: negative on a prefix of 0…65535, positive
-    // on a suffix. Found once with the float tests themselves, they become integer compares.
-    let negative_below = partition_point_u16(negative);
-    let positive_from = partition_point_u16(|d| !positive(d));
-    // A positive lobe starts a maximum where the nearest lobe pixel before it is negative;
-    // that pixel ends the negative lobe. Most pixels are in no lobe: a plain search skips
-    // them, with no state carried from pixel to pixel.
-    let is_negative = |d: u16| (d as u32) < negative_below;
-    let is_positive = |d: u16| (d as u32) >= positive_from;
-    let (mut last_negative, mut last_index) = (false, 0usize);
-    let mut i = 0;
-    while let Some(skipped) = odd[i..]
-        .iter()
-        .position(|&d| is_negative(d) | is_positive(d))
-    {
-        i += skipped;
-        // A lobe is a run of one sign: skip to its end in one search too.
-        let negative = is_negative(odd[i]);
-        let run = odd[i..]
-            .iter()
-            .position(|&d| {
-                if negative {
-                    !is_negative(d)
-                } else {
-                    !is_positive(d)
-                }
-            })
-            .unwrap_or(odd.len() - i);
-        if !negative && last_negative {
-            visit((last_index + 1 + i) as f64 / 2.0);
+/// The lobe tests of [`light_maxima`] for one resolution and contrast, as integer thresholds
+/// on the digital value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LobeThresholds {
+    /// Values below this are in a negative lobe.
+    negative_below: u32,
+    /// Values from this on are in a positive lobe.
+    positive_from: u32,
+}
+
+impl LobeThresholds {
+    /// The thresholds for `bits`-bit values and `min_contrast` LSB.
+    pub fn new(bits: u32, min_contrast: f64) -> LobeThresholds {
+        let zero = ((1u32 << bits) - 1) as f64 / 2.0;
+        let negative = |d: u32| d as f64 - zero <= -min_contrast;
+        let positive = |d: u32| !negative(d) && d as f64 - zero >= min_contrast;
+        // Both tests are monotone in the digital value: negative on a prefix of 0…65535,
+        // positive on a suffix. Found once with the float tests themselves, they become
+        // integer compares.
+        LobeThresholds {
+            negative_below: partition_point_u16(negative),
+            positive_from: partition_point_u16(|d| !positive(d)),
         }
-        last_negative = negative;
-        last_index = i + run - 1;
-        i += run;
+    }
+
+    /// [`nearest_light_maximum`] with these thresholds.
+    pub fn nearest_maximum(&self, odd: &[u16], centre: f64) -> Option<f64> {
+        let mut nearest: Option<f64> = None;
+        self.for_each_maximum(odd, |p| {
+            if nearest.is_none_or(|n| (p - centre).abs() < (n - centre).abs()) {
+                nearest = Some(p);
+            }
+            // Maxima come in increasing order: past the centre, the rest are farther.
+            if p >= centre {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        });
+        nearest
+    }
+
+    /// Calls `visit` on each maximum of [`light_maxima`], in pixel order, until it breaks.
+    fn for_each_maximum(&self, odd: &[u16], mut visit: impl FnMut(f64) -> ControlFlow<()>) {
+        // A positive lobe starts a maximum where the nearest lobe pixel before it is negative;
+        // that pixel ends the negative lobe. Most pixels are in no lobe: a plain search skips
+        // them, with no state carried from pixel to pixel.
+        let is_negative = |d: u16| (d as u32) < self.negative_below;
+        let is_positive = |d: u16| (d as u32) >= self.positive_from;
+        let (mut last_negative, mut last_index) = (false, 0usize);
+        let mut i = 0;
+        while let Some(skipped) = odd[i..]
+            .iter()
+            .position(|&d| is_negative(d) | is_positive(d))
+        {
+            i += skipped;
+            // A lobe is a run of one sign: skip to its end in one search too.
+            let negative = is_negative(odd[i]);
+            let run = odd[i..]
+                .iter()
+                .position(|&d| {
+                    if negative {
+                        !is_negative(d)
+                    } else {
+                        !is_positive(d)
+                    }
+                })
+                .unwrap_or(odd.len() - i);
+            if !negative && last_negative && visit((last_index + 1 + i) as f64 / 2.0).is_break() {
+                return;
+            }
+            last_negative = negative;
+            last_index = i + run - 1;
+            i += run;
+        }
     }
 }
 
@@ -251,6 +287,8 @@ fn partition_point_u16(holds: impl Fn(u32) -> bool) -> u32 {
 /// The paper's regatta controller.
 pub struct Regatta {
     pub parameters: Parameters,
+    /// The lobe thresholds, with the resolution and contrast they were found for.
+    thresholds: Option<(u32, u64, LobeThresholds)>,
     enabled: bool,
     /// The odd filter's last reading, its buffer reused.
     odd: Vec<u16>,
@@ -271,12 +309,16 @@ impl Controller for Regatta {
         let (first, _) = turret.region_of_interest()?;
         let bits = turret.bits()?;
         let centre = crate::retina::PIXELS as f64 / 2.0;
-        let nearest = nearest_light_maximum(
-            &self.odd,
-            bits,
-            self.parameters.min_contrast,
-            centre - first as f64,
-        );
+        let contrast = self.parameters.min_contrast;
+        let thresholds = match self.thresholds {
+            Some((b, c, thresholds)) if b == bits && c == contrast.to_bits() => thresholds,
+            _ => {
+                let thresholds = LobeThresholds::new(bits, contrast);
+                self.thresholds = Some((bits, contrast.to_bits(), thresholds));
+                thresholds
+            }
+        };
+        let nearest = thresholds.nearest_maximum(&self.odd, centre - first as f64);
         if let Some(maximum) = nearest {
             let offset = maximum + first as f64 - centre;
             // Right of centre (positive) turns right: left wheel faster.

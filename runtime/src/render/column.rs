@@ -528,17 +528,38 @@ impl<'g> ColumnScene<'g> {
                 ] {
                     match corner {
                         Some(corner) if hiders.iter().any(|h| h.corner == corner) => {
+                            let Footprint::Rect {
+                                center,
+                                u,
+                                v,
+                                half_u,
+                                half_v,
+                            } = object.footprint
+                            else {
+                                unreachable!("only rectangles have corners")
+                            };
                             edges.push(PendingEdge {
                                 angle: wrap(angle),
                                 object: index as u16,
                                 corner,
+                                to_corner: rect_corner(
+                                    center,
+                                    u,
+                                    v,
+                                    half_u,
+                                    half_v,
+                                    corner as usize,
+                                ) - eye2,
                             });
                         }
                         _ => breaks.push(wrap(angle)),
                     }
                 }
             }
-            let (lo, hi) = interval.map_or((f64::NEG_INFINITY, f64::INFINITY), |i| (i.lo, i.hi));
+            // Edges wrapped into (−π, π]: an interval through ±π wraps to lo > hi.
+            let (lo, hi) = interval.map_or((f64::NEG_INFINITY, f64::INFINITY), |i| {
+                (wrap(i.lo), wrap(i.hi))
+            });
             let relative = match object.footprint {
                 Footprint::Circle { center, radius } => {
                     let oc = eye2 - center;
@@ -569,6 +590,7 @@ impl<'g> ColumnScene<'g> {
             objects.push(EyeObject {
                 lo,
                 hi,
+                wraps: lo > hi,
                 relative,
                 y0: object.y0 - eye.y,
                 y1: object.y1 - eye.y,
@@ -578,7 +600,7 @@ impl<'g> ColumnScene<'g> {
             });
         }
         for edge in edges.iter() {
-            if !self.edge_hidden(frame, objects, eye2, edge) {
+            if !self.edge_hidden(objects, edge) {
                 breaks.push(edge.angle);
             }
         }
@@ -596,31 +618,8 @@ impl<'g> ColumnScene<'g> {
     /// edge's whole elevation range. Then nothing of the rectangle shows near that azimuth, the
     /// column integrand is as smooth there as on either side, and the edge need not cut the
     /// strip (the end of one arena wall behind the next, at each corner).
-    fn edge_hidden(
-        &self,
-        frame: &ColumnFrame,
-        objects: &[EyeObject],
-        eye: DVec2,
-        edge: &PendingEdge,
-    ) -> bool {
+    fn edge_hidden(&self, objects: &[EyeObject], edge: &PendingEdge) -> bool {
         let index = edge.object as usize;
-        let Footprint::Rect {
-            center,
-            u,
-            v,
-            half_u,
-            half_v,
-        } = frame.object(index).footprint
-        else {
-            return false;
-        };
-        let to_corner = rect_corner(center, u, v, half_u, half_v, edge.corner as usize) - eye;
-        let distance = to_corner.length();
-        if distance <= 0.0 || !distance.is_finite() {
-            return false;
-        }
-        let direction = to_corner / distance;
-        let inverse = DVec2::ONE / direction;
         let hidden = &objects[index];
         self.hiders[index]
             .iter()
@@ -630,16 +629,18 @@ impl<'g> ColumnScene<'g> {
                 if !hider.side {
                     return false;
                 }
-                let Some((t_in, _, _)) = hider.relative.cross(direction, inverse) else {
+                // Along the sight line in units of the corner's distance (the corner at 1):
+                // entered strictly before the corner, from outside, and its side there spans
+                // the edge's tan-elevations (and so any cap of the hidden object, which meets
+                // the edge at its height). Heights over distances compare as heights over
+                // these units: both sides share the distance.
+                let Some(entry) = hider.relative.entry(edge.to_corner) else {
                     return false;
                 };
-                // Entered strictly before the corner (from outside the hider), and its side
-                // there spans the edge's tan-elevations (and so any cap of the hidden object,
-                // which meets the edge at its height).
-                t_in > 0.0
-                    && t_in < distance * (1.0 - 1e-9)
-                    && hider.y0 / t_in <= hidden.y0 / distance
-                    && hider.y1 / t_in >= hidden.y1 / distance
+                entry > 0.0
+                    && entry < 1.0 - 1e-9
+                    && hider.y0 / entry <= hidden.y0
+                    && hider.y1 / entry >= hidden.y1
             })
     }
 
@@ -1121,21 +1122,6 @@ fn sort_small(values: &mut [f64]) {
     }
 }
 
-/// Whether azimuth `alpha` (in (−π, π]) misses the interval `[lo, hi]`, which may reach past
-/// ±π (it spans less than a turn), so `alpha ± 2π` is tried too.
-#[inline]
-fn outside(alpha: f64, lo: f64, hi: f64) -> bool {
-    if alpha >= lo && alpha <= hi {
-        return false;
-    }
-    let turned = if alpha < lo {
-        alpha + std::f64::consts::TAU
-    } else {
-        alpha - std::f64::consts::TAU
-    };
-    turned < lo || turned > hi
-}
-
 /// A static object that may hide a static rectangle's corner: the corner lies in (or on) its
 /// footprint and its height range holds the rectangle's. Whether it does hide it depends on
 /// the eye (see [`ColumnScene::edge_hidden`]).
@@ -1153,6 +1139,8 @@ struct PendingEdge {
     angle: f64,
     object: u16,
     corner: u8,
+    /// From the eye to the corner, in (x, z).
+    to_corner: DVec2,
 }
 
 /// For each static object, the hiders of its corners.
@@ -1205,14 +1193,6 @@ const RECT_CORNERS: [(f64, f64); 4] = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-
 fn rect_corner(center: DVec2, u: DVec2, v: DVec2, half_u: f64, half_v: f64, k: usize) -> DVec2 {
     let (su, sv) = RECT_CORNERS[k];
     center + u * (su * half_u) + v * (sv * half_v)
-}
-
-/// Whether `(a, b)` (within (−π, π]) meets the interval `[lo, hi]`, which may reach past ±π
-/// (it spans less than a turn).
-#[inline]
-fn meets(a: f64, b: f64, lo: f64, hi: f64) -> bool {
-    const TAU: f64 = std::f64::consts::TAU;
-    (lo < b && hi > a) || (lo + TAU < b && hi + TAU > a) || (lo - TAU < b && hi - TAU > a)
 }
 
 /// An object's azimuth interval relative to the viewer's heading.
@@ -1305,8 +1285,11 @@ fn azimuth_interval(object: &Upright, eye: DVec2, heading: f64) -> Option<Interv
 /// An object as seen from one eye.
 #[derive(Clone, Copy, Debug)]
 pub struct EyeObject {
+    /// Its azimuth interval's edges in (−π, π] (infinite when it surrounds the eye).
     lo: f64,
     hi: f64,
+    /// Whether the interval passes ±π: it is `[lo, π] ∪ (−π, hi]`.
+    wraps: bool,
     relative: Relative,
     /// Heights relative to the eye.
     y0: f64,
@@ -1314,6 +1297,30 @@ pub struct EyeObject {
     side: bool,
     top: bool,
     bottom: bool,
+}
+
+impl EyeObject {
+    /// Whether its azimuth interval holds `alpha` (in (−π, π]).
+    #[inline]
+    fn holds(&self, alpha: f64) -> bool {
+        let (after_lo, before_hi) = (alpha >= self.lo, alpha <= self.hi);
+        if self.wraps {
+            after_lo | before_hi
+        } else {
+            after_lo & before_hi
+        }
+    }
+
+    /// Whether its azimuth interval meets the open interval `(a, b)` (within (−π, π]).
+    #[inline]
+    fn meets(&self, a: f64, b: f64) -> bool {
+        let (after_lo, before_hi) = (self.lo < b, self.hi > a);
+        if self.wraps {
+            after_lo | before_hi
+        } else {
+            after_lo & before_hi
+        }
+    }
 }
 
 /// A footprint relative to the eye, with what does not depend on the direction precomputed.
@@ -1391,6 +1398,27 @@ impl Relative {
                 let normal = if axis == 0 { u * sign } else { v * sign };
                 Some((t_in.max(0.0), t_out, normal))
             }
+        }
+    }
+
+    /// Where the segment from the eye to `eye + to` enters the footprint, as a fraction of
+    /// `to` (negative when the eye is inside), or `None` if the line misses it.
+    fn entry(&self, to: DVec2) -> Option<f64> {
+        match *self {
+            Relative::Circle { oc, c, .. } => {
+                let (a, b) = (to.length_squared(), oc.dot(to));
+                let disc = b * b - a * c;
+                (disc >= 0.0 && a > 0.0).then(|| (-b - disc.sqrt()) / a)
+            }
+            Relative::Rect {
+                pu,
+                pv,
+                u,
+                v,
+                half_u,
+                half_v,
+            } => crate::geometry::rect_slabs(pu, pv, to.dot(u), to.dot(v), half_u, half_v)
+                .map(|(t_in, _, _)| t_in),
         }
     }
 
@@ -1472,7 +1500,7 @@ impl Look {
             self.objects
                 .iter()
                 .enumerate()
-                .filter(|(_, o)| !outside(alpha, o.lo, o.hi))
+                .filter(|(_, o)| o.holds(alpha))
                 .map(|(index, _)| index as u16),
         );
     }
@@ -1484,7 +1512,7 @@ impl Look {
             self.objects
                 .iter()
                 .enumerate()
-                .filter(|(_, o)| meets(a, b, o.lo, o.hi))
+                .filter(|(_, o)| o.meets(a, b))
                 .map(|(index, _)| index as u16),
         );
     }
