@@ -150,6 +150,8 @@ pub struct ColumnScene<'g> {
     cached: Option<StaticShading>,
     /// Per static object, what may hide its corners' silhouette edges.
     hiders: Vec<Vec<Hider>>,
+    /// Per static object, whether its footprint is the previous one's (a lamp on its buoy).
+    same_footprint: Vec<bool>,
     /// Buffers reused from update to update (a scene renders one view at a time).
     buffers: std::cell::RefCell<RegionBuffers>,
     /// The last update's eye, its buffers reused by the next.
@@ -422,9 +424,13 @@ impl<'g> ColumnScene<'g> {
             (Arc::from(lights), Arc::from(flat))
         });
         let hiders = corner_hiders(&statics);
+        let same_footprint = (0..statics.len())
+            .map(|i| i > 0 && statics[i].footprint == statics[i - 1].footprint)
+            .collect();
         ColumnScene {
             graph,
             hiders,
+            same_footprint,
             statics,
             visible,
             robot_parts,
@@ -513,8 +519,12 @@ impl<'g> ColumnScene<'g> {
         let mut previous: Option<(&Upright, Option<Interval>)> = None;
         for (index, object) in frame.objects().enumerate() {
             // A lamp on its buoy has the buoy's footprint: its interval is the buoy's.
+            let shares_previous = |before: &Upright| match self.same_footprint.get(index) {
+                Some(&same) => same,
+                None => before.footprint == object.footprint,
+            };
             let interval = match previous {
-                Some((before, interval)) if before.footprint == object.footprint => interval,
+                Some((before, interval)) if shares_previous(before) => interval,
                 _ => azimuth_interval(object, eye2, heading),
             };
             previous = Some((object, interval));

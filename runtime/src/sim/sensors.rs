@@ -87,8 +87,6 @@ pub fn proximity(
     let origin = placement.to_world(sensor.position);
     let height = origin.y;
     let origin2 = DVec2::new(origin.x, origin.z);
-    let looking = placement.direction_to_world(sensor.direction);
-    let direction = DVec2::new(looking.x, looking.z).normalize_or(DVec2::X);
     // Only obstacles at the sensor's height and within its range can answer any of its rays
     // (a hit is never nearer than the obstacle; the margin keeps rounding on the safe side).
     let reach = sensor.range * (1.0 + 1e-9) + 1e-12;
@@ -109,19 +107,29 @@ pub fn proximity(
             }
         }
     }
+    // Other robots' bodies at the sensor's height and within its range, likewise.
+    let robot_near = |other: usize, place: &Placement| {
+        other != robot
+            && height >= place.floor_y
+            && height <= place.floor_y + rigs[other].body_height
+            && DVec2::new(place.x, place.z).distance(origin2) <= reach + rigs[other].body_radius
+    };
+    if count == 0 && !placements.iter().enumerate().any(|(o, p)| robot_near(o, p)) {
+        // Every ray misses: the same sums with no ray traced.
+        return sample(sensor, stream, |_| None);
+    }
+    let looking = placement.direction_to_world(sensor.direction);
+    let direction = DVec2::new(looking.x, looking.z).normalize_or(DVec2::X);
     let candidates = near[..count]
         .iter()
         .chain(&overflow)
         .map(|&i| &slab.obstacles[i as usize]);
-    let far = lookup(&sensor.lookup, f64::INFINITY);
-    let (mut value_sum, mut noise_sum, mut weight_sum) = (0.0, 0.0, 0.0);
-    for &(_, cos, sin) in &sensor.ray_turns {
+    sample(sensor, stream, |(cos, sin)| {
         // Counter-clockwise seen from above, in (x, z): the same sense as headings.
         let ray = DVec2::new(
             cos * direction.x + sin * direction.y,
             -sin * direction.x + cos * direction.y,
         );
-        let weight = cos;
         let mut nearest = sensor.range;
         let mut reflectance = 0.0;
         for obstacle in candidates.clone() {
@@ -133,10 +141,7 @@ pub fn proximity(
             }
         }
         for (other, place) in placements.iter().enumerate() {
-            if other == robot {
-                continue;
-            }
-            if height < place.floor_y || height > place.floor_y + rigs[other].body_height {
+            if !robot_near(other, place) {
                 continue;
             }
             let body = Footprint::Circle {
@@ -150,17 +155,30 @@ pub fn proximity(
                 }
             }
         }
-        // The hit's depth along the sensor's axis: a wall square ahead is at one depth for
-        // every ray and reads the table's value.
-        let (value, noise) = if nearest < sensor.range {
-            lookup(&sensor.lookup, nearest * weight)
-        } else {
-            far
-        };
-        let value = if nearest < sensor.range {
-            value * reflectance
-        } else {
-            value
+        (nearest < sensor.range).then_some((nearest, reflectance))
+    })
+}
+
+/// One reading from the rays' hits: `hit(cos, sin)` of each ray's turn gives its nearest hit
+/// (distance, reflectance) within range, if any. The response is weighted by each ray's
+/// cosine; the hit's depth along the sensor's axis reads the table (a wall square ahead is at
+/// one depth for every ray and reads the table's value).
+#[inline]
+fn sample(
+    sensor: &DistanceSensorRig,
+    stream: &mut Stream,
+    mut hit: impl FnMut((f64, f64)) -> Option<(f64, f64)>,
+) -> u16 {
+    let far = lookup(&sensor.lookup, f64::INFINITY);
+    let (mut value_sum, mut noise_sum, mut weight_sum) = (0.0, 0.0, 0.0);
+    for &(_, cos, sin) in &sensor.ray_turns {
+        let weight = cos;
+        let (value, noise) = match hit((cos, sin)) {
+            Some((nearest, reflectance)) => {
+                let (value, noise) = lookup(&sensor.lookup, nearest * weight);
+                (value * reflectance, noise)
+            }
+            None => far,
         };
         value_sum += weight * value;
         noise_sum += weight * noise * value;
