@@ -92,16 +92,19 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
     // The usual image is finite: a peak that is finite and a sum that is not NaN prove it,
     // and then no element needs its own test. The peak in four lanes: max is exact, so
     // the order does not change it.
+    // A plain compare, not `f64::max`: a NaN never wins it (and then shows in the sum), and
+    // it needs no NaN fix-up per element.
+    let larger = |m: f64, v: f64| if v > m { v } else { m };
     let mut lanes = [0.0f64; 4];
     let mut chunks = y.chunks_exact(4);
     for chunk in &mut chunks {
         for (lane, &v) in lanes.iter_mut().zip(chunk) {
-            *lane = lane.max(v.abs());
+            *lane = larger(*lane, v.abs());
         }
     }
     let peak = chunks.remainder().iter().fold(
-        lanes[0].max(lanes[1]).max(lanes[2].max(lanes[3])),
-        |m, &v| m.max(v.abs()),
+        larger(larger(lanes[0], lanes[1]), larger(lanes[2], lanes[3])),
+        |m, &v| larger(m, v.abs()),
     );
     if peak > 0.0 && peak.is_finite() {
         let inverse_peak = 1.0 / peak;
@@ -613,11 +616,13 @@ pub fn convert(filtered: f64, i_bda: f64, bits: u32) -> u16 {
 #[inline]
 pub fn convert_scaled(filtered: f64, half: f64, gain: f64, top: f64) -> u16 {
     let value = half + filtered * gain + 0.5;
-    // `min` caps at top; `as` truncates (floor on [0, top]) and saturates negatives to 0.
-    if value.is_nan() {
-        0
+    // Capped at top; `as` truncates (floor on (0, top)); NaN fails both compares and reads 0.
+    if value >= top {
+        top as u16
+    } else if value > 0.0 {
+        value as u16
     } else {
-        value.min(top) as u16
+        0
     }
 }
 
