@@ -212,7 +212,7 @@ impl Raster<'_> {
         // two it covers in part, the mean over the part times its share.
         let partial = |i: usize| {
             let i = i as f64;
-            let (a, b) = (u0.max(i), u1.min(i + 1.0));
+            let (a, b) = (larger(u0, i), smaller(u1, i + 1.0));
             if b > a {
                 (b - a) * (value + slope_u * (u1 - 0.5 * (a + b)))
             } else {
@@ -1119,6 +1119,27 @@ fn nearest_index(x: f64) -> usize {
     whole.saturating_add((x - whole as f64 >= 0.5) as usize)
 }
 
+/// The larger of two numbers, by one compare: `f64::max` also settles NaN, at a cost on the
+/// hot paths, and none arises there (finite geometry; a NaN here picks `b`).
+#[inline(always)]
+fn larger(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// The smaller of two numbers, by one compare (see [`larger`]).
+#[inline(always)]
+fn smaller(a: f64, b: f64) -> f64 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
 /// Sorts a few finite numbers ascending (insertion sort: the edges of a dozen objects).
 fn sort_small(values: &mut [f64]) {
     for i in 1..values.len() {
@@ -1368,7 +1389,7 @@ impl Relative {
                 if t1 <= 0.0 {
                     return None;
                 }
-                Some((t0.max(0.0), t1, (oc + direction * t0) / radius))
+                Some((larger(t0, 0.0), t1, (oc + direction * t0) / radius))
             }
             Relative::Rect {
                 pu,
@@ -1406,7 +1427,7 @@ impl Relative {
                     return None;
                 }
                 let normal = if axis == 0 { u * sign } else { v * sign };
-                Some((t_in.max(0.0), t_out, normal))
+                Some((larger(t_in, 0.0), t_out, normal))
             }
         }
     }
@@ -1483,7 +1504,7 @@ fn axis_slabs(
         t_in = near_v;
         face = (1, facing(direction.y));
     }
-    let t_out = f64::INFINITY.min(far_u).min(far_v);
+    let t_out = smaller(far_u, far_v);
     (t_in <= t_out && t_out >= 0.0).then_some((t_in, t_out, face))
 }
 
@@ -1774,7 +1795,7 @@ impl Band {
                 break;
             }
             let (t0, t1) = segment.extent();
-            let (a, b) = (t0.max(-tan_half), t1.min(tan_half));
+            let (a, b) = (larger(t0, -tan_half), smaller(t1, tan_half));
             if a >= b {
                 continue;
             }
@@ -1845,7 +1866,7 @@ impl Free {
             if x0 >= b {
                 break;
             }
-            let (c0, c1) = (x0.max(a), x1.min(b));
+            let (c0, c1) = (larger(x0, a), smaller(x1, b));
             visit(c0, c1);
             match (x0 < c0, c1 < x1) {
                 (true, true) => {
