@@ -222,11 +222,12 @@ impl Raster<'_> {
             return;
         }
         self.out[last - 1] += partial(last - 1);
-        // Centres counted in f64: exact for integers, and no integer conversion per pixel.
-        let mut center = (first + 1) as f64 + 0.5;
-        for out in &mut self.out[first + 1..last - 1] {
+        // Each centre from its index (one signed conversion, exact): a running `center += 1`
+        // would chain every pixel's add behind the last one's.
+        let base = (first + 1) as i64;
+        for (k, out) in self.out[first + 1..last - 1].iter_mut().enumerate() {
+            let center = (base + k as i64) as f64 + 0.5;
             *out += value + slope_u * (u1 - center);
-            center += 1.0;
         }
     }
 }
