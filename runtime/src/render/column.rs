@@ -522,12 +522,15 @@ impl<'g> ColumnScene<'g> {
                 Some(&same) => same,
                 None => before.footprint == object.footprint,
             };
-            let interval = match previous {
-                Some((before, interval)) if shares_previous(before) => interval,
-                _ => azimuth_interval(object, eye2, heading),
+            let (interval, shared) = match previous {
+                Some((before, interval)) if shares_previous(before) => (interval, true),
+                _ => (azimuth_interval(object, eye2, heading), false),
             };
             previous = Some((object, interval));
-            if let Some(interval) = interval {
+            // A shared round silhouette's edges are already in (a rectangle's may yet be
+            // hidden for one object and not for the other).
+            let edges_in = shared && interval.is_some_and(|i| i.corners.is_none());
+            if let Some(interval) = interval.filter(|_| !edges_in) {
                 // An interval may reach past ±π; its edges are where a column of (−π, π] meets
                 // them. An edge another object may hide waits until every object is placed.
                 let hiders = self.hiders.get(index).map_or(&[][..], Vec::as_slice);
@@ -615,7 +618,7 @@ impl<'g> ColumnScene<'g> {
             }
         }
         sort_small(breaks);
-        // A lamp on its buoy shares the buoy's silhouette: one edge is enough.
+        // Objects may share an edge: one is enough.
         breaks.dedup();
         look.eye = eye;
         look.heading = heading;
