@@ -63,8 +63,10 @@ impl Stream {
         let u2 = self.uniform();
         let radius = libm::sqrt(-2.0 * libm::log(u1));
         let angle = 2.0 * std::f64::consts::PI * u2;
-        self.spare = Some(radius * libm::sin(angle));
-        radius * libm::cos(angle)
+        // One range reduction for both (the same values as `sin` and `cos` apart).
+        let (sin, cos) = libm::sincos(angle);
+        self.spare = Some(radius * sin);
+        radius * cos
     }
 }
 
@@ -91,5 +93,31 @@ mod tests {
             mean.abs() < 0.03 && (variance - 1.0).abs() < 0.05,
             "{mean} {variance}"
         );
+    }
+
+    /// `gaussian` takes sine and cosine from one `sincos`: the noise must stay what separate
+    /// `sin` and `cos` give (the streams are part of a run's identity).
+    #[test]
+    fn sincos_equals_sin_and_cos_bit_for_bit() {
+        let mut stream = Stream::new(3, 0, kind::WHEELS, 0);
+        for i in 0..200_000 {
+            let angle = if i < 8 {
+                [
+                    0.0,
+                    1e-300,
+                    0.5,
+                    1.0,
+                    3.0,
+                    std::f64::consts::PI,
+                    6.0,
+                    6.283185307179586,
+                ][i]
+            } else {
+                2.0 * std::f64::consts::PI * stream.uniform()
+            };
+            let (sin, cos) = libm::sincos(angle);
+            assert_eq!(sin.to_bits(), libm::sin(angle).to_bits(), "{angle}");
+            assert_eq!(cos.to_bits(), libm::cos(angle).to_bits(), "{angle}");
+        }
     }
 }
