@@ -110,7 +110,7 @@ mod tests {
                     3.0,
                     std::f64::consts::PI,
                     6.0,
-                    6.283185307179586,
+                    std::f64::consts::TAU,
                 ][i]
             } else {
                 2.0 * std::f64::consts::PI * stream.uniform()
