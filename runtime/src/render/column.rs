@@ -540,29 +540,15 @@ impl<'g> ColumnScene<'g> {
                 ] {
                     match corner {
                         Some(corner) if hiders.iter().any(|h| h.corner == corner) => {
-                            let Footprint::Rect {
-                                center,
-                                u,
-                                v,
-                                half_u,
-                                half_v,
-                            } = object.footprint
-                            else {
-                                unreachable!("only rectangles have corners")
-                            };
-                            edges.push(PendingEdge {
-                                angle: wrap(angle),
-                                object: index as u16,
-                                corner,
-                                to_corner: rect_corner(
-                                    center,
-                                    u,
-                                    v,
-                                    half_u,
-                                    half_v,
-                                    corner as usize,
-                                ) - eye2,
-                            });
+                            match corner_of(&object.footprint, corner as usize) {
+                                Some(point) => edges.push(PendingEdge {
+                                    angle: wrap(angle),
+                                    object: index as u16,
+                                    corner,
+                                    to_corner: point - eye2,
+                                }),
+                                None => breaks.push(wrap(angle)),
+                            }
                         }
                         _ => breaks.push(wrap(angle)),
                     }
@@ -1192,19 +1178,11 @@ fn corner_hiders(statics: &[Upright]) -> Vec<Vec<Hider>> {
         .iter()
         .enumerate()
         .map(|(index, object)| {
-            let Footprint::Rect {
-                center,
-                u,
-                v,
-                half_u,
-                half_v,
-            } = object.footprint
-            else {
-                return Vec::new();
-            };
             let mut hiders = Vec::new();
             for corner in 0..RECT_CORNERS.len() {
-                let point = rect_corner(center, u, v, half_u, half_v, corner);
+                let Some(point) = corner_of(&object.footprint, corner) else {
+                    break;
+                };
                 // Touching within rounding of the coordinates (walls built edge to edge).
                 let (_, reach) = object.footprint.bounding_circle();
                 let tolerance = 1e-9 * (1.0 + point.length() + reach);
@@ -1236,6 +1214,20 @@ const RECT_CORNERS: [(f64, f64); 4] = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-
 fn rect_corner(center: DVec2, u: DVec2, v: DVec2, half_u: f64, half_v: f64, k: usize) -> DVec2 {
     let (su, sv) = RECT_CORNERS[k];
     center + u * (su * half_u) + v * (sv * half_v)
+}
+
+/// Corner `k` of a footprint (see [`RECT_CORNERS`]): a circle has none.
+fn corner_of(footprint: &Footprint, k: usize) -> Option<DVec2> {
+    match *footprint {
+        Footprint::Rect {
+            center,
+            u,
+            v,
+            half_u,
+            half_v,
+        } => Some(rect_corner(center, u, v, half_u, half_v, k)),
+        Footprint::Circle { .. } => None,
+    }
 }
 
 /// An object's azimuth interval relative to the viewer's heading.
