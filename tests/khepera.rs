@@ -242,3 +242,29 @@ fn the_khepera_api_checks_its_arguments_and_its_filters() {
         "{counters:?}"
     );
 }
+
+/// Another robot's body reflects IR like any obstacle: a Khepera 2 cm ahead lights the front
+/// sensors, one 30 cm ahead leaves them at the noise floor (rays are traced only towards
+/// bodies within range).
+#[test]
+fn another_khepera_ahead_is_seen_by_the_front_sensors() {
+    let front = |gap: f64| {
+        let text = format!(
+            "#VRML_SIM R2023b utf8
+WorldInfo {{ coordinateSystem \"NUE\" }}
+Khepera {{ name \"a\" controller \"none\" }}
+Khepera {{ name \"b\" translation {} 0 0 controller \"none\" }}
+",
+            0.055 + gap
+        );
+        let compiled = compile_text(&text);
+        let mut simulation = Simulation::new(&compiled, None).unwrap();
+        simulation.step();
+        let p = simulation.robots[0].proximity;
+        p[2].max(p[3])
+    };
+    let near = front(0.02);
+    let far = front(0.30);
+    assert!(near > 300, "2 cm: {near}");
+    assert!(far < 10, "30 cm: {far}");
+}

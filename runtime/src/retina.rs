@@ -91,9 +91,8 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
     let n = y.len() as f64;
     // The usual image is finite: a peak that is finite and a sum that is not NaN prove it,
     // and then no element needs its own test. The peak in four lanes: max is exact, so
-    // the order does not change it.
-    // A plain compare, not `f64::max`: a NaN never wins it (and then shows in the sum), and
-    // it needs no NaN fix-up per element.
+    // the order does not change it. A plain compare, not `f64::max`: a NaN never wins it
+    // (and then shows in the sum), and it needs no NaN fix-up per element.
     let larger = |m: f64, v: f64| if v > m { v } else { m };
     let mut lanes = [0.0f64; 4];
     let mut chunks = y.chunks_exact(4);
@@ -121,7 +120,7 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
             |s, &v| s + v * inverse_peak,
         );
         if !sum.is_nan() {
-            return scale_by_mean(y, analog, inverse_peak, sum / n);
+            return scale_by_mean(y, analog, inverse_peak, sum / n, |v| v);
         }
     }
     // Some photocurrent is infinite or NaN: those read 0.
@@ -140,26 +139,26 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
         .map(|&v| finite_or_zero(v) * inverse_peak)
         .sum::<f64>()
         / n;
-    if mean <= 0.0 {
-        analog.iter_mut().for_each(|a| *a = 0.0);
-        return false;
-    }
-    let scale = inverse_peak / mean;
-    for (a, &v) in analog.iter_mut().zip(y) {
-        *a = finite_or_zero(v) * scale;
-    }
-    true
+    scale_by_mean(y, analog, inverse_peak, mean, finite_or_zero)
 }
 
-/// `analog = y / mean` from the mean of `y` scaled by `inverse_peak` (all finite).
-fn scale_by_mean(y: &[f64], analog: &mut [f64], inverse_peak: f64, mean: f64) -> bool {
+/// `analog = read(y) / mean`, from the mean of `read(y)` scaled by `inverse_peak`; false (and
+/// zeros) when that mean is not positive.
+#[inline]
+fn scale_by_mean(
+    y: &[f64],
+    analog: &mut [f64],
+    inverse_peak: f64,
+    mean: f64,
+    read: impl Fn(f64) -> f64,
+) -> bool {
     if mean <= 0.0 {
         analog.iter_mut().for_each(|a| *a = 0.0);
         return false;
     }
     let scale = inverse_peak / mean;
     for (a, &v) in analog.iter_mut().zip(y) {
-        *a = v * scale;
+        *a = read(v) * scale;
     }
     true
 }

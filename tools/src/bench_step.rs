@@ -28,9 +28,8 @@ pub struct Args {
     renderer: crate::vision::RendererKind,
 }
 
-/// Steps per second of a world over at least `millis`.
-/// Steps per second over about `millis` ms; `everything` refreshes the sensors no controller
-/// reads too.
+/// Steps per second of a world over about `millis` ms; `everything` refreshes the sensors no
+/// controller reads too.
 fn steps_per_second(compiled: &Compiled, millis: u64, everything: bool) -> anyhow::Result<f64> {
     let mut simulation = Simulation::new(compiled, None)?;
     if everything {

@@ -307,10 +307,10 @@ impl GpuVision {
                 .unwrap_or(*floor);
             let instance = request.instance as u32;
             let robot = request.robot as u32;
-            let height = match device {
-                Some(Device::Panoramic { height, .. } | Device::Linear { height, .. }) => *height,
-                None => return Err(bad(format!("robot {} has no vision device", request.robot))),
+            let Some(device) = device else {
+                return Err(bad(format!("robot {} has no vision device", request.robot)));
             };
+            let (Device::Panoramic { height, .. } | Device::Linear { height, .. }) = device;
             let eye = DVec3::new(pose.x, floor + height, pose.z) - info.origin;
             let eye = [
                 eye.x as f32,
@@ -319,13 +319,13 @@ impl GpuVision {
                 pose.heading as f32,
             ];
             match device {
-                Some(Device::Panoramic {
+                Device::Panoramic {
                     samples,
                     quantize,
                     columns,
                     rows,
                     ..
-                }) => {
+                } => {
                     for (v, center) in VIEW_CENTERS.iter().enumerate() {
                         self.views.push(GpuView {
                             a: [instance, robot, 0, (outputs + v * FLAT_COLUMNS) as u32],
@@ -339,13 +339,13 @@ impl GpuVision {
                     self.outputs.push((outputs, PIXELS));
                     outputs += PIXELS;
                 }
-                Some(Device::Linear {
+                Device::Linear {
                     pixels,
                     samples,
                     field_of_view,
                     vertical_field_of_view,
                     ..
-                }) => {
+                } => {
                     let width = field_of_view / *pixels as f64;
                     self.views.push(GpuView {
                         a: [instance, robot, 1, outputs as u32],
@@ -362,7 +362,6 @@ impl GpuVision {
                     self.outputs.push((outputs, *pixels as usize));
                     outputs += *pixels as usize;
                 }
-                None => unreachable!("checked above"),
             }
         }
         Ok((flat, outputs))

@@ -607,7 +607,6 @@ impl<'g> ColumnScene<'g> {
         // Objects may share an edge: one is enough.
         breaks.dedup();
         look.eye = eye;
-        look.heading = heading;
         look.cos_h = libm::cos(heading);
         look.sin_h = libm::sin(heading);
     }
@@ -624,10 +623,8 @@ impl<'g> ColumnScene<'g> {
             .iter()
             .filter(|h| h.corner == edge.corner)
             .any(|h| {
+                // (A hider has a side: `corner_hiders` keeps no other.)
                 let hider = &objects[h.object as usize];
-                if !hider.side {
-                    return false;
-                }
                 // Along the sight line in units of the corner's distance (the corner at 1):
                 // entered strictly before the corner, from outside, and its side there spans
                 // the edge's tan-elevations (and so any cap of the hidden object, which meets
@@ -1179,16 +1176,19 @@ fn corner_hiders(statics: &[Upright]) -> Vec<Vec<Hider>> {
         .enumerate()
         .map(|(index, object)| {
             let mut hiders = Vec::new();
+            // Objects are named by u16 indices in a look.
+            if index > u16::MAX as usize {
+                return hiders;
+            }
+            let (_, reach) = object.footprint.bounding_circle();
             for corner in 0..RECT_CORNERS.len() {
                 let Some(point) = corner_of(&object.footprint, corner) else {
                     break;
                 };
                 // Touching within rounding of the coordinates (walls built edge to edge).
-                let (_, reach) = object.footprint.bounding_circle();
                 let tolerance = 1e-9 * (1.0 + point.length() + reach);
-                for (other, hider) in statics.iter().enumerate() {
+                for (other, hider) in statics.iter().enumerate().take(u16::MAX as usize + 1) {
                     if other != index
-                        && other <= u16::MAX as usize
                         && hider.side
                         && hider.y0 <= object.y0
                         && hider.y1 >= object.y1
@@ -1521,8 +1521,6 @@ fn axis_slabs(
 #[derive(Default)]
 pub struct Look {
     eye: DVec3,
-    #[allow(dead_code)]
-    heading: f64,
     cos_h: f64,
     sin_h: f64,
     objects: Vec<EyeObject>,
