@@ -363,18 +363,14 @@ impl Chain {
     /// right-going pass, then a left-going pass over its output. Mirror symmetry of the
     /// result gives the left pass its start exactly: `y[n−1] = r[n−1]`.
     pub fn lowpass(&self, x: &[f64], out: &mut [f64]) {
-        let n = x.len().min(out.len());
-        if n == 0 {
-            return;
-        }
-        debug_assert_eq!(n, self.len, "a chain filters images of its own length");
-        let (x, out) = (&x[..n], &mut out[..n]);
-        with_scratch(n, |left| {
-            let (start, _) = self.zero_state_passes(x, out, left);
+        let Some(out) = self.with_passes(x, out, |out, _, (start, _)| {
             for (i, o) in out.iter_mut().enumerate() {
                 *o += self.powers[i + 1] * start;
             }
-        });
+        }) else {
+            return;
+        };
+        let n = out.len();
         // The left-going pass over the right-going output, from y[n−1] = r[n−1].
         let end = out[n - 1];
         self.recursion::<true>(&mut out[..n - 1]);
@@ -387,20 +383,38 @@ impl Chain {
     /// `(1−b)·sgn(n)·b^|n|` with `b = e^(−1/λ)`: zero at the centre, zero DC gain,
     /// antisymmetric. A rising edge to the right gives a positive response just after it.
     pub fn odd(&self, x: &[f64], out: &mut [f64]) {
+        self.with_passes(x, out, |out, left, (right_start, left_start)| {
+            // a^(i+1) rising for the right-going pass, a^(n−i) falling for the left-going one.
+            let ramp = &self.powers[1..=out.len()];
+            let weights = ramp.iter().zip(ramp.iter().rev());
+            for ((o, l), (up, down)) in out.iter_mut().zip(left).zip(weights) {
+                let right_going = *o + up * right_start;
+                let left_going = *l + down * left_start;
+                *o = right_going - left_going;
+            }
+        });
+    }
+
+    /// Runs [`Chain::zero_state_passes`] over the image (`x` and `out` cut to their common
+    /// length: the right-going pass into `out`, the left-going one into scratch) and hands
+    /// both, with the true starts, to `finish`; returns `out` so cut, or `None` when empty.
+    fn with_passes<'o>(
+        &self,
+        x: &[f64],
+        out: &'o mut [f64],
+        finish: impl FnOnce(&mut [f64], &[f64], (f64, f64)),
+    ) -> Option<&'o mut [f64]> {
         let n = x.len().min(out.len());
         if n == 0 {
-            return;
+            return None;
         }
         debug_assert_eq!(n, self.len, "a chain filters images of its own length");
         let (x, out) = (&x[..n], &mut out[..n]);
         with_scratch(n, |left| {
-            let (right_start, left_start) = self.zero_state_passes(x, out, left);
-            for (i, (o, l)) in out.iter_mut().zip(left.iter()).enumerate() {
-                let right_going = *o + self.powers[i + 1] * right_start;
-                let left_going = *l + self.powers[n - i] * left_start;
-                *o = right_going - left_going;
-            }
+            let starts = self.zero_state_passes(x, out, left);
+            finish(out, left, starts);
         });
+        Some(out)
     }
 }
 
