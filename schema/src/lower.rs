@@ -882,7 +882,18 @@ impl<'c> Lowerer<'c> {
                     let sets_controller = items.iter().any(|item| {
                         matches!(item, BodyItem::Field(f) if f.name.text == "controller")
                     });
-                    if sets_controller || url.as_deref().is_some_and(|u| u.contains("/robots/")) {
+                    // Robots stand at the top of a world; a PROTO of Webots' robots folder met
+                    // deeper is an extension (a turret board, a gripper).
+                    let in_robots_folder = |u: &str| {
+                        let resolved = match &self.options.base_dir {
+                            Some(base) if !u.contains("://") => base.join(u),
+                            _ => PathBuf::from(u),
+                        };
+                        resolved.to_string_lossy().replace('\\', "/").contains("/robots/")
+                    };
+                    let robot_proto =
+                        place == "the world" && url.as_deref().is_some_and(in_robots_folder);
+                    if sets_controller || robot_proto {
                         self.unbuilt_robots.push(UnbuiltRobot {
                             type_name: type_name.text.clone(),
                             url,

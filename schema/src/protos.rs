@@ -21,6 +21,8 @@ pub const WEBOTS_STANDINS: &[(&str, &str, crate::webots::Authoring)] = {
         ("Floor", include_str!("../../worlds/protos/webots/Floor.proto"), Webots),
         ("Khepera1", include_str!("../../worlds/protos/webots/Khepera1.proto"), Webots),
         ("Khepera2", include_str!("../../worlds/protos/webots/Khepera2.proto"), Webots),
+        ("Khepera3", include_str!("../../worlds/protos/webots/Khepera3.proto"), Webots),
+        ("Khepera4", include_str!("../../worlds/protos/webots/Khepera4.proto"), Webots),
         ("RectangleArena", include_str!("../../worlds/protos/webots/RectangleArena.proto"), Webots),
         ("TexturedBackground", include_str!("../../worlds/protos/webots/TexturedBackground.proto"), Webots),
         ("TexturedBackgroundLight", include_str!("../../worlds/protos/webots/TexturedBackgroundLight.proto"), Webots),

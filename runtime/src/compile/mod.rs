@@ -634,28 +634,44 @@ impl Compiler<'_> {
     }
 }
 
-/// The floors each robot stands on: thin static primitives whose top is at the height the
-/// robot stands at (within 2 mm) and under its start.
+/// The floors each robot stands on: thin static primitives under its start whose top is at
+/// the height it stands at. Webots worlds leave robots a little above or below their floor
+/// (where physics let them settle): a floor top within 1 cm below the robot's origin or 2 mm
+/// above it is the floor, and the robot is set on it.
 fn find_floors(graph: &RenderGraph, rig: &mut SensorRig) {
-    const TOLERANCE: f64 = 0.002;
+    const BELOW: f64 = 0.01;
+    const ABOVE: f64 = 0.002;
     const THIN: f64 = 0.05;
     for robot in &mut rig.robots {
-        let floors: Vec<[f64; 4]> = graph
-            .primitives
-            .iter()
-            .filter(|p| p.owner == Owner::Static)
-            .map(|p| p.bounds)
-            .filter(|b| {
-                (b.max.y - robot.floor_y).abs() <= TOLERANCE && b.max.y - b.min.y <= THIN
-            })
+        let near = |b: &crate::geometry::Aabb| {
+            b.max.y >= robot.floor_y - BELOW
+                && b.max.y <= robot.floor_y + ABOVE
+                && b.max.y - b.min.y <= THIN
+        };
+        let under = |b: &crate::geometry::Aabb| {
+            (b.min.x..=b.max.x).contains(&robot.start.x)
+                && (b.min.z..=b.max.z).contains(&robot.start.z)
+        };
+        let statics = || {
+            graph
+                .primitives
+                .iter()
+                .filter(|p| p.owner == Owner::Static)
+                .map(|p| p.bounds)
+        };
+        // The highest floor under the robot is the one it stands on.
+        let Some(top) = statics()
+            .filter(|b| near(b) && under(b))
+            .map(|b| b.max.y)
+            .max_by(f64::total_cmp)
+        else {
+            continue;
+        };
+        robot.floor_y = top;
+        robot.floors = statics()
+            .filter(|b| (b.max.y - top).abs() <= 1e-9 && b.max.y - b.min.y <= THIN)
             .map(|b| [b.min.x, b.min.z, b.max.x, b.max.z])
             .collect();
-        let under = |f: &[f64; 4]| {
-            (f[0]..=f[2]).contains(&robot.start.x) && (f[1]..=f[3]).contains(&robot.start.z)
-        };
-        if floors.iter().any(under) {
-            robot.floors = floors;
-        }
     }
 }
 
