@@ -1225,7 +1225,9 @@ impl<'c> Lowerer<'c> {
             self.check_interface_once(def);
         } else if matches!(
             proto_authoring,
-            crate::webots::Authoring::Webots | crate::webots::Authoring::WebotsFlu
+            crate::webots::Authoring::Webots
+                | crate::webots::Authoring::WebotsRobot
+                | crate::webots::Authoring::WebotsFlu
         ) && !self.substitutions.iter().any(|s| &s.name == name)
         {
             let url = self

@@ -19,9 +19,12 @@ pub enum Authoring {
     /// One of regatta's own PROTOs (Arena, Buoy, Khepera): y-up, +x forward; turned only in
     /// FLU worlds.
     Regatta,
-    /// A Webots stand-in: y-up, +x forward; turned to FLU in FLU worlds and to Webots' legacy
-    /// robot frame (forward −z) in the others.
+    /// A stand-in for a Webots object (arena, floor, box, background): y-up; turned to FLU in
+    /// FLU worlds.
     Webots,
+    /// A stand-in for a Webots robot: y-up, +x forward; turned to FLU in FLU worlds and to
+    /// Webots' legacy robot frame (forward −z) in the others.
+    WebotsRobot,
     /// A stand-in for a PROTO that is FLU whatever the world (webots_ros2's `E-puck_enu`).
     WebotsFlu,
 }
@@ -53,11 +56,12 @@ pub fn turn(from: Authoring, to: Authoring, objects: Objects) -> Option<[f64; 4]
     fn from_world(a: Authoring, objects: Objects) -> Option<[f64; 4]> {
         use std::f64::consts::FRAC_PI_2;
         match (a, objects) {
-            (Authoring::World, _) | (Authoring::Regatta, Objects::Legacy) => None,
-            (Authoring::Webots, Objects::Legacy) => Some([0.0, 1.0, 0.0, FRAC_PI_2]),
-            (Authoring::Regatta | Authoring::Webots, Objects::Flu) | (Authoring::WebotsFlu, _) => {
-                Some([1.0, 0.0, 0.0, FRAC_PI_2])
+            (Authoring::World, _) | (Authoring::Regatta | Authoring::Webots, Objects::Legacy) => {
+                None
             }
+            (Authoring::WebotsRobot, Objects::Legacy) => Some([0.0, 1.0, 0.0, FRAC_PI_2]),
+            (Authoring::Regatta | Authoring::Webots | Authoring::WebotsRobot, Objects::Flu)
+            | (Authoring::WebotsFlu, _) => Some([1.0, 0.0, 0.0, FRAC_PI_2]),
         }
     }
     if from == to {
