@@ -103,8 +103,10 @@ fn every_stand_in_world_compiles_to_its_summary() {
             checked.render(false)
         );
         let compiled = regatta_runtime::compile(&checked.scene);
-        if let Err(e) = expect_file(&world.with_extension("expected"), &summary(&checked, &compiled))
-        {
+        if let Err(e) = expect_file(
+            &world.with_extension("expected"),
+            &summary(&checked, &compiled),
+        ) {
             failures.push(e);
         }
     }
@@ -150,7 +152,8 @@ fn trajectory(compiled: &Compiled, steps: usize) -> Vec<(f64, f64, f64)> {
 /// once the robot meets a box, and obstacle avoidance amplifies it.
 #[test]
 fn khepera_world_in_r2020a_and_r2023b_is_the_same_up_to_the_axis_change() {
-    let old = corpus().join("webots/_versions/R2020a/projects/robots/k-team/khepera1/worlds/khepera.wbt");
+    let old =
+        corpus().join("webots/_versions/R2020a/projects/robots/k-team/khepera1/worlds/khepera.wbt");
     let new = corpus().join("webots/projects/robots/k-team/khepera1/worlds/khepera.wbt");
     let (a, b) = (load(&old, None), load(&new, None));
     // The same static scene: every primitive's bounds within 1 µm.
@@ -178,7 +181,10 @@ fn khepera_world_in_r2020a_and_r2023b_is_the_same_up_to_the_axis_change() {
     let (ba, bb) = (bounds(&a), bounds(&b));
     assert_eq!(ba.len(), bb.len());
     for (p, q) in ba.iter().zip(&bb) {
-        assert!(p.iter().zip(q).all(|(x, y)| (x - y).abs() <= 1), "{p:?} vs {q:?}");
+        assert!(
+            p.iter().zip(q).all(|(x, y)| (x - y).abs() <= 1),
+            "{p:?} vs {q:?}"
+        );
     }
     let (ra, rb) = (&a.rig.robots[0], &b.rig.robots[0]);
     assert!((ra.start.x - rb.start.x).abs() < 1e-9 && (ra.start.z - rb.start.z).abs() < 1e-9);

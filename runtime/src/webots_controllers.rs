@@ -16,20 +16,50 @@ pub enum Resolution {
 
 /// (Webots name, regatta controller, documented behaviour): the table in the README.
 pub const MAPPED: &[(&str, &str, &str)] = &[
-    ("braitenberg", "braitenberg", "Braitenberg obstacle avoidance (Webots' default for the Khepera I and II)"),
-    ("e-puck_avoid_obstacles", "braitenberg", "the e-puck's default: obstacle avoidance with its proximity sensors"),
-    ("e-puck_avoid_collisions", "braitenberg", "obstacle avoidance with the proximity sensors"),
-    ("obstacle_avoidance", "braitenberg", "obstacle avoidance with the proximity sensors"),
-    ("avoid_obstacles", "braitenberg", "obstacle avoidance with the proximity sensors"),
-    ("void", "none", "Webots' empty controller: the robot stands still"),
+    (
+        "braitenberg",
+        "braitenberg",
+        "Braitenberg obstacle avoidance (Webots' default for the Khepera I and II)",
+    ),
+    (
+        "e-puck_avoid_obstacles",
+        "braitenberg",
+        "the e-puck's default: obstacle avoidance with its proximity sensors",
+    ),
+    (
+        "e-puck_avoid_collisions",
+        "braitenberg",
+        "obstacle avoidance with the proximity sensors",
+    ),
+    (
+        "obstacle_avoidance",
+        "braitenberg",
+        "obstacle avoidance with the proximity sensors",
+    ),
+    (
+        "avoid_obstacles",
+        "braitenberg",
+        "obstacle avoidance with the proximity sensors",
+    ),
+    (
+        "void",
+        "none",
+        "Webots' empty controller: the robot stands still",
+    ),
     ("<none>", "none", "no controller: the robot stands still"),
 ];
 
 /// (Webots name, how the robot is driven from outside).
 pub const EXTERNAL: &[(&str, &str)] = &[
     ("<extern>", "an extern controller connects to the simulator"),
-    ("pipe", "a program sends Khepera serial-protocol commands through a pipe"),
-    ("tcpip", "a program sends Khepera serial-protocol commands over TCP/IP"),
+    (
+        "pipe",
+        "a program sends Khepera serial-protocol commands through a pipe",
+    ),
+    (
+        "tcpip",
+        "a program sends Khepera serial-protocol commands over TCP/IP",
+    ),
 ];
 
 /// Resolves a controller name: regatta's own names first, then Webots' names.
@@ -37,7 +67,14 @@ pub fn resolve(name: &str) -> Resolution {
     match name {
         "none" | "" => return Resolution::Builtin("none", ""),
         "braitenberg" | "regatta" => {
-            return Resolution::Builtin(if name == "regatta" { "regatta" } else { "braitenberg" }, "")
+            return Resolution::Builtin(
+                if name == "regatta" {
+                    "regatta"
+                } else {
+                    "braitenberg"
+                },
+                "",
+            )
         }
         _ => {}
     }
@@ -57,7 +94,10 @@ mod tests {
     #[test]
     fn webots_names() {
         assert_eq!(resolve("regatta"), Resolution::Builtin("regatta", ""));
-        assert!(matches!(resolve("e-puck_avoid_obstacles"), Resolution::Builtin("braitenberg", _)));
+        assert!(matches!(
+            resolve("e-puck_avoid_obstacles"),
+            Resolution::Builtin("braitenberg", _)
+        ));
         assert!(matches!(resolve("<extern>"), Resolution::External(_)));
         assert!(matches!(resolve("pipe"), Resolution::External(_)));
         assert_eq!(resolve("khepera_gripper"), Resolution::Unknown);

@@ -16,9 +16,8 @@ pub mod webots;
 
 pub use catalogue::{Catalogue, FieldSpec, NodeSpec};
 pub use lower::{
-    check, check_file, check_file_with_proto_path, Checked, FileDiagnostic, Options, Source, Substitution, UnbuiltRobot,
-    MAX_INSTANCE_DEPTH,
-    MAX_NODES,
+    check, check_file, check_file_with_proto_path, Checked, FileDiagnostic, Options, Source,
+    Substitution, UnbuiltRobot, MAX_INSTANCE_DEPTH, MAX_NODES,
 };
 pub use protos::{BUILTIN_PROTOS, WEBOTS_STANDINS};
 pub use scene::{FileId, NodeId, Scene, SceneNode, UpAxis};

@@ -879,9 +879,9 @@ impl<'c> Lowerer<'c> {
                     self.lower_builtin(spec, node, items, scope)?
                 } else {
                     let url = self.unresolved.get(&type_name.text).cloned();
-                    let sets_controller = items.iter().any(|item| {
-                        matches!(item, BodyItem::Field(f) if f.name.text == "controller")
-                    });
+                    let sets_controller = items.iter().any(
+                        |item| matches!(item, BodyItem::Field(f) if f.name.text == "controller"),
+                    );
                     // Robots stand at the top of a world; a PROTO of Webots' robots folder met
                     // deeper is an extension (a turret board, a gripper).
                     let in_robots_folder = |u: &str| {
@@ -889,7 +889,10 @@ impl<'c> Lowerer<'c> {
                             Some(base) if !u.contains("://") => base.join(u),
                             _ => PathBuf::from(u),
                         };
-                        resolved.to_string_lossy().replace('\\', "/").contains("/robots/")
+                        resolved
+                            .to_string_lossy()
+                            .replace('\\', "/")
+                            .contains("/robots/")
                     };
                     let robot_proto =
                         place == "the world" && url.as_deref().is_some_and(in_robots_folder);

@@ -111,7 +111,9 @@ fn main() -> ExitCode {
         Color::Never => false,
         Color::Auto => std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none(),
     };
-    world::set_proto_path(regatta_schema::proto_path::from_flags_and_env(&cli.proto_path));
+    world::set_proto_path(regatta_schema::proto_path::from_flags_and_env(
+        &cli.proto_path,
+    ));
     let result = match cli.command {
         Command::Check(args) => check::run(args, color),
         Command::Schema(args) => schema::run(args),

@@ -57,7 +57,11 @@ pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
     let mut loaded = crate::world::load(&args.world, args.lenient, color)?;
     crate::webots::refuse_unbuilt_robots(&loaded)?;
     let served = match &args.robot {
-        Some(name) => Some(crate::world::robot_named(&loaded.compiled, &args.world, name)?),
+        Some(name) => Some(crate::world::robot_named(
+            &loaded.compiled,
+            &args.world,
+            name,
+        )?),
         None => (!loaded.compiled.rig.robots.is_empty()).then_some(0),
     };
     crate::webots::resolve_controllers(

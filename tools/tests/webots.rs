@@ -15,7 +15,11 @@ fn corpus() -> PathBuf {
 }
 
 fn run(world: &Path, extra: &[&str]) -> Output {
-    let duration = if extra.contains(&"--duration") { &[][..] } else { &["--duration", "10"][..] };
+    let duration = if extra.contains(&"--duration") {
+        &[][..]
+    } else {
+        &["--duration", "10"][..]
+    };
     regatta()
         .arg("run")
         .arg(world)
@@ -131,10 +135,16 @@ fn fifteen_of_webots_nineteen_worlds_run_and_the_rest_are_refused_for_their_reas
             "webots/tests/parser/worlds/node_without_brackets.wbt",
         ]
     );
-    assert!(refused[0].1.contains("'BlueBoat' (its PROTO: ../protos/BlueBoat.proto)"));
+    assert!(refused[0]
+        .1
+        .contains("'BlueBoat' (its PROTO: ../protos/BlueBoat.proto)"));
     assert!(refused[1].1.contains("'Heron'"));
-    assert!(refused[2].1.contains("Expected floating point value, found 'direction'."));
-    assert!(refused[3].1.contains("Expected '{', found 'RectangleArena'."));
+    assert!(refused[2]
+        .1
+        .contains("Expected floating point value, found 'direction'."));
+    assert!(refused[3]
+        .1
+        .contains("Expected '{', found 'RectangleArena'."));
     assert!(worlds.len() - refused.len() >= 15);
 }
 
@@ -169,12 +179,21 @@ fn controllers_are_mapped_refused_or_overridden() {
     let output = regatta()
         .arg("run")
         .arg(&world)
-        .args(["--lenient", "--duration", "1", "--controller", "nothing-like-this"])
+        .args([
+            "--lenient",
+            "--duration",
+            "1",
+            "--controller",
+            "nothing-like-this",
+        ])
         .output()
         .expect("regatta runs");
     let (_, stderr) = text(&output);
     assert!(!output.status.success());
-    assert!(stderr.contains("no controller \"nothing-like-this\""), "{stderr}");
+    assert!(
+        stderr.contains("no controller \"nothing-like-this\""),
+        "{stderr}"
+    );
     // An override for one robot, with arguments; the idle controller keeps it in place.
     let output = run(&world, &["--controller", "khepera=none"]);
     let (stdout, stderr) = text(&output);
@@ -191,8 +210,14 @@ fn controllers_are_mapped_refused_or_overridden() {
     let output = run(&epuck, &[]);
     let (_, stderr) = text(&output);
     assert!(output.status.success(), "{stderr}");
-    assert!(stderr.contains("regatta serve WORLD --robot epuck"), "{stderr}");
-    assert!(stderr.contains("lenient mode runs \"braitenberg\" instead"), "{stderr}");
+    assert!(
+        stderr.contains("regatta serve WORLD --robot epuck"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("lenient mode runs \"braitenberg\" instead"),
+        "{stderr}"
+    );
 }
 
 #[test]

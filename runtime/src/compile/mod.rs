@@ -145,8 +145,12 @@ fn turned(frame: &Frame, turn: Option<[f64; 4]>) -> Frame {
 /// For nodes whose axes carry meaning (robots, cameras, cylinder-like geometry): the rotation
 /// from regatta's frame for them (y up, +x forward) to the frame a world in FLU writes them in.
 fn flu_to_regatta(scene: &Scene, body: Authoring) -> Option<[f64; 4]> {
-    (body == Authoring::World && scene.objects == Objects::Flu)
-        .then_some([1.0, 0.0, 0.0, std::f64::consts::FRAC_PI_2])
+    (body == Authoring::World && scene.objects == Objects::Flu).then_some([
+        1.0,
+        0.0,
+        0.0,
+        std::f64::consts::FRAC_PI_2,
+    ])
 }
 
 const MAX_WALK_DEPTH: usize = 256;
@@ -299,13 +303,15 @@ impl Compiler<'_> {
                 });
             }
             "DifferentialWheels" => self.robot(node, frame, owner, depth),
-            "DistanceSensor" | "LightSensor" | "PanoramicTurret" | "LinearCamera" | "Camera" => match owner {
-                Owner::Robot(robot) => self.device(node, frame, robot),
-                Owner::Static => self.warnings.push(format!(
-                    "a {} outside any robot is ignored",
-                    scene.type_name(node)
-                )),
-            },
+            "DistanceSensor" | "LightSensor" | "PanoramicTurret" | "LinearCamera" | "Camera" => {
+                match owner {
+                    Owner::Robot(robot) => self.device(node, frame, robot),
+                    Owner::Static => self.warnings.push(format!(
+                        "a {} outside any robot is ignored",
+                        scene.type_name(node)
+                    )),
+                }
+            }
             _ => {}
         }
     }
@@ -533,7 +539,9 @@ impl Compiler<'_> {
         // Webots cameras look along -z before R2022a, along +x (z up) from then.
         let look = match (scene.node(node).axes.body, scene.objects) {
             (Authoring::World, Objects::Flu) => Some([1.0, 0.0, 0.0, std::f64::consts::FRAC_PI_2]),
-            (Authoring::World, Objects::Legacy) => Some([0.0, 1.0, 0.0, std::f64::consts::FRAC_PI_2]),
+            (Authoring::World, Objects::Legacy) => {
+                Some([0.0, 1.0, 0.0, std::f64::consts::FRAC_PI_2])
+            }
             _ => None,
         };
         let local = Frame::vrml(
