@@ -109,7 +109,10 @@ pub fn resolve_controllers(
     }
     for (index, robot) in compiled.rig.robots.iter_mut().enumerate() {
         if Some(index) == served {
-            robot.controller = "none".to_owned();
+            // Driven over the protocol: its own controller never runs, but must be buildable.
+            if !matches!(resolve(&robot.controller), Resolution::Builtin(..)) {
+                robot.controller = "none".to_owned();
+            }
             continue;
         }
         let name = robot.controller.clone();
