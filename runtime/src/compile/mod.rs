@@ -88,7 +88,7 @@ pub fn compile(scene: &Scene) -> Compiled {
         compiler.walk(node, &root_frame, Owner::Static, 0);
     }
     index_static(&mut compiler.graph);
-    find_floors(&compiler.graph, &mut compiler.rig);
+    find_floors(&mut compiler.graph, &mut compiler.rig);
     let settings = settings_of(scene);
     let plan = Plan::new(&compiler.graph, &compiler.rig);
     Compiled {
@@ -646,7 +646,7 @@ impl Compiler<'_> {
 /// the height it stands at. Webots worlds leave robots a little above or below their floor
 /// (where physics let them settle): a floor top within 1 cm below the robot's origin or 2 mm
 /// above it is the floor, and the robot is set on it.
-fn find_floors(graph: &RenderGraph, rig: &mut SensorRig) {
+fn find_floors(graph: &mut RenderGraph, rig: &mut SensorRig) {
     const BELOW: f64 = 0.01;
     const ABOVE: f64 = 0.002;
     const THIN: f64 = 0.05;
@@ -675,11 +675,18 @@ fn find_floors(graph: &RenderGraph, rig: &mut SensorRig) {
         else {
             continue;
         };
-        robot.floor_y = top;
         robot.floors = statics()
             .filter(|b| (b.max.y - top).abs() <= 1e-9 && b.max.y - b.min.y <= THIN)
             .map(|b| [b.min.x, b.min.z, b.max.x, b.max.z])
             .collect();
+        robot.floor_y = top;
+    }
+    // The robots' groups sit where the simulation puts them.
+    for group in &mut graph.groups {
+        if let Some(robot) = group.robot {
+            let robot = &rig.robots[robot];
+            group.frame = robot.start.frame(robot.floor_y);
+        }
     }
 }
 
