@@ -22,8 +22,10 @@ pub const RIGHT_WEIGHTS: [f64; 8] = [-5.0, -15.0, -18.0, 6.0, 4.0, 4.0, 3.0, 5.0
 /// Why a controller could not be built from a world's fields.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ControllerError {
-    #[error("unknown controller \"{0}\"; built in: none, braitenberg, regatta")]
+    #[error("unknown controller \"{0}\"; built in: none, braitenberg, regatta, neural")]
     Unknown(String),
+    #[error(transparent)]
+    Network(#[from] crate::neural::NetworkError),
     #[error("controller argument \"{0}\" is not key=value")]
     Malformed(String),
     #[error("controller {controller} has no parameter \"{key}\"; it takes {known}")]
@@ -101,7 +103,30 @@ impl Parameters {
     }
 }
 
-/// Builds a built-in controller.
+/// Builds a robot's controller as its world sets it: [`build`], or for `neural` the network
+/// of its `network` field.
+pub fn build_for(
+    rig: &crate::compile::rig::RobotRig,
+) -> Result<Box<dyn Controller>, ControllerError> {
+    if rig.controller != "neural" {
+        return build(&rig.controller, &rig.controller_args);
+    }
+    if let Some(arg) = rig.controller_args.iter().find(|a| !a.trim().is_empty()) {
+        return Err(ControllerError::UnknownKey {
+            controller: "neural".to_owned(),
+            key: arg.clone(),
+            known: "nothing (its parameters are the NeuralNetwork's fields)".to_owned(),
+        });
+    }
+    match &rig.network {
+        Some(Ok(spec)) => Ok(Box::new(crate::neural::Neural::from_spec(spec)?)),
+        Some(Err(error)) => Err(error.clone().into()),
+        None => Err(crate::neural::NetworkError::NoNetwork.into()),
+    }
+}
+
+/// Builds a built-in controller from its name and arguments (`neural` needs its network:
+/// see [`build_for`]).
 pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, ControllerError> {
     match name {
         "none" | "" | "<none>" => Ok(Box::new(Idle)),
@@ -114,6 +139,7 @@ pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, Control
             enabled: false,
             odd: Vec::new(),
         })),
+        "neural" => Err(crate::neural::NetworkError::NoNetwork.into()),
         other => Err(ControllerError::Unknown(other.to_owned())),
     }
 }
@@ -142,7 +168,9 @@ pub fn braitenberg_speeds(proximity: &[u16; 8], parameters: &Parameters) -> (f64
     )
 }
 
-fn to_command(speed: f64) -> i32 {
+/// A wheel speed (pulses per 10 ms) as the robot takes it: rounded half away from zero,
+/// clamped to −127 … 127.
+pub fn to_command(speed: f64) -> i32 {
     libm::round(speed).clamp(-127.0, 127.0) as i32
 }
 

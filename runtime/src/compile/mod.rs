@@ -86,7 +86,7 @@ pub fn compile(scene: &Scene) -> Compiled {
         compiler.walk(node, &root_frame, Owner::Static, 0);
     }
     index_static(&mut compiler.graph);
-    let settings = settings_of(scene);
+    let settings = world_settings(scene);
     let plan = Plan::new(&compiler.graph, &compiler.rig);
     Compiled {
         graph: compiler.graph,
@@ -98,7 +98,8 @@ pub fn compile(scene: &Scene) -> Compiled {
     }
 }
 
-fn settings_of(scene: &Scene) -> WorldSettings {
+/// The world's WorldInfo settings (defaults where it has none).
+pub fn world_settings(scene: &Scene) -> WorldSettings {
     match scene.find("WorldInfo").first() {
         Some(&info) => WorldSettings {
             title: scene.string(info, "title").to_owned(),
@@ -377,6 +378,17 @@ impl Compiler<'_> {
             body_height: scene.float(node, "bodyHeight"),
             controller: scene.string(node, "controller").to_owned(),
             controller_args: scene.strings(node, "controllerArgs").to_vec(),
+            network: scene.child(node, "network").map(|network| {
+                let panoramic = scene
+                    .child(node, "turret")
+                    .is_some_and(|t| scene.type_name(t) == "PanoramicTurret");
+                crate::neural::network_from_scene(
+                    scene,
+                    network,
+                    panoramic,
+                    world_settings(scene).time_step,
+                )
+            }),
             distance_sensors: Vec::new(),
             light_sensors: Vec::new(),
             turret: None,

@@ -197,11 +197,9 @@ impl<'c> Simulation<'c> {
         let mut robots = Vec::with_capacity(compiled.rig.robots.len());
         for (index, rig) in compiled.rig.robots.iter().enumerate() {
             let controller =
-                controllers::build(&rig.controller, &rig.controller_args).map_err(|source| {
-                    SimError::Controller {
-                        robot: rig.name.clone(),
-                        source,
-                    }
+                controllers::build_for(rig).map_err(|source| SimError::Controller {
+                    robot: rig.name.clone(),
+                    source,
                 })?;
             robots.push(RobotState {
                 name: rig.name.clone(),
