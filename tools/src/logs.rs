@@ -213,10 +213,28 @@ fn decode(kind: &str, data: &[u8]) -> Result<Option<CsvRow>, regatta_runtime::lo
             row.push(light.to_string());
             (t, header, row)
         }
-        "contacts" => (
+        "contacts" => {
+            let (touching, contacts) = (r.bool()?, r.u64()?);
+            // Logs written before contacts said with what have no such field.
+            let with = r.strings().unwrap_or_default();
+            (
+                t,
+                vec!["touching".into(), "contacts".into(), "with".into()],
+                vec![
+                    touching.to_string(),
+                    contacts.to_string(),
+                    format!("\"{}\"", with.join(";").replace('"', "\"\"")),
+                ],
+            )
+        }
+        "visits" => (
             t,
-            vec!["touching".into(), "contacts".into()],
-            vec![r.bool()?.to_string(), r.u64()?.to_string()],
+            vec!["buoy".into(), "name".into(), "visits".into()],
+            vec![
+                r.u32()?.to_string(),
+                format!("\"{}\"", r.string()?.replace('"', "\"\"")),
+                r.u32()?.to_string(),
+            ],
         ),
         "controller" => (
             t,

@@ -41,6 +41,11 @@ pub struct Landmark {
     /// (x, z) of its centre.
     pub center: glam::DVec2,
     pub radius: f64,
+    /// Luminance of its brightest emissive part (Rec. 709 weights): what makes a buoy the
+    /// brightest for the `phototaxis` fitness.
+    pub brightness: f64,
+    /// Its primitives in the render graph.
+    pub primitives: std::ops::Range<usize>,
 }
 
 /// Everything a run needs, compiled from one scene.
@@ -142,6 +147,13 @@ impl Compiler<'_> {
                 .fold(crate::geometry::Aabb::EMPTY, |b, p| b.union(p.bounds));
             if !bounds.is_empty() {
                 let number = self.landmarks.len() + 1;
+                let brightness = self.graph.primitives[first..]
+                    .iter()
+                    .map(|p| {
+                        let [r, g, b] = self.graph.materials[p.material].emissive;
+                        0.2126 * r + 0.7152 * g + 0.0722 * b
+                    })
+                    .fold(0.0, f64::max);
                 self.landmarks.push(Landmark {
                     name: format!("buoy {number}"),
                     center: glam::DVec2::new(
@@ -149,6 +161,8 @@ impl Compiler<'_> {
                         (bounds.min.z + bounds.max.z) / 2.0,
                     ),
                     radius: (bounds.max.x - bounds.min.x).max(bounds.max.z - bounds.min.z) / 2.0,
+                    brightness,
+                    primitives: first..self.graph.primitives.len(),
                 });
             }
             return;
