@@ -14,6 +14,9 @@ pub enum Resolution {
     Unknown,
 }
 
+/// regatta's own controllers (`controllers::build`).
+pub const BUILT_IN: &[&str] = &["none", "braitenberg", "regatta", "neural"];
+
 /// (Webots name, regatta controller, documented behaviour): the table in the README.
 pub const MAPPED: &[(&str, &str, &str)] = &[
     (
@@ -64,19 +67,11 @@ pub const EXTERNAL: &[(&str, &str)] = &[
 
 /// Resolves a controller name: regatta's own names first, then Webots' names.
 pub fn resolve(name: &str) -> Resolution {
-    match name {
-        "none" | "" => return Resolution::Builtin("none", ""),
-        "braitenberg" | "regatta" => {
-            return Resolution::Builtin(
-                if name == "regatta" {
-                    "regatta"
-                } else {
-                    "braitenberg"
-                },
-                "",
-            )
-        }
-        _ => {}
+    if name.is_empty() {
+        return Resolution::Builtin("none", "");
+    }
+    if let Some(own) = BUILT_IN.iter().find(|n| **n == name) {
+        return Resolution::Builtin(own, "");
     }
     if let Some((_, builtin, why)) = MAPPED.iter().find(|(n, _, _)| *n == name) {
         return Resolution::Builtin(builtin, why);

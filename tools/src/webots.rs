@@ -81,7 +81,7 @@ pub fn resolve_controllers(
         };
         if matches!(resolve(controller), Resolution::Unknown) {
             bail!(
-                "--controller {spec}: no controller \"{controller}\"; built in: none, braitenberg, regatta, and the Webots names in the README"
+                "--controller {spec}: no controller \"{controller}\"; built in: none, braitenberg, regatta, neural, and the Webots names in the README"
             );
         }
         let targets: Vec<usize> = match robot {
@@ -140,7 +140,7 @@ pub fn resolve_controllers(
             }
             Resolution::Unknown => {
                 let message = format!(
-                    "robot '{}' has controller \"{name}\", which regatta does not have (built in: none, braitenberg, regatta, and the Webots names in the README)",
+                    "robot '{}' has controller \"{name}\", which regatta does not have (built in: none, braitenberg, regatta, neural, and the Webots names in the README)",
                     robot.name
                 );
                 if !lenient {
