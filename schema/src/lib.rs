@@ -7,6 +7,7 @@
 
 pub mod catalogue;
 mod lower;
+mod procedural;
 pub mod proto_path;
 mod protos;
 pub mod scene;

@@ -307,6 +307,17 @@ struct Lowerer<'c> {
     standin_urls: HashMap<String, String>,
     substitutions: Vec<Substitution>,
     unbuilt_robots: Vec<UnbuiltRobot>,
+    /// The JavaScript engine, started by the first template that needs it.
+    engine: Option<regatta_template::Engine>,
+    /// Expanded template PROTOs by PROTO, field values and (for nonDeterministic ones)
+    /// instance; `None` for an expansion that failed (reported once).
+    expanded: HashMap<String, Option<Rc<ProtoDef>>>,
+    /// Template instances so far: the next one's `context.id`.
+    template_instances: u64,
+    /// `WorldInfo.randomSeed` as written, which seeds templates.
+    world_seed: i64,
+    /// The world's Webots version (its header), which templates see in `context`.
+    webots_version: String,
 }
 
 impl<'c> Lowerer<'c> {
@@ -335,6 +346,11 @@ impl<'c> Lowerer<'c> {
             standin_urls: HashMap::new(),
             substitutions: Vec::new(),
             unbuilt_robots: Vec::new(),
+            engine: None,
+            expanded: HashMap::new(),
+            template_instances: 0,
+            world_seed: 0,
+            webots_version: String::new(),
         }
     }
 
@@ -664,7 +680,16 @@ impl<'c> Lowerer<'c> {
             return Some(id);
         }
         match SourceText::read(path) {
-            Ok(source) => {
+            Ok(mut source) => {
+                // Named from the world's folder, so messages do not depend on the checkout.
+                if let Some(relative) = self
+                    .options
+                    .base_dir
+                    .as_deref()
+                    .and_then(|base| path.strip_prefix(base).ok())
+                {
+                    source.name = relative.display().to_string();
+                }
                 let id = self.add_file(source);
                 self.loaded.insert(key, id);
                 Some(id)
@@ -759,6 +784,17 @@ impl<'c> Lowerer<'c> {
             }
             for field in &body.items {
                 if let BodyItem::Field(f) = field {
+                    if f.name.text == "randomSeed" {
+                        if let syntax::FieldValue::Value(syntax::Value {
+                            items: Items::Numbers(list),
+                            ..
+                        }) = &f.value
+                        {
+                            if let Some(&seed) = list.values.first() {
+                                self.world_seed = seed as i64;
+                            }
+                        }
+                    }
                     if f.name.text == "coordinateSystem" {
                         if let syntax::FieldValue::Value(syntax::Value {
                             items: Items::Atoms(atoms),
@@ -773,6 +809,15 @@ impl<'c> Lowerer<'c> {
                 }
             }
         }
+        self.webots_version = match header {
+            Some(syntax::Header {
+                dialect: Dialect::Webots,
+                version,
+                ..
+            }) => version.clone(),
+            // Files that are not Webots': the release regatta's stand-ins are written for.
+            _ => "R2023b".to_owned(),
+        };
         // (year, letter) of a Webots header.
         let version = match header {
             Some(syntax::Header {
@@ -1205,30 +1250,22 @@ impl<'c> Lowerer<'c> {
             );
             return None;
         }
-        if has_template(proto) {
+        let statements = has_template(proto);
+        if statements {
             let proto_file = &self.sources[def.file.0 as usize];
-            let lua = proto_file
-                .text
-                .lines()
-                .take_while(|l| l.starts_with('#') || l.trim().is_empty())
-                .any(|l| l.contains("template language: lua"))
-                || proto_file.text[proto.span.range()].contains("%{");
-            let message = if lua {
-                format!(
-                    "PROTO '{name}' ({}) is written with a Lua template (Webots before R2022a); regatta does not run Lua templates, so this instance is skipped",
+            if crate::procedural::is_lua(&proto_file.text)
+                || proto_file.text[proto.span.range()].contains("%{")
+            {
+                let message = format!(
+                    "PROTO '{name}' ({}) is written with a Lua template (Webots before R2022a); regatta runs JavaScript templates only, so this instance is skipped",
                     proto_file.name
-                )
-            } else {
-                format!(
-                    "PROTO '{name}' ({}) contains JavaScript template statements, which regatta does not run (only arithmetic expressions %<= … >% are evaluated); this instance is skipped",
-                    proto_file.name
-                )
-            };
-            self.strict_or_warn(
-                scope.file,
-                Diagnostic::error(node.span, message).with_code("template"),
-            );
-            return None;
+                );
+                self.strict_or_warn(
+                    scope.file,
+                    Diagnostic::error(node.span, message).with_code("template"),
+                );
+                return None;
+            }
         }
         let instantiating = self
             .file_authoring
@@ -1358,6 +1395,15 @@ impl<'c> Lowerer<'c> {
             };
             bindings.insert(declaration.name.text.clone(), (ty, value, None));
         }
+        // A template PROTO's body is the text its template generates, unless every template
+        // in it is arithmetic over fields (regatta's own PROTOs): then no engine starts.
+        let body_def = if statements || self.needs_engine(def, &bindings) {
+            self.expand_template(def, &bindings, node, scope)?
+        } else {
+            def.clone()
+        };
+        let def = &body_def;
+        let proto = &def.proto;
         // The body, in a scope of its own.
         self.instance_stack.push(name.clone());
         let visible = self.visible_protos(def);
@@ -1419,6 +1465,252 @@ impl<'c> Lowerer<'c> {
             self.instance_authoring.insert(root.0, instantiating);
         }
         Some(root)
+    }
+
+    /// Whether a PROTO's templates need the JavaScript engine: some template block of its
+    /// content is not an arithmetic expression in a field value that regatta evaluates itself.
+    fn needs_engine(&self, def: &ProtoDef, bindings: &Bindings) -> bool {
+        let text = &self.sources[def.file.0 as usize].text;
+        let Some(content) = crate::procedural::content_range(text, def.proto.span.range()) else {
+            return false;
+        };
+        let blocks = match regatta_template::blocks(&text[content.clone()]) {
+            Ok(blocks) if blocks.is_empty() => return false,
+            Ok(blocks) => blocks,
+            Err(_) => return true,
+        };
+        let mut arithmetic = BTreeSet::new();
+        fn walk(
+            node: &syntax::Node,
+            text: &str,
+            bindings: &Bindings,
+            arithmetic: &mut BTreeSet<usize>,
+        ) {
+            let NodeKind::Instance {
+                body: Some(body), ..
+            } = &node.kind
+            else {
+                return;
+            };
+            for item in &body.items {
+                let BodyItem::Field(field) = item else {
+                    continue;
+                };
+                let syntax::FieldValue::Value(syntax::Value {
+                    items: Items::Atoms(atoms),
+                    ..
+                }) = &field.value
+                else {
+                    continue;
+                };
+                for atom in atoms {
+                    match atom {
+                        Atom::Template(t)
+                            if t.expression
+                                && crate::template::evaluate(&text[t.span.range()], bindings)
+                                    .is_ok() =>
+                        {
+                            arithmetic.insert(t.span.start as usize);
+                        }
+                        Atom::Node(child) => walk(child, text, bindings, arithmetic),
+                        _ => {}
+                    }
+                }
+            }
+        }
+        for item in &def.proto.body {
+            if let Item::Node(node) = item {
+                walk(node, text, bindings, &mut arithmetic);
+            }
+        }
+        blocks
+            .iter()
+            .any(|block| !arithmetic.contains(&(content.start + block.start)))
+    }
+
+    /// Runs a PROTO's JavaScript template for one instance and returns the PROTO as its
+    /// template generated it (a file of its own, so that messages about the generated text
+    /// show it). `None` after reporting a template that failed; the instance is skipped.
+    fn expand_template(
+        &mut self,
+        def: &Rc<ProtoDef>,
+        bindings: &Bindings,
+        node: &syntax::Node,
+        scope: &mut Scope,
+    ) -> Option<Rc<ProtoDef>> {
+        let proto = &def.proto;
+        let name = proto.name.text.clone();
+        let source = self.sources[def.file.0 as usize].clone();
+        let Some(content) = crate::procedural::content_range(&source.text, proto.span.range())
+        else {
+            self.strict_or_warn(
+                def.file,
+                Diagnostic::error(
+                    proto.name.span,
+                    format!("PROTO '{name}': cannot find the body its template is in"),
+                )
+                .with_code("template"),
+            );
+            return None;
+        };
+        // Field values and defaults, in Webots' JavaScript shapes.
+        let mut default_scope = Scope {
+            protos: self.visible_protos(def),
+            ..Scope::new(def.file)
+        };
+        let mut pairs = Vec::new();
+        for declaration in &proto.interface {
+            let Some((ty, value, origin)) = bindings.get(&declaration.name.text).cloned() else {
+                continue;
+            };
+            let default = match (&origin, &declaration.default) {
+                (None, _) => value.clone(),
+                (Some(_), Some(default)) => self.lower_field_value(
+                    default,
+                    ty,
+                    None,
+                    &mut default_scope,
+                    &declaration.name.text,
+                    declaration.name.span,
+                ),
+                (Some(_), None) => None,
+            };
+            pairs.push((declaration.name.text.clone(), ty, value, default));
+        }
+        let mut fields = serde_json::Map::new();
+        let mut given = crate::procedural::FieldsJson::new(&self.nodes, self.catalogue());
+        for (field, ty, value, default) in &pairs {
+            fields.insert(
+                field.clone(),
+                given.field(*ty, value.as_ref(), default.as_ref()),
+            );
+        }
+        let fields = serde_json::Value::Object(fields);
+        self.template_instances += 1;
+        let id = self.template_instances;
+        let non_deterministic = crate::procedural::is_non_deterministic(&source.text);
+        let key = format!(
+            "{}:{}:{}:{}",
+            def.file.0,
+            proto.span.start,
+            if non_deterministic { id } else { 0 },
+            fields
+        );
+        if let Some(expanded) = self.expanded.get(&key) {
+            return expanded.clone();
+        }
+        let coordinate_system = match self.up_axis {
+            UpAxis::Y => "NUE",
+            UpAxis::Z => "ENU",
+        };
+        let context = crate::procedural::context(
+            &self.sources[0].name,
+            &source.name,
+            id,
+            coordinate_system,
+            &self.webots_version,
+        );
+        let seed = crate::procedural::seed(self.world_seed, if non_deterministic { id } else { 0 });
+        let engine = match &self.engine {
+            Some(engine) => engine,
+            None => match regatta_template::Engine::new(regatta_template::Limits::default()) {
+                Ok(engine) => self.engine.insert(engine),
+                Err(error) => {
+                    self.error(
+                        scope.file,
+                        Diagnostic::error(node.span, error.message).with_code("template"),
+                    );
+                    return None;
+                }
+            },
+        };
+        let request = regatta_template::Request {
+            content: &source.text[content.clone()],
+            name: &source.name,
+            fields: &fields,
+            context: &context,
+            seed,
+        };
+        let expanded = match engine.expand(&request) {
+            Ok(generated) => {
+                for line in generated.console.iter().filter(|l| l.warning) {
+                    self.error(
+                        scope.file,
+                        Diagnostic::warning(
+                            node.span,
+                            format!("PROTO '{name}' template: {}", line.text),
+                        )
+                        .with_label("printed while this instance was generated")
+                        .with_code("template-console"),
+                    );
+                }
+                let mut text = String::with_capacity(source.text.len() + generated.text.len());
+                text.push_str(&source.text[..content.start]);
+                text.push_str(&generated.text);
+                text.push_str(&source.text[content.end..]);
+                let file = self.add_text(&format!("{} (generated)", source.name), &text);
+                if let Some(authoring) = self.file_authoring.get(&def.file.0).copied() {
+                    self.file_authoring.insert(file.0, authoring);
+                }
+                if let Some(table) = self.file_scopes.get(&def.file.0).cloned() {
+                    self.file_scopes.insert(file.0, table);
+                }
+                let parsed = self.parse(file);
+                let found = parsed.items.iter().find_map(|item| match item {
+                    Item::Proto(p) if p.span.start == proto.span.start && p.name.text == name => {
+                        Some(p.clone())
+                    }
+                    _ => None,
+                });
+                if found.is_none() {
+                    self.strict_or_warn(
+                        file,
+                        Diagnostic::error(
+                            proto.name.span,
+                            format!("PROTO '{name}': the text its template generated is not a PROTO body"),
+                        )
+                        .with_code("template"),
+                    );
+                }
+                found.map(|generated| {
+                    Rc::new(ProtoDef {
+                        file,
+                        proto: generated,
+                        enclosing: def.enclosing.clone(),
+                    })
+                })
+            }
+            Err(error) => {
+                let (instance_line, instance_column) = regatta_parser::diagnostic::line_col(
+                    &self.sources[scope.file.0 as usize].text,
+                    node.span.start as usize,
+                );
+                let span = match error.offset {
+                    Some(offset) => {
+                        let at = content.start + offset;
+                        let end = source.text[at..]
+                            .char_indices()
+                            .nth(1)
+                            .map_or(source.text.len(), |(next, _)| at + next);
+                        Span::new(at, end)
+                    }
+                    None => proto.name.span,
+                };
+                self.strict_or_warn(
+                    def.file,
+                    Diagnostic::error(span, format!("PROTO '{name}' template: {}", error.message))
+                        .with_label("in this template")
+                        .with_note(format!(
+                            "while generating the instance at {}:{instance_line}:{instance_column}, which is skipped",
+                            self.sources[scope.file.0 as usize].name
+                        ))
+                        .with_code("template"),
+                );
+                None
+            }
+        };
+        self.expanded.insert(key, expanded.clone());
+        expanded
     }
 
     /// Webots' "PROTO parameter 'x' has no matching IS field." and IS targets that name no

@@ -8,7 +8,7 @@
 
 /// Where a template block starts and whether it is an expression (`%<=`).
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Block {
+pub struct Block {
     /// Byte offset of the `%<` in the content.
     pub start: usize,
     /// Byte range of the code inside the block.
@@ -204,6 +204,9 @@ mod tests {
         let at = composed.js.find("let s").unwrap();
         assert_eq!(composed.content_offset(at), content.find("let s"));
         let at = composed.js.find(" s \n").unwrap() + 1;
-        assert_eq!(composed.content_offset(at), content.find("= s >%").map(|o| o + 2));
+        assert_eq!(
+            composed.content_offset(at),
+            content.find("= s >%").map(|o| o + 2)
+        );
     }
 }

@@ -21,6 +21,15 @@
 
 mod compose;
 
+pub use compose::Block;
+
+/// The template blocks (`%< … >%`, `%<= … >%`) of a PROTO's content scope, in order, as the
+/// composition reads them (`#` comments hide blocks, strings hold them); `Err` with the
+/// offset of a block that is never closed.
+pub fn blocks(content: &str) -> Result<Vec<Block>, usize> {
+    compose::blocks(content).map_err(|unclosed| unclosed.start)
+}
+
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 

@@ -3,7 +3,11 @@
 
 use regatta_template::{Engine, Generated, Limits, Request, TemplateError};
 
-fn expand_with(content: &str, fields: serde_json::Value, seed: u32) -> Result<Generated, TemplateError> {
+fn expand_with(
+    content: &str,
+    fields: serde_json::Value,
+    seed: u32,
+) -> Result<Generated, TemplateError> {
     let engine = Engine::new(Limits::default()).unwrap();
     let context = serde_json::json!({"id": 4, "coordinate_system": "ENU"});
     engine.expand(&Request {
@@ -44,14 +48,26 @@ fn statements_wrap_text_and_expressions_write_values() {
         "\n radius 1\n"
     );
     // A comment of the PROTO text hides the blocks on its line; strings hold blocks.
-    assert_eq!(text("# %<= 1 >%\nurl \"%<= 'a' + 1 >%.png\""), "# %<= 1 >%\nurl \"a1.png\"");
-    assert_eq!(text("%<= fields.size.value.z - fields.size.defaultValue.x >%"), "2.9");
-    assert_eq!(text("%<= fields.colors.value[0].r >% %<= fields.colors.defaultValue.length >%"), "1 0");
+    assert_eq!(
+        text("# %<= 1 >%\nurl \"%<= 'a' + 1 >%.png\""),
+        "# %<= 1 >%\nurl \"a1.png\""
+    );
+    assert_eq!(
+        text("%<= fields.size.value.z - fields.size.defaultValue.x >%"),
+        "2.9"
+    );
+    assert_eq!(
+        text("%<= fields.colors.value[0].r >% %<= fields.colors.defaultValue.length >%"),
+        "1 0"
+    );
     assert_eq!(
         text("%<= fields.geometry.value.node_name >% %<= fields.geometry.value.fields.size.value.y >%"),
         "Box 2"
     );
-    assert_eq!(text("%<= context.id >% %<= context.coordinate_system >%"), "4 ENU");
+    assert_eq!(
+        text("%<= context.id >% %<= context.coordinate_system >%"),
+        "4 ENU"
+    );
 }
 
 #[test]
@@ -75,9 +91,11 @@ fn webots_modules_import_and_behave() {
     );
     assert_eq!(spline, "17 {\"x\":0,\"y\":0} {\"x\":2,\"y\":0}");
     assert_eq!(
-        text("%< import * as v from 'wbvector3.js'; import * as v2 from 'wbvector2.js'; >%\
+        text(
+            "%< import * as v from 'wbvector3.js'; import * as v2 from 'wbvector2.js'; >%\
               %<= JSON.stringify(v.cross({x: 1, y: 0, z: 0}, {x: 0, y: 1, z: 0})) >% \
-              %<= v2.norm(v2.minus({x: 4, y: 3}, {x: 0, y: 0})) >%"),
+              %<= v2.norm(v2.minus({x: 4, y: 3}, {x: 0, y: 0})) >%"
+        ),
         "{\"x\":0,\"y\":0,\"z\":1} 5"
     );
     let turned = text(
@@ -87,10 +105,15 @@ fn webots_modules_import_and_behave() {
          %<= v.x.toFixed(9) >% %<= v.y.toFixed(9) >% %<= back.y.toFixed(9) >% %<= back.a.toFixed(9) >% \
          %<= r.equal(r.combine({x: 0, y: 0, z: 1, a: 1}, {x: 0, y: 0, z: 1, a: 2}), {x: 0, y: 0, z: 1, a: 3}) >%",
     );
-    assert_eq!(turned, "0.000000000 1.000000000 1.000000000 0.500000000 true");
     assert_eq!(
-        text("%< import * as u from 'wbutility.js'; >%%<= u.radiansToDegrees(Math.PI) >% \
-              %<= u.isVector3(fields.size.value) >% %<= u.isAxisAngle(fields.size.value) >%"),
+        turned,
+        "0.000000000 1.000000000 1.000000000 0.500000000 true"
+    );
+    assert_eq!(
+        text(
+            "%< import * as u from 'wbutility.js'; >%%<= u.radiansToDegrees(Math.PI) >% \
+              %<= u.isVector3(fields.size.value) >% %<= u.isAxisAngle(fields.size.value) >%"
+        ),
         "180 true false"
     );
 }
@@ -130,7 +153,9 @@ fn math_is_the_same_everywhere() {
 
 #[test]
 fn console_lines_are_kept() {
-    let generated = expand("%< console.log('made', fields.n.value, {a: 1}); console.warn('careful'); >%ok").unwrap();
+    let generated =
+        expand("%< console.log('made', fields.n.value, {a: 1}); console.warn('careful'); >%ok")
+            .unwrap();
     assert_eq!(generated.text, "ok");
     assert_eq!(generated.console.len(), 2);
     assert_eq!(generated.console[0].text, "made 3 {\"a\":1}");
@@ -146,12 +171,18 @@ fn errors_are_placed_in_the_template() {
 
     let content = "Box {\n  %< const g = fields.nothing.value; >%\n}";
     let error = expand(content).unwrap_err();
-    assert_eq!(error.message, "TypeError: cannot read property 'value' of undefined");
+    assert_eq!(
+        error.message,
+        "TypeError: cannot read property 'value' of undefined"
+    );
     assert_eq!(error.offset, content.find("fields.nothing"));
 
     let content = "%< import * as fs from 'fs.js'; >%";
     let error = expand(content).unwrap_err();
-    assert!(error.message.starts_with("cannot import 'fs.js'"), "{error:?}");
+    assert!(
+        error.message.starts_with("cannot import 'fs.js'"),
+        "{error:?}"
+    );
     assert_eq!(error.offset, content.find("'fs.js'"));
 
     let error = expand("a %< if (x) { ").unwrap_err();
@@ -173,14 +204,18 @@ fn nothing_reaches_outside() {
     ] {
         assert!(expand(content).is_err(), "{content}");
     }
-    assert_eq!(text("%<= typeof require >% %<= typeof process >% %<= typeof fetch >%"), "undefined undefined undefined");
+    assert_eq!(
+        text("%<= typeof require >% %<= typeof process >% %<= typeof fetch >%"),
+        "undefined undefined undefined"
+    );
 }
 
 #[test]
 fn limits_stop_runaway_templates() {
     let error = expand("%< while (true) {} >%").unwrap_err();
     assert!(error.message.contains("work limit"), "{error:?}");
-    let error = expand("%< let a = []; for (;;) a.push('x'.repeat(1000) + a.length); >%").unwrap_err();
+    let error =
+        expand("%< let a = []; for (;;) a.push('x'.repeat(1000) + a.length); >%").unwrap_err();
     assert!(error.message.contains("out of memory"), "{error:?}");
     let error = expand("%< function f() { return f() + 1; } f(); >%").unwrap_err();
     assert!(error.message.starts_with("RangeError"), "{error:?}");
