@@ -183,13 +183,14 @@ impl Chart {
     }
 
     fn ranges(&self) -> ((f64, f64), (f64, f64)) {
-        let xs = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
-        let ys = self.series.iter().flat_map(|s| {
-            s.points
-                .iter()
-                .map(|p| p.1)
-                .chain(s.upper.iter().copied())
-        });
+        let xs = self
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.0));
+        let ys = self
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.1).chain(s.upper.iter().copied()));
         (self.x.fitted(xs), self.y.fitted(ys))
     }
 }
@@ -376,7 +377,10 @@ pub(crate) fn legend_mark<'a, DB: DrawingBackend + 'a>(
     };
     EmptyElement::at(at)
         + Rectangle::new([(0, -9), (30, 9)], color.mix(shade).filled())
-        + PathElement::new(vec![(0, 0), (30, 0)], color.mix(line).stroke_width(style::LINE))
+        + PathElement::new(
+            vec![(0, 0), (30, 0)],
+            color.mix(line).stroke_width(style::LINE),
+        )
         + Circle::new((15, 0), 7, color.mix(dot).filled())
 }
 

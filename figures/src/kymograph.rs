@@ -7,8 +7,8 @@
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::colors::colormaps::{ColorMap, DerivedColorMap, ViridisRGB};
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::{number, style, DrawResult, Figure, Rasters};
 
@@ -195,7 +195,9 @@ impl Figure for Kymograph {
         // Marks: a line across at each time, its label in the column to the right; labels
         // closer than a line of text to the previous one are left out (the lines stay).
         let mut last_label: Option<i32> = None;
-        let font = ("sans-serif", style::TICK - 4).into_font().color(&style::INK);
+        let font = ("sans-serif", style::TICK - 4)
+            .into_font()
+            .color(&style::INK);
         for mark in &self.marks {
             if mark.t < t0 || mark.t > t1 {
                 continue;
@@ -208,7 +210,10 @@ impl Figure for Kymograph {
             if last_label.is_none_or(|last| y - last >= style::TICK as i32 - 2) {
                 main.draw(&Text::new(
                     mark.label.clone(),
-                    (xs.end + 10 - main.get_base_pixel().0, y - main.get_base_pixel().1),
+                    (
+                        xs.end + 10 - main.get_base_pixel().0,
+                        y - main.get_base_pixel().1,
+                    ),
                     font.clone().pos(Pos::new(HPos::Left, VPos::Center)),
                 ))?;
                 last_label = Some(y);
@@ -217,11 +222,18 @@ impl Figure for Kymograph {
         if !self.marks.is_empty() {
             main.draw(&Text::new(
                 "visits".to_owned(),
-                (xs.end + 8 - main.get_base_pixel().0, ys.start - 20 - main.get_base_pixel().1),
+                (
+                    xs.end + 8 - main.get_base_pixel().0,
+                    ys.start - 20 - main.get_base_pixel().1,
+                ),
                 font.clone().pos(Pos::new(HPos::Left, VPos::Bottom)),
             ))?;
         }
-        self.draw_color_bar(&bar, ys.start - root.get_base_pixel().1, ys.end - root.get_base_pixel().1)
+        self.draw_color_bar(
+            &bar,
+            ys.start - root.get_base_pixel().1,
+            ys.end - root.get_base_pixel().1,
+        )
     }
 }
 
@@ -315,7 +327,10 @@ mod tests {
     fn rows_are_means_of_their_frames() {
         let frames: Vec<(f64, Vec<f64>)> = (0..10).map(|i| (i as f64, vec![i as f64])).collect();
         let rows = average_rows(&frames, 5, (0.0, 10.0));
-        assert_eq!(rows, vec![vec![0.5], vec![2.5], vec![4.5], vec![6.5], vec![8.5]]);
+        assert_eq!(
+            rows,
+            vec![vec![0.5], vec![2.5], vec![4.5], vec![6.5], vec![8.5]]
+        );
         // Fewer frames than rows: one row per frame.
         assert_eq!(average_rows(&frames[..3], 5, (0.0, 3.0)).len(), 3);
     }

@@ -78,8 +78,11 @@ pub trait Figure {
     fn size(&self) -> (u32, u32);
     /// Draws the figure on `root`, which covers [`Figure::size`]; pictures made of pixels
     /// (a kymograph) go through `rasters`.
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, rasters: &mut Rasters)
-        -> DrawResult
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        rasters: &mut Rasters,
+    ) -> DrawResult
     where
         DB::ErrorType: 'static;
 }
@@ -100,12 +103,12 @@ pub fn save(figure: &impl Figure, path: &Path, format: Format) -> Result<(), Fig
                     source,
                 },
             }),
-        Format::Svg => std::fs::write(path, render_svg(figure)?).map_err(|source| {
-            FigureError::Write {
+        Format::Svg => {
+            std::fs::write(path, render_svg(figure)?).map_err(|source| FigureError::Write {
                 path: shown,
                 source,
-            }
-        }),
+            })
+        }
     }
 }
 
@@ -151,8 +154,7 @@ where
     figure
         .draw(root, rasters)
         .map_err(|e| FigureError::Draw(e.to_string()))?;
-    root.present()
-        .map_err(|e| FigureError::Draw(e.to_string()))
+    root.present().map_err(|e| FigureError::Draw(e.to_string()))
 }
 
 /// Pixel pictures inside a figure. A bitmap is scaled (nearest neighbour, so that each value
@@ -195,7 +197,11 @@ impl Rasters {
             Some(placed) => {
                 let marker = format!("regatta-raster-{}", placed.len());
                 root.draw(&Text::new(marker.clone(), local, ("sans-serif", 1)))?;
-                placed.push((marker, (top_left.0, top_left.1, size.0, size.1), picture.clone()));
+                placed.push((
+                    marker,
+                    (top_left.0, top_left.1, size.0, size.1),
+                    picture.clone(),
+                ));
             }
         }
         Ok(())
@@ -215,10 +221,7 @@ impl Rasters {
             let end = at + end + "</text>".len();
             let mut png = Vec::new();
             if picture
-                .write_to(
-                    &mut std::io::Cursor::new(&mut png),
-                    image::ImageFormat::Png,
-                )
+                .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
                 .is_err()
             {
                 continue;
@@ -239,11 +242,8 @@ fn register_fonts() {
     ONCE.call_once(|| {
         for family in ["sans-serif", "serif", "monospace"] {
             // The font is valid: `dejavu` ships it, and a test draws text with it.
-            let _ = plotters::style::register_font(
-                family,
-                FontStyle::Normal,
-                dejavu::sans::regular(),
-            );
+            let _ =
+                plotters::style::register_font(family, FontStyle::Normal, dejavu::sans::regular());
             let _ = plotters::style::register_font(family, FontStyle::Bold, dejavu::sans::bold());
         }
     });

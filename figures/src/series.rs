@@ -139,7 +139,11 @@ impl Figure for TimeSeries {
                 .build_cartesian_2d(t0..t1, low..high)?;
             let mut mesh = context.configure_mesh();
             mesh.y_desc(&panel.label)
-                .axis_desc_style(("sans-serif", style::LABEL - 4).into_font().color(&style::INK))
+                .axis_desc_style(
+                    ("sans-serif", style::LABEL - 4)
+                        .into_font()
+                        .color(&style::INK),
+                )
                 .label_style(("sans-serif", style::TICK).into_font().color(&style::INK))
                 .x_label_formatter(&|v| number(*v))
                 .y_label_formatter(&|v| number(*v))
@@ -222,7 +226,11 @@ pub fn envelope(points: &[(f64, f64)], kept: usize) -> Vec<(f64, f64)> {
                 if p.1 > chunk[hi].1 { i } else { hi },
             )
         });
-        let (first, second) = if low <= high { (low, high) } else { (high, low) };
+        let (first, second) = if low <= high {
+            (low, high)
+        } else {
+            (high, low)
+        };
         out.push(chunk[first]);
         if second != first {
             out.push(chunk[second]);

@@ -8,15 +8,18 @@
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::colors::colormaps::{ColorMap, ViridisRGB};
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::{number, style, DrawResult, Figure, Rasters};
 
 /// An obstacle's footprint, in world (x, z) metres.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Outline {
-    Circle { center: (f64, f64), radius: f64 },
+    Circle {
+        center: (f64, f64),
+        radius: f64,
+    },
     /// Corners in order (a rotated box has four).
     Polygon(Vec<(f64, f64)>),
 }
@@ -225,7 +228,10 @@ impl Figure for TopView {
                 .into_iter()
                 .map(page)
                 .collect();
-            context.draw_series(std::iter::once(Polygon::new(ring.clone(), buoy_color.filled())))?;
+            context.draw_series(std::iter::once(Polygon::new(
+                ring.clone(),
+                buoy_color.filled(),
+            )))?;
             context.draw_series(std::iter::once(PathElement::new(
                 ring,
                 style::INK.stroke_width(2),

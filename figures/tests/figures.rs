@@ -40,7 +40,13 @@ fn fitness() -> Chart {
         "population min–max",
         generations
             .iter()
-            .map(|&g| (g, 2.0 * (1.0 - (-g / 10.0).exp()), 6.0 * (1.0 - (-g / 8.0).exp()) + 1.0))
+            .map(|&g| {
+                (
+                    g,
+                    2.0 * (1.0 - (-g / 10.0).exp()),
+                    6.0 * (1.0 - (-g / 8.0).exp()) + 1.0,
+                )
+            })
             .collect(),
     ))
     .with(Series::line(
@@ -76,7 +82,10 @@ fn top_view(color_by_time: bool) -> TopView {
             ),
         },
     ];
-    for (k, &(x, z)) in [(0.0, -0.3), (-0.26, 0.15), (0.26, 0.15)].iter().enumerate() {
+    for (k, &(x, z)) in [(0.0, -0.3), (-0.26, 0.15), (0.26, 0.15)]
+        .iter()
+        .enumerate()
+    {
         view.obstacles.push(Obstacle {
             outline: Outline::Circle {
                 center: (x, z),
@@ -96,7 +105,12 @@ fn top_view(color_by_time: bool) -> TopView {
                 let t = i as f64 * 0.1;
                 let a = t * 0.4 + k as f64 * 2.0;
                 let r = 0.15 + 0.15 * (t * 0.07).sin().abs();
-                (t, r * a.cos(), r * a.sin(), -a - std::f64::consts::FRAC_PI_2)
+                (
+                    t,
+                    r * a.cos(),
+                    r * a.sin(),
+                    -a - std::f64::consts::FRAC_PI_2,
+                )
             })
             .collect();
         view.tracks.push(Track {
@@ -148,15 +162,27 @@ fn kymograph() -> Kymograph {
 
 fn time_series() -> TimeSeries {
     let trace = |name: &str, f: &dyn Fn(f64) -> f64| {
-        Trace::new(name, (0..3000).map(|i| (i as f64 * 0.02, f(i as f64 * 0.02))).collect())
+        Trace::new(
+            name,
+            (0..3000)
+                .map(|i| (i as f64 * 0.02, f(i as f64 * 0.02)))
+                .collect(),
+        )
     };
     TimeSeries::new("khepera: sensors and wheels", (0.0, 60.0))
-        .with(Panel::new(
-            "IR proximity (0–1023)",
-            (0..8)
-                .map(|s| trace(&format!("IR {s}"), &move |t| 500.0 + 400.0 * (t * 0.3 + s as f64).sin()))
-                .collect(),
-        ).range(0.0, 1023.0))
+        .with(
+            Panel::new(
+                "IR proximity (0–1023)",
+                (0..8)
+                    .map(|s| {
+                        trace(&format!("IR {s}"), &move |t| {
+                            500.0 + 400.0 * (t * 0.3 + s as f64).sin()
+                        })
+                    })
+                    .collect(),
+            )
+            .range(0.0, 1023.0),
+        )
         .with(Panel::new(
             "wheel speed (pulses/10 ms)",
             vec![
@@ -174,12 +200,19 @@ fn time_series() -> TimeSeries {
 }
 
 /// Every figure kind, with a name and the axis titles its SVG must hold.
-fn figures() -> Vec<(&'static str, Box<dyn Fn() -> (Vec<u8>, String)>, Vec<&'static str>)> {
+fn figures() -> Vec<(
+    &'static str,
+    Box<dyn Fn() -> (Vec<u8>, String)>,
+    Vec<&'static str>,
+)> {
     fn both(figure: &impl Figure) -> (Vec<u8>, String) {
         let png = render_png(figure).expect("draws as PNG");
         let mut bytes = Vec::new();
-        png.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
-            .expect("encodes");
+        png.write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
+        .expect("encodes");
         (bytes, render_svg(figure).expect("draws as SVG"))
     }
     vec![
@@ -196,7 +229,14 @@ fn figures() -> Vec<(&'static str, Box<dyn Fn() -> (Vec<u8>, String)>, Vec<&'sta
         (
             "top_view",
             Box::new(|| both(&top_view(false))),
-            vec!["x (m)", "z (m)", "khepera", "khepera_2", "start", "contact began"],
+            vec![
+                "x (m)",
+                "z (m)",
+                "khepera",
+                "khepera_2",
+                "start",
+                "contact began",
+            ],
         ),
         (
             "top_view_time",
@@ -216,7 +256,11 @@ fn figures() -> Vec<(&'static str, Box<dyn Fn() -> (Vec<u8>, String)>, Vec<&'sta
         (
             "time_series",
             Box::new(|| both(&time_series())),
-            vec!["simulated time (s)", "IR proximity (0–1023)", "wheel speed (pulses/10 ms)"],
+            vec![
+                "simulated time (s)",
+                "IR proximity (0–1023)",
+                "wheel speed (pulses/10 ms)",
+            ],
         ),
     ]
 }
@@ -227,8 +271,12 @@ fn svg_texts(svg: &str) -> Vec<String> {
     let mut rest = svg;
     while let Some(start) = rest.find("<text") {
         rest = &rest[start..];
-        let Some(open_end) = rest.find('>') else { break };
-        let Some(close) = rest.find("</text>") else { break };
+        let Some(open_end) = rest.find('>') else {
+            break;
+        };
+        let Some(close) = rest.find("</text>") else {
+            break;
+        };
         texts.push(
             rest[open_end + 1..close]
                 .trim()
@@ -258,13 +306,17 @@ fn every_figure_labels_its_axes() {
         let numbers = texts
             .iter()
             .filter(|t| {
-                !t.is_empty()
-                    && t.chars()
-                        .all(|c| c.is_ascii_digit() || ".−-e".contains(c))
+                !t.is_empty() && t.chars().all(|c| c.is_ascii_digit() || ".−-e".contains(c))
             })
             .count();
-        assert!(numbers >= 6, "{name}: only {numbers} tick labels in {texts:?}");
-        assert!(!svg.contains("regatta-raster"), "{name}: a raster marker was left in the SVG");
+        assert!(
+            numbers >= 6,
+            "{name}: only {numbers} tick labels in {texts:?}"
+        );
+        assert!(
+            !svg.contains("regatta-raster"),
+            "{name}: a raster marker was left in the SVG"
+        );
     }
 }
 
@@ -305,7 +357,9 @@ fn figures_match_their_golden_images() {
         // Mean difference per channel, and the share of pixels that differ visibly.
         let (mut sum, mut visible) = (0u64, 0usize);
         for (a, e) in actual.pixels().zip(expected.pixels()) {
-            let d: u32 = (0..3).map(|c| (a[c] as i32 - e[c] as i32).unsigned_abs()).sum();
+            let d: u32 = (0..3)
+                .map(|c| (a[c] as i32 - e[c] as i32).unsigned_abs())
+                .sum();
             sum += d as u64;
             if d > 96 {
                 visible += 1;
@@ -336,5 +390,8 @@ fn a_figure_written_to_a_missing_folder_is_an_error() {
         regatta_figures::Format::Png,
     )
     .unwrap_err();
-    assert!(error.to_string().contains("/nonexistent-folder/chart.png"), "{error}");
+    assert!(
+        error.to_string().contains("/nonexistent-folder/chart.png"),
+        "{error}"
+    );
 }

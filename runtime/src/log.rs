@@ -2,7 +2,11 @@
 //!
 //! Format decisions:
 //! - One channel per robot and sensor: `/{robot}/pose`, `/wheels`, `/proximity`, `/ambient`,
-//!   `/retina`, `/k213`, `/contacts`, `/controller`.
+//!   `/retina`, `/k213`, `/contacts`, `/controller` (regatta's own schemas: the reproducible
+//!   record), and beside them Foxglove's well-known schemas (`foxglove`: scene, transforms,
+//!   poses, images, events) so that Foxglove and ROS 2 tools show a log as it is.
+//!   `{robot}` is the robot's name made a valid ROS 2 token (`channels`); `--channels` picks
+//!   the channels a log holds, and the log's metadata says which.
 //! - Chunks of 4 MB (uncompressed) with zstd level 1: the size and speed targets of a ten-minute
 //!   regatta at full rate (18.9 MB; logging costs about 45 % of the speed) both hold.
 //! - Messages are CDR-encoded with a `ros2msg` schema per channel (the ROS 2 convention that
@@ -20,7 +24,14 @@ use std::io::{Seek, Write};
 
 use sha2::{Digest, Sha256};
 
+use crate::khepera::Senses;
 use crate::sim::Simulation;
+
+mod channels;
+mod foxglove;
+
+pub use channels::{is_ros2_topic, robot_tokens, sanitize, Channel, Channels, UnknownChannel};
+pub use foxglove::SCHEMAS as FOXGLOVE_SCHEMAS;
 
 /// Why a log could not be written or read.
 #[derive(Debug, thiserror::Error)]
@@ -45,6 +56,8 @@ pub struct RunInfo {
     pub seed: u64,
     pub lenient: bool,
     pub steps_requested: u64,
+    /// The channels recorded.
+    pub channels: Channels,
 }
 
 impl RunInfo {
@@ -64,6 +77,7 @@ impl RunInfo {
                 self.steps_requested.to_string(),
             ),
             ("time_step".to_owned(), format!("{time_step}")),
+            ("channels".to_owned(), self.channels.to_string()),
             (
                 "regatta_version".to_owned(),
                 env!("CARGO_PKG_VERSION").to_owned(),
@@ -84,26 +98,34 @@ impl RunInfo {
             steps_requested: get("steps_requested")?
                 .parse()
                 .map_err(|_| LogError::MissingField("steps_requested"))?,
+            // Logs from before `--channels` hold regatta's own channels.
+            channels: match metadata.get("channels") {
+                Some(names) => names
+                    .parse()
+                    .map_err(|_| LogError::MissingField("channels"))?,
+                None => Channels::REGATTA,
+            },
         })
     }
 }
 
-/// The channels of one robot.
+/// The channels of one robot (`None`: not recorded).
 struct RobotChannels {
-    pose: u16,
-    wheels: u16,
-    proximity: u16,
-    ambient: u16,
+    pose: Option<u16>,
+    wheels: Option<u16>,
+    proximity: Option<u16>,
+    ambient: Option<u16>,
     retina: Option<u16>,
     k213: Option<u16>,
-    contacts: u16,
-    controller: u16,
+    contacts: Option<u16>,
+    controller: Option<u16>,
 }
 
 /// Writes a run's messages, step by step.
 pub struct Recorder<W: Write + Seek> {
     writer: mcap::Writer<W>,
     robots: Vec<RobotChannels>,
+    foxglove: Option<foxglove::Foxglove>,
     sequence: u32,
     cdr: Cdr,
 }
@@ -286,15 +308,22 @@ impl<'a> CdrReader<'a> {
 }
 
 impl<W: Write + Seek> Recorder<W> {
-    /// Starts a log for `simulation`, writing the header, metadata, schemas and channels. From
-    /// now on the simulation refreshes every sensor, read or not, so that the log holds them
-    /// all (see [`Simulation::sense_everything`]).
+    /// Starts a log for `simulation`, writing the header, metadata, schemas and the channels
+    /// `run.channels` names. From now on the simulation refreshes every sensor those channels
+    /// record, read or not (see [`Simulation::always_sensed`]).
     pub fn new(
         sink: W,
         simulation: &mut Simulation,
         run: &RunInfo,
     ) -> Result<Recorder<W>, LogError> {
-        simulation.sense_everything();
+        let wanted = run.channels;
+        simulation.always_sensed = Senses {
+            proximity: wanted.contains(Channel::Proximity),
+            ambient: wanted.contains(Channel::Ambient),
+            vision: wanted.contains(Channel::Retina)
+                || wanted.contains(Channel::K213)
+                || wanted.contains(Channel::Images),
+        };
         let simulation = &*simulation;
         let options = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Zstd))
@@ -310,58 +339,91 @@ impl<W: Write + Seek> Recorder<W> {
             })
             .map_err(LogError::Write)?;
         let mut schema = BTreeMap::new();
+        let kinds = [
+            (Channel::Pose, "regatta/msg/Pose"),
+            (Channel::Wheels, "regatta/msg/Wheels"),
+            (Channel::Proximity, "regatta/msg/Readings8"),
+            (Channel::Ambient, "regatta/msg/Readings8"),
+            (Channel::Retina, "regatta/msg/Retina"),
+            (Channel::K213, "regatta/msg/LinearCamera"),
+            (Channel::Contacts, "regatta/msg/Contact"),
+            (Channel::Controller, "regatta/msg/ControllerEvent"),
+        ];
         for (name, text) in SCHEMAS {
-            schema.insert(
-                *name,
-                writer
-                    .add_schema(name, "ros2msg", text.as_bytes())
-                    .map_err(LogError::Write)?,
-            );
+            if kinds.iter().any(|(c, s)| s == name && wanted.contains(*c)) {
+                schema.insert(
+                    *name,
+                    writer
+                        .add_schema(name, "ros2msg", text.as_bytes())
+                        .map_err(LogError::Write)?,
+                );
+            }
         }
+        let tokens = robot_tokens(simulation.robots.iter().map(|r| r.name.as_str()));
         let mut robots = Vec::new();
-        let none = BTreeMap::new();
-        for robot in &simulation.robots {
-            let mut channel = |topic: &str, schema_name: &str| {
+        for (robot, token) in simulation.robots.iter().zip(&tokens) {
+            let owner = BTreeMap::from([("robot".to_owned(), robot.name.clone())]);
+            let mut channel = |kind: Channel, present: bool| -> Result<Option<u16>, LogError> {
+                if !present || !wanted.contains(kind) {
+                    return Ok(None);
+                }
+                let schema_name = kinds
+                    .iter()
+                    .find(|(c, _)| *c == kind)
+                    .map(|(_, s)| *s)
+                    .expect("every regatta channel has a schema");
                 writer
                     .add_channel(
                         schema[schema_name],
-                        &format!("/{}/{topic}", robot.name),
+                        &format!("/{token}/{}", kind.name()),
                         "cdr",
-                        &none,
+                        &owner,
                     )
+                    .map(Some)
                     .map_err(LogError::Write)
             };
             robots.push(RobotChannels {
-                pose: channel("pose", "regatta/msg/Pose")?,
-                wheels: channel("wheels", "regatta/msg/Wheels")?,
-                proximity: channel("proximity", "regatta/msg/Readings8")?,
-                ambient: channel("ambient", "regatta/msg/Readings8")?,
-                retina: if robot.panoramic.is_some() {
-                    Some(channel("retina", "regatta/msg/Retina")?)
-                } else {
-                    None
-                },
-                k213: if robot.linear_camera.is_some() {
-                    Some(channel("k213", "regatta/msg/LinearCamera")?)
-                } else {
-                    None
-                },
-                contacts: channel("contacts", "regatta/msg/Contact")?,
-                controller: channel("controller", "regatta/msg/ControllerEvent")?,
+                pose: channel(Channel::Pose, true)?,
+                wheels: channel(Channel::Wheels, true)?,
+                proximity: channel(Channel::Proximity, true)?,
+                ambient: channel(Channel::Ambient, true)?,
+                retina: channel(Channel::Retina, robot.panoramic.is_some())?,
+                k213: channel(Channel::K213, robot.linear_camera.is_some())?,
+                contacts: channel(Channel::Contacts, true)?,
+                controller: channel(Channel::Controller, true)?,
             });
         }
+        let mut cdr = Cdr {
+            buf: Vec::with_capacity(4096),
+        };
+        let mut sequence = 0;
+        let foxglove = if wanted.any_foxglove() {
+            Some(foxglove::Foxglove::new(
+                &mut writer,
+                &mut cdr,
+                &mut sequence,
+                simulation,
+                wanted,
+                &tokens,
+                &run.world_name,
+            )?)
+        } else {
+            None
+        };
         Ok(Recorder {
             writer,
             robots,
-            sequence: 0,
-            cdr: Cdr {
-                buf: Vec::with_capacity(4096),
-            },
+            foxglove,
+            sequence,
+            cdr,
         })
     }
 
-    /// Writes the message encoded in `self.cdr`.
-    fn write(&mut self, channel: u16, time_ns: u64) -> Result<(), LogError> {
+    /// Writes the message encoded in `self.cdr` (nothing when the channel is not recorded).
+    fn write(&mut self, channel: Option<u16>, time_ns: u64) -> Result<(), LogError> {
+        let Some(channel) = channel else {
+            return Ok(());
+        };
         self.sequence = self.sequence.wrapping_add(1);
         let header = mcap::records::MessageHeader {
             channel_id: channel,
@@ -395,13 +457,13 @@ impl<W: Write + Seek> Recorder<W> {
                 channels.controller,
             );
             let updated = robot.updated;
-            if updated.proximity {
+            if updated.proximity && proximity.is_some() {
                 self.cdr.start();
                 self.cdr.f64(read_at);
                 robot.proximity.iter().for_each(|&v| self.cdr.u16(v));
                 self.write(proximity, ns(read_at))?;
             }
-            if updated.ambient {
+            if updated.ambient && ambient.is_some() {
                 self.cdr.start();
                 self.cdr.f64(read_at);
                 robot.ambient.iter().for_each(|&v| self.cdr.u16(v));
@@ -409,6 +471,7 @@ impl<W: Write + Seek> Recorder<W> {
             }
             if updated.vision {
                 if let (Some(channel), Some(turret)) = (retina, &robot.panoramic) {
+                    let channel = Some(channel);
                     let out = &turret.output;
                     let roi = turret.model.rig.roi;
                     let cdr = &mut self.cdr;
@@ -439,6 +502,7 @@ impl<W: Write + Seek> Recorder<W> {
                     self.write(channel, ns(read_at))?;
                 }
                 if let (Some(channel), Some(camera)) = (k213, &robot.linear_camera) {
+                    let channel = Some(channel);
                     self.cdr.start();
                     self.cdr.f64(read_at);
                     self.cdr.u16s(&camera.output.digital);
@@ -446,7 +510,7 @@ impl<W: Write + Seek> Recorder<W> {
                     self.write(channel, ns(read_at))?;
                 }
             }
-            if updated.controller_error {
+            if updated.controller_error && controller.is_some() {
                 self.cdr.start();
                 self.cdr.f64(read_at);
                 self.cdr
@@ -454,26 +518,38 @@ impl<W: Write + Seek> Recorder<W> {
                 self.write(controller, ns(read_at))?;
             }
             let (left, right) = robot.counters(rig);
-            self.cdr.start();
-            self.cdr.f64(t);
-            self.cdr.i32(robot.command.0);
-            self.cdr.i32(robot.command.1);
-            self.cdr.i32(left);
-            self.cdr.i32(right);
-            self.write(wheels, ns(t))?;
-            self.cdr.start();
-            self.cdr.f64(t);
-            self.cdr.f64(robot.pose.x);
-            self.cdr.f64(robot.pose.z);
-            self.cdr.f64(robot.pose.heading);
-            self.write(pose, ns(t))?;
-            if updated.contact {
+            if wheels.is_some() {
+                self.cdr.start();
+                self.cdr.f64(t);
+                self.cdr.i32(robot.command.0);
+                self.cdr.i32(robot.command.1);
+                self.cdr.i32(left);
+                self.cdr.i32(right);
+                self.write(wheels, ns(t))?;
+            }
+            if pose.is_some() {
+                self.cdr.start();
+                self.cdr.f64(t);
+                self.cdr.f64(robot.pose.x);
+                self.cdr.f64(robot.pose.z);
+                self.cdr.f64(robot.pose.heading);
+                self.write(pose, ns(t))?;
+            }
+            if updated.contact && contacts.is_some() {
                 self.cdr.start();
                 self.cdr.f64(t);
                 self.cdr.bool(robot.contacts.is_touching());
                 self.cdr.u64(robot.contacts.events);
                 self.write(contacts, ns(t))?;
             }
+        }
+        if let Some(foxglove) = &mut self.foxglove {
+            foxglove.record(
+                &mut self.writer,
+                &mut self.cdr,
+                &mut self.sequence,
+                simulation,
+            )?;
         }
         Ok(())
     }
