@@ -6,7 +6,7 @@ use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::{number, style, DrawResult, Figure, Rasters};
+use crate::{number, polyline, style, DrawResult, Figure, Rasters};
 
 /// One axis: its title (with the unit, e.g. "time per update (µs)"), scale and range.
 #[derive(Clone, Debug, PartialEq)]
@@ -200,22 +200,38 @@ impl Figure for Chart {
         self.size
     }
 
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, _: &mut Rasters) -> DrawResult
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        rasters: &mut Rasters,
+    ) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
         let ((x0, x1), (y0, y1)) = self.ranges();
         match (self.x.log, self.y.log) {
-            (false, false) => draw_chart(self, root, x0..x1, y0..y1),
-            (true, false) => draw_chart(self, root, (x0..x1).log_scale(), y0..y1),
-            (false, true) => draw_chart(self, root, x0..x1, (y0..y1).log_scale()),
-            (true, true) => draw_chart(self, root, (x0..x1).log_scale(), (y0..y1).log_scale()),
+            (false, false) => draw_chart(self, root, x0..x1, y0..y1, rasters),
+            (true, false) => draw_chart(self, root, (x0..x1).log_scale(), y0..y1, rasters),
+            (false, true) => draw_chart(self, root, x0..x1, (y0..y1).log_scale(), rasters),
+            (true, true) => draw_chart(
+                self,
+                root,
+                (x0..x1).log_scale(),
+                (y0..y1).log_scale(),
+                rasters,
+            ),
         }
     }
 }
 
 /// The chart on any pair of axis kinds.
-fn draw_chart<DB, X, Y>(chart: &Chart, root: &DrawingArea<DB, Shift>, x: X, y: Y) -> DrawResult
+fn draw_chart<DB, X, Y>(
+    chart: &Chart,
+    root: &DrawingArea<DB, Shift>,
+    x: X,
+    y: Y,
+    rasters: &Rasters,
+) -> DrawResult
 where
     DB: DrawingBackend,
     DB::ErrorType: 'static,
@@ -237,7 +253,7 @@ where
         chart.x.log,
         chart.y.log,
     )?;
-    draw_series(&mut context, &chart.series)?;
+    draw_series(&mut context, &chart.series, rasters)?;
     if chart.series.iter().any(|s| !s.name.is_empty()) {
         legend(&mut context, chart.legend)?;
     }
@@ -295,6 +311,7 @@ fn is_decade(v: f64) -> bool {
 pub(crate) fn draw_series<'a, DB, X, Y>(
     context: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
     series: &[Series],
+    rasters: &Rasters,
 ) -> DrawResult
 where
     DB: DrawingBackend + 'a,
@@ -322,7 +339,7 @@ where
             .filter(|p| p.0.is_finite() && p.1.is_finite())
             .collect();
         let legend_style = s.style;
-        let drawn = match s.style {
+        match s.style {
             SeriesStyle::Band => {
                 let mut outline: Vec<(f64, f64)> = s
                     .points
@@ -334,25 +351,23 @@ where
                 context.draw_series(std::iter::once(Polygon::new(
                     outline,
                     color.mix(0.25).filled(),
-                )))?
+                )))?;
             }
-            SeriesStyle::Line => context.draw_series(LineSeries::new(
-                finite.clone(),
-                color.stroke_width(style::LINE),
-            ))?,
+            SeriesStyle::Line => {
+                polyline(context, finite, color.stroke_width(style::LINE), rasters)?;
+            }
             SeriesStyle::Markers | SeriesStyle::LineMarkers => {
                 if s.style == SeriesStyle::LineMarkers {
-                    context.draw_series(LineSeries::new(
-                        finite.clone(),
-                        color.stroke_width(style::LINE),
-                    ))?;
+                    polyline(context, finite, color.stroke_width(style::LINE), rasters)?;
                 }
                 context.draw_series(s.points.iter().enumerate().map(|(i, &p)| {
                     let radius = s.marker_sizes.get(i).copied().unwrap_or(7) as i32;
                     Circle::new(p, radius, color.filled())
-                }))?
+                }))?;
             }
-        };
+        }
+        // The legend entry hangs on an empty series.
+        let drawn = context.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?;
         if !s.name.is_empty() {
             drawn
                 .label(&s.name)

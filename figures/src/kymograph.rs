@@ -192,22 +192,43 @@ impl Figure for Kymograph {
             .axis_style(style::INK.stroke_width(2))
             .set_all_tick_mark_size(8)
             .draw()?;
-        // Marks: a line across at each time, its label in the column to the right; labels
-        // closer than a line of text to the previous one are left out (the lines stay).
-        let mut last_label: Option<i32> = None;
-        let font = ("sans-serif", style::TICK - 4)
-            .into_font()
-            .color(&style::INK);
+        // Marks: a tick inward from the right edge at each time (a line across would hide the
+        // picture), its label in the column to the right; labels closer than a line of text to
+        // the previous one are left out (the ticks stay).
+        // Each distinct label gets its own colour, so that ticks read without their labels;
+        // labels shrink (to 14 px) before any is left out.
+        let mut kinds: Vec<&str> = Vec::new();
         for mark in &self.marks {
+            if !kinds.contains(&mark.label.as_str()) {
+                kinds.push(&mark.label);
+            }
+        }
+        let times: Vec<i32> = self
+            .marks
+            .iter()
+            .map(|m| context.backend_coord(&(0.0, -m.t)).1)
+            .collect();
+        let gap = times
+            .windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .min()
+            .unwrap_or(i32::MAX);
+        let size = (gap as f64 * 0.95).clamp(14.0, (style::TICK - 4) as f64) as u32;
+        let mut last_label: Option<i32> = None;
+        for mark in &self.marks {
+            let kind = kinds.iter().position(|k| *k == mark.label).unwrap_or(0);
+            let ink = style::color(kind);
+            let font = ("sans-serif", size).into_font().color(&ink);
             if mark.t < t0 || mark.t > t1 {
                 continue;
             }
+            let inward = 0.04 * (a0 - a1).abs();
             context.draw_series(std::iter::once(PathElement::new(
-                vec![(a0.min(a1), -mark.t), (a0.max(a1), -mark.t)],
-                BLACK.mix(0.55).stroke_width(1),
+                vec![(a0.max(a1) - inward, -mark.t), (a0.max(a1), -mark.t)],
+                ink.stroke_width(3),
             )))?;
             let (_, y) = context.backend_coord(&(a0.max(a1), -mark.t));
-            if last_label.is_none_or(|last| y - last >= style::TICK as i32 - 2) {
+            if last_label.is_none_or(|last| y - last >= size as i32) {
                 main.draw(&Text::new(
                     mark.label.clone(),
                     (
@@ -220,6 +241,9 @@ impl Figure for Kymograph {
             }
         }
         if !self.marks.is_empty() {
+            let font = ("sans-serif", style::TICK - 4)
+                .into_font()
+                .color(&style::INK);
             main.draw(&Text::new(
                 "visits".to_owned(),
                 (

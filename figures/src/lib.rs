@@ -207,6 +207,11 @@ impl Rasters {
         Ok(())
     }
 
+    /// Whether the figure is being drawn as SVG.
+    pub fn is_svg(&self) -> bool {
+        self.svg.is_some()
+    }
+
     /// Replaces each marker's `<text>` element by an `<image>` holding its picture.
     fn embed(self, mut svg: String) -> String {
         use base64::Engine as _;
@@ -234,6 +239,35 @@ impl Rasters {
         }
         svg
     }
+}
+
+/// Draws a polyline through `points` (data coordinates). A bitmap gets one segment per pair
+/// of points when the line is thicker than a pixel: plotters' bitmap rasteriser joins thick
+/// polylines with unlimited miters, which shoot far out of the plot at every sharp turn of a
+/// noisy trace. SVG joins lines itself and gets a single polyline.
+pub(crate) fn polyline<DB, X, Y>(
+    context: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    points: Vec<(f64, f64)>,
+    style: ShapeStyle,
+    rasters: &Rasters,
+) -> DrawResult
+where
+    DB: DrawingBackend,
+    DB::ErrorType: 'static,
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    if rasters.is_svg() || style.stroke_width <= 1 {
+        context.draw_series(std::iter::once(PathElement::new(points, style)))?;
+    } else {
+        context.draw_series(
+            points
+                .windows(2)
+                .filter(|w| w[0] != w[1])
+                .map(|w| PathElement::new(vec![w[0], w[1]], style)),
+        )?;
+    }
+    Ok(())
 }
 
 /// Registers the embedded font once, for every family name plotters may ask for.

@@ -165,7 +165,7 @@ impl Figure for TimeSeries {
                 } else {
                     points
                 };
-                context.draw_series(LineSeries::new(points, color.stroke_width(2)))?;
+                context.draw_series(LineSeries::new(points, color.stroke_width(1)))?;
             }
             // The legend beside the panel, one row per trace.
             let row = style::TICK as i32 + 8;

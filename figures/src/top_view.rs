@@ -11,7 +11,7 @@ use plotters::prelude::*;
 use plotters::style::colors::colormaps::{ColorMap, ViridisRGB};
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::{number, style, DrawResult, Figure, Rasters};
+use crate::{number, polyline, style, DrawResult, Figure, Rasters};
 
 /// An obstacle's footprint, in world (x, z) metres.
 #[derive(Clone, Debug, PartialEq)]
@@ -168,7 +168,11 @@ impl Figure for TopView {
         (self.width, plot_height + TOP + BOTTOM + 2 * MARGIN)
     }
 
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, _: &mut Rasters) -> DrawResult
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        rasters: &mut Rasters,
+    ) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -268,10 +272,12 @@ impl Figure for TopView {
                 let mut flush = |run: &mut Vec<(f64, f64)>, bin: usize| -> DrawResult {
                     if run.len() >= 2 {
                         let c = time_color((bin as f64 + 0.5) / TIME_BINS as f64);
-                        context.draw_series(std::iter::once(PathElement::new(
+                        polyline(
+                            &mut context,
                             std::mem::take(run),
                             c.stroke_width(style::LINE),
-                        )))?;
+                            rasters,
+                        )?;
                     }
                     Ok(())
                 };
@@ -287,10 +293,16 @@ impl Figure for TopView {
                 }
                 flush(&mut run, run_bin)?;
             } else {
-                context.draw_series(LineSeries::new(
-                    track.poses.iter().map(|&(_, x, z, _)| page((x, z))),
+                polyline(
+                    &mut context,
+                    track
+                        .poses
+                        .iter()
+                        .map(|&(_, x, z, _)| page((x, z)))
+                        .collect(),
                     color.stroke_width(style::LINE),
-                ))?;
+                    rasters,
+                )?;
             }
             // Start: an open circle; end: the body at true size with a heading stroke.
             if let Some(&(_, x, z, _)) = track.poses.first() {

@@ -572,9 +572,24 @@ impl<W: Write + Seek> Recorder<W> {
     }
 }
 
+/// A channel of a log.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TopicInfo {
+    pub topic: String,
+    /// Its schema's name (`regatta/msg/Pose`, `foxglove_msgs/msg/FrameTransform`, …).
+    pub schema: String,
+    pub message_encoding: String,
+    /// The robot it belongs to (its own name, before sanitising), if any.
+    pub robot: Option<String>,
+}
+
 /// A log read back.
 pub struct LogContents {
     pub run: RunInfo,
+    /// Every channel, in the order they were added.
+    pub topics: Vec<TopicInfo>,
+    /// The `regatta` metadata record as written (world hash, version, time step, …).
+    pub metadata: BTreeMap<String, String>,
     /// The end record's entries, if the run finished writing it.
     pub end: Option<BTreeMap<String, String>>,
     /// (topic, log time ns, CDR bytes), in file order.
@@ -589,15 +604,32 @@ pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
     let mut run = None;
     let mut end = None;
     let mut truncated = None;
-    let reader = mcap::read::LinearReader::new_with_options(
+    let mut schemas = BTreeMap::new();
+    let mut topics = Vec::new();
+    let mut raw_metadata = BTreeMap::new();
+    let reader = mcap::read::ChunkFlattener::new_with_options(
         bytes,
         mcap::read::Options::IgnoreEndMagic.into(),
     )
     .map_err(LogError::Read)?;
     for record in reader {
         match record {
+            Ok(mcap::records::Record::Schema { header, .. }) => {
+                schemas.insert(header.id, header.name);
+            }
+            Ok(mcap::records::Record::Channel(channel)) => {
+                if !topics.iter().any(|t: &TopicInfo| t.topic == channel.topic) {
+                    topics.push(TopicInfo {
+                        schema: schemas.get(&channel.schema_id).cloned().unwrap_or_default(),
+                        robot: channel.metadata.get("robot").cloned(),
+                        topic: channel.topic,
+                        message_encoding: channel.message_encoding,
+                    });
+                }
+            }
             Ok(mcap::records::Record::Metadata(metadata)) if metadata.name == "regatta" => {
-                run = Some(RunInfo::from_metadata(&metadata.metadata)?)
+                run = Some(RunInfo::from_metadata(&metadata.metadata)?);
+                raw_metadata = metadata.metadata;
             }
             Ok(mcap::records::Record::Metadata(metadata)) if metadata.name == "regatta.end" => {
                 end = Some(metadata.metadata)
@@ -632,6 +664,8 @@ pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
     }
     Ok(LogContents {
         run,
+        topics,
+        metadata: raw_metadata,
         end,
         messages,
         truncated,

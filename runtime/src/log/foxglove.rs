@@ -8,7 +8,8 @@
 //! - `/{robot}/world_pose` (`foxglove_msgs/msg/PoseInFrame`): the robot's pose in `world`.
 //! - `/{robot}/retina/{filter}/image`, `/{robot}/retina/analog/image` when no filter is on,
 //!   and `/{robot}/k213/image` (`foxglove_msgs/msg/RawImage`, `mono8`, one pixel high): what
-//!   the vision device produced, at its own rate. Digital values are scaled to 0…255.
+//!   the vision device produced, at its own rate. Digital values are scaled to 0…255; the
+//!   analog image (luminance over its mean) maps 0…2 to 0…255.
 //! - `/events` (`foxglove_msgs/msg/Log`): buoy visits, contacts, controller errors, and the
 //!   compiler's warnings, with the robot's name as `name` and the world file as `file`.
 //!
@@ -234,10 +235,10 @@ impl Foxglove {
                     let channels = self.robots[index].retina_images.clone();
                     if out.digital.is_empty() {
                         if let Some(&channel) = channels.first() {
-                            // Analog photocurrents: 150 is a fully lit photodiode.
+                            // The analog image is luminance over its mean: 1 is mid-grey.
                             self.image.clear();
                             self.image
-                                .extend(out.analog.iter().map(|&a| to_byte(a / 150.0)));
+                                .extend(out.analog.iter().map(|&a| to_byte(a / 2.0)));
                             self.raw_image(cdr, ns(read_at), index, "retina");
                             write(writer, sequence, channel, ns(read_at), &cdr.buf)?;
                         }
