@@ -391,7 +391,7 @@ fn chart(rows: &[Row], world: &str) -> regatta_figures::Chart {
     let mut chart = Chart::new(
         format!("retina update on {world}: time against error"),
         Axis::log("time per update (µs)"),
-        Axis::log("mean digital error (LSB)"),
+        Axis::log("mean digital error (LSB; 0 drawn at 0.001)"),
     )
     .legend(Corner::UpperRight);
     for (name, optics, renderer) in [
