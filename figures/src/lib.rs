@@ -91,18 +91,31 @@ pub trait Figure {
 pub fn save(figure: &impl Figure, path: &Path, format: Format) -> Result<(), FigureError> {
     let shown = path.display().to_string();
     match format {
-        Format::Png => render_png(figure)?
-            .save_with_format(path, image::ImageFormat::Png)
-            .map_err(|source| match source {
-                image::ImageError::IoError(source) => FigureError::Write {
-                    path: shown,
-                    source,
-                },
-                source => FigureError::Encode {
-                    path: shown,
-                    source,
-                },
-            }),
+        Format::Png => {
+            // The best compression: figures are drawn once and kept (in papers, in docs/).
+            let picture = render_png(figure)?;
+            let file = std::fs::File::create(path).map_err(|source| FigureError::Write {
+                path: shown.clone(),
+                source,
+            })?;
+            let encoder = image::codecs::png::PngEncoder::new_with_quality(
+                std::io::BufWriter::new(file),
+                image::codecs::png::CompressionType::Best,
+                image::codecs::png::FilterType::Adaptive,
+            );
+            picture
+                .write_with_encoder(encoder)
+                .map_err(|source| match source {
+                    image::ImageError::IoError(source) => FigureError::Write {
+                        path: shown,
+                        source,
+                    },
+                    source => FigureError::Encode {
+                        path: shown,
+                        source,
+                    },
+                })
+        }
         Format::Svg => {
             std::fs::write(path, render_svg(figure)?).map_err(|source| FigureError::Write {
                 path: shown,
