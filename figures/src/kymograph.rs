@@ -328,7 +328,7 @@ impl Kymograph {
 
 /// About `n` round ticks between `low` and `high` (steps of 1, 2 or 5 × a power of ten).
 pub(crate) fn ticks(low: f64, high: f64, n: usize) -> Vec<f64> {
-    if !(high > low) || n == 0 {
+    if high.partial_cmp(&low) != Some(std::cmp::Ordering::Greater) || n == 0 {
         return vec![low];
     }
     let raw = (high - low) / n as f64;

@@ -174,8 +174,16 @@ where
 /// stays a sharp block) and blitted; an SVG gets the picture at its own resolution as an
 /// embedded PNG, which a viewer scales without smoothing.
 pub struct Rasters {
-    /// For SVG: the pictures placed so far, each with the marker text that stands in for it.
-    svg: Option<Vec<(String, (i32, i32, u32, u32), image::RgbImage)>>,
+    /// For SVG: the pictures placed so far.
+    svg: Option<Vec<Placed>>,
+}
+
+/// A picture placed in an SVG: the marker text that stands in for it until the document is
+/// complete, its rectangle (x, y, width, height), and the picture.
+struct Placed {
+    marker: String,
+    rectangle: (i32, i32, u32, u32),
+    picture: image::RgbImage,
 }
 
 impl Rasters {
@@ -210,11 +218,11 @@ impl Rasters {
             Some(placed) => {
                 let marker = format!("regatta-raster-{}", placed.len());
                 root.draw(&Text::new(marker.clone(), local, ("sans-serif", 1)))?;
-                placed.push((
+                placed.push(Placed {
                     marker,
-                    (top_left.0, top_left.1, size.0, size.1),
-                    picture.clone(),
-                ));
+                    rectangle: (top_left.0, top_left.1, size.0, size.1),
+                    picture: picture.clone(),
+                });
             }
         }
         Ok(())
@@ -228,7 +236,12 @@ impl Rasters {
     /// Replaces each marker's `<text>` element by an `<image>` holding its picture.
     fn embed(self, mut svg: String) -> String {
         use base64::Engine as _;
-        for (marker, (x, y, w, h), picture) in self.svg.unwrap_or_default() {
+        for Placed {
+            marker,
+            rectangle: (x, y, w, h),
+            picture,
+        } in self.svg.unwrap_or_default()
+        {
             let Some(at) = svg.find(&marker) else {
                 continue;
             };

@@ -199,12 +199,11 @@ fn time_series() -> TimeSeries {
         ))
 }
 
+/// Draws a figure: its PNG bytes and its SVG text.
+type Draw = Box<dyn Fn() -> (Vec<u8>, String)>;
+
 /// Every figure kind, with a name and the axis titles its SVG must hold.
-fn figures() -> Vec<(
-    &'static str,
-    Box<dyn Fn() -> (Vec<u8>, String)>,
-    Vec<&'static str>,
-)> {
+fn figures() -> Vec<(&'static str, Draw, Vec<&'static str>)> {
     fn both(figure: &impl Figure) -> (Vec<u8>, String) {
         let png = render_png(figure).expect("draws as PNG");
         let mut bytes = Vec::new();

@@ -148,18 +148,6 @@ pub fn peak_resident_bytes() -> Option<u64> {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn peak_memory_covers_what_this_process_touched() {
-        let block = vec![1u8; 64 << 20];
-        std::hint::black_box(&block);
-        let peak = super::peak_resident_bytes().expect("reported on this system");
-        assert!(peak >= 64 << 20, "peak {peak} bytes after touching 64 MiB");
-        drop(block);
-    }
-}
-
 fn gltf(points: usize, runs: usize) -> anyhow::Result<Outcome> {
     if runs == 0 {
         bail!("--runs must be at least 1");
@@ -207,4 +195,16 @@ fn gltf(points: usize, runs: usize) -> anyhow::Result<Outcome> {
         load.as_secs_f64()
     );
     Ok(Outcome::Clean)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn peak_memory_covers_what_this_process_touched() {
+        let block = vec![1u8; 64 << 20];
+        std::hint::black_box(&block);
+        let peak = super::peak_resident_bytes().expect("reported on this system");
+        assert!(peak >= 64 << 20, "peak {peak} bytes after touching 64 MiB");
+        drop(block);
+    }
 }
