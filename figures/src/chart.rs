@@ -6,7 +6,7 @@ use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::{number, polyline, style, DrawResult, Figure, Rasters};
+use crate::{house_axes, number, polyline, style, DrawResult, Figure, Rasters};
 
 /// One axis: its title (with the unit, e.g. "time per update (µs)"), scale and range.
 #[derive(Clone, Debug, PartialEq)]
@@ -40,7 +40,7 @@ impl Axis {
     }
 
     /// The range to show for `values`.
-    fn fitted(&self, values: impl Iterator<Item = f64>) -> (f64, f64) {
+    pub(crate) fn fitted(&self, values: impl Iterator<Item = f64>) -> (f64, f64) {
         if let Some(range) = self.range {
             return range;
         }
@@ -285,20 +285,13 @@ where
     };
     let x_format = format(x_log);
     let y_format = format(y_log);
-    context
-        .configure_mesh()
+    house_axes(&mut context.configure_mesh())
         .x_desc(x_label)
         .y_desc(y_label)
-        .axis_desc_style(("sans-serif", style::LABEL).into_font().color(&style::INK))
-        .label_style(("sans-serif", style::TICK).into_font().color(&style::INK))
         .x_label_formatter(&x_format)
         .y_label_formatter(&y_format)
         .x_labels(8)
         .y_labels(8)
-        .light_line_style(style::GRID.mix(0.5))
-        .bold_line_style(style::GRID)
-        .axis_style(style::INK.stroke_width(2))
-        .set_all_tick_mark_size(8)
         .draw()?;
     Ok(())
 }

@@ -10,7 +10,7 @@ use plotters::prelude::*;
 use plotters::style::colors::colormaps::{ColorMap, DerivedColorMap, ViridisRGB};
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::{number, style, DrawResult, Figure, Rasters};
+use crate::{house_axes, number, style, DrawResult, Figure, Rasters};
 
 /// How values map to colours.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -178,19 +178,14 @@ impl Figure for Kymograph {
             ((xs.end - xs.start) as u32, (ys.end - ys.start) as u32),
             &picture,
         )?;
-        context
-            .configure_mesh()
+        house_axes(&mut context.configure_mesh())
             .disable_mesh()
             .x_desc("azimuth (°, left of heading > 0)")
             .y_desc("simulated time (s)")
-            .axis_desc_style(("sans-serif", style::LABEL).into_font().color(&style::INK))
-            .label_style(("sans-serif", style::TICK).into_font().color(&style::INK))
             .x_label_formatter(&|v| number(-*v))
             .y_label_formatter(&|v| number(-*v))
             .x_labels(9)
             .y_labels(10)
-            .axis_style(style::INK.stroke_width(2))
-            .set_all_tick_mark_size(8)
             .draw()?;
         // Marks: a tick inward from the right edge at each time (a line across would hide the
         // picture), its label in the column to the right; labels closer than a line of text to

@@ -296,6 +296,24 @@ where
     Ok(())
 }
 
+/// The house style of a chart's axes: fonts, grid, axis lines, tick marks. Callers add the
+/// axis titles, formatters and tick counts.
+pub(crate) fn house_axes<'m, 'a, 'b, X, Y, DB>(
+    mesh: &'m mut plotters::chart::MeshStyle<'a, 'b, X, Y, DB>,
+) -> &'m mut plotters::chart::MeshStyle<'a, 'b, X, Y, DB>
+where
+    X: Ranged,
+    Y: Ranged,
+    DB: DrawingBackend,
+{
+    mesh.axis_desc_style(("sans-serif", style::LABEL).into_font().color(&style::INK))
+        .label_style(("sans-serif", style::TICK).into_font().color(&style::INK))
+        .light_line_style(style::GRID.mix(0.45))
+        .bold_line_style(style::GRID)
+        .axis_style(style::INK.stroke_width(2))
+        .set_all_tick_mark_size(8)
+}
+
 /// Registers the embedded font once, for every family name plotters may ask for.
 fn register_fonts() {
     static ONCE: std::sync::Once = std::sync::Once::new();

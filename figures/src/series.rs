@@ -8,7 +8,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::{number, style, DrawResult, Figure, Rasters};
+use crate::{house_axes, number, style, Axis, DrawResult, Figure, Rasters};
 
 /// One trace of a panel.
 #[derive(Clone, Debug, PartialEq)]
@@ -138,21 +138,17 @@ impl Figure for TimeSeries {
                 .y_label_area_size(130)
                 .build_cartesian_2d(t0..t1, low..high)?;
             let mut mesh = context.configure_mesh();
-            mesh.y_desc(&panel.label)
+            house_axes(&mut mesh)
+                .y_desc(&panel.label)
                 .axis_desc_style(
                     ("sans-serif", style::LABEL - 4)
                         .into_font()
                         .color(&style::INK),
                 )
-                .label_style(("sans-serif", style::TICK).into_font().color(&style::INK))
                 .x_label_formatter(&|v| number(*v))
                 .y_label_formatter(&|v| number(*v))
                 .x_labels(10)
-                .y_labels(5)
-                .light_line_style(style::GRID.mix(0.4))
-                .bold_line_style(style::GRID)
-                .axis_style(style::INK.stroke_width(2))
-                .set_all_tick_mark_size(8);
+                .y_labels(5);
             if last {
                 mesh.x_desc("simulated time (s)");
             }
@@ -191,23 +187,12 @@ impl Figure for TimeSeries {
 
 /// The range that fits every trace of `panel`, padded by 5 %.
 fn fit(panel: &Panel) -> (f64, f64) {
-    let (low, high) = panel
-        .traces
-        .iter()
-        .flat_map(|t| t.points.iter().map(|p| p.1))
-        .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-            (a.min(v), b.max(v))
-        });
-    if !low.is_finite() {
-        return (0.0, 1.0);
-    }
-    let pad = if high > low {
-        0.05 * (high - low)
-    } else {
-        low.abs().max(1.0) * 0.5
-    };
-    (low - pad, high + pad)
+    Axis::linear("").fitted(
+        panel
+            .traces
+            .iter()
+            .flat_map(|t| t.points.iter().map(|p| p.1)),
+    )
 }
 
 /// At most about `kept` points of `points`: for each of `kept / 2` equal index bins, its

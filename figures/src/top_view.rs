@@ -11,7 +11,7 @@ use plotters::prelude::*;
 use plotters::style::colors::colormaps::{ColorMap, ViridisRGB};
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::{number, polyline, style, DrawResult, Figure, Rasters};
+use crate::{house_axes, number, polyline, style, DrawResult, Figure, Rasters};
 
 /// An obstacle's footprint, in world (x, z) metres.
 #[derive(Clone, Debug, PartialEq)]
@@ -466,20 +466,13 @@ fn configure_axes_flipped<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    context
-        .configure_mesh()
+    house_axes(&mut context.configure_mesh())
         .x_desc("x (m)")
         .y_desc("z (m)")
-        .axis_desc_style(("sans-serif", style::LABEL).into_font().color(&style::INK))
-        .label_style(("sans-serif", style::TICK).into_font().color(&style::INK))
         .x_label_formatter(&|v| number(*v))
         .y_label_formatter(&|v| number(-*v))
         .x_labels(10)
         .y_labels(10)
-        .light_line_style(style::GRID.mix(0.4))
-        .bold_line_style(style::GRID)
-        .axis_style(style::INK.stroke_width(2))
-        .set_all_tick_mark_size(8)
         .draw()?;
     Ok(())
 }

@@ -227,18 +227,19 @@ pub fn elevation_grid(scene: &Scene, node: NodeId) -> Mesh {
 mod tests {
     use super::*;
 
+    /// Each triangle's (b − a) × (c − a).
+    fn crosses<'a>(
+        points: &'a [DVec3],
+        triangles: &'a [[u32; 3]],
+    ) -> impl Iterator<Item = DVec3> + 'a {
+        triangles.iter().map(|t| {
+            let [a, b, c] = t.map(|i| points[i as usize]);
+            (b - a).cross(c - a)
+        })
+    }
+
     fn area(points: &[DVec3], triangles: &[[u32; 3]]) -> f64 {
-        triangles
-            .iter()
-            .map(|t| {
-                let (a, b, c) = (
-                    points[t[0] as usize],
-                    points[t[1] as usize],
-                    points[t[2] as usize],
-                );
-                (b - a).cross(c - a).length() / 2.0
-            })
-            .sum()
+        crosses(points, triangles).map(|c| c.length() / 2.0).sum()
     }
 
     #[test]
@@ -254,19 +255,9 @@ mod tests {
         assert!((area(&pts, &out) - 3.0).abs() < 1e-12);
     }
 
-    /// The signed area of each triangle about +y: positive when counter-clockwise seen from +y.
+    /// Each triangle's turn about +y (twice its signed area seen along y).
     fn windings(points: &[DVec3], triangles: &[[u32; 3]]) -> Vec<f64> {
-        triangles
-            .iter()
-            .map(|t| {
-                let (a, b, c) = (
-                    points[t[0] as usize],
-                    points[t[1] as usize],
-                    points[t[2] as usize],
-                );
-                (b - a).cross(c - a).y
-            })
-            .collect()
+        crosses(points, triangles).map(|c| c.y).collect()
     }
 
     #[test]
