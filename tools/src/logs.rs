@@ -142,6 +142,19 @@ pub(crate) fn split_topic(topic: &str) -> (&str, &str) {
     trimmed.rsplit_once('/').unwrap_or(("", trimmed))
 }
 
+/// The robot's own name and the channel kind of a topic: the name from the channel's
+/// metadata (topics carry the name sanitised), else from the topic itself (older logs).
+pub(crate) fn robot_of<'a>(contents: &'a LogContents, topic: &'a str) -> (&'a str, &'a str) {
+    let (token, kind) = split_topic(topic);
+    let name = contents
+        .topics
+        .iter()
+        .find(|t| t.topic == topic)
+        .and_then(|t| t.robot.as_deref())
+        .unwrap_or(token);
+    (name, kind)
+}
+
 /// A decoded message: its time, the CSV header after `t,robot`, and the row.
 type CsvRow = (f64, Vec<String>, Vec<String>);
 
@@ -239,7 +252,7 @@ fn export(log: &Path, dir: &Path) -> anyhow::Result<Outcome> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let mut files: std::collections::BTreeMap<String, (Vec<String>, String)> = Default::default();
     for (topic, _, data) in &contents.messages {
-        let (robot, kind) = split_topic(topic);
+        let (robot, kind) = robot_of(&contents, topic);
         let Some((t, header, row)) =
             decode(kind, data).with_context(|| format!("a {topic} message is damaged"))?
         else {

@@ -187,3 +187,52 @@ fn channels_pick_what_is_written_and_replay_covers_them() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("unknown channel 'nope'"));
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn robots_with_spaces_in_their_names_keep_them_across_export_gltf_and_plot() {
+    let dir = temp_dir("names");
+    let world = dir.join("names.wbt");
+    std::fs::write(
+        &world,
+        "#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" }\nArena { size 1 1 }\n\
+         Khepera { name \"my robot\" translation 0.2 0 0.2 }\n\
+         Khepera { name \"my-robot\" translation -0.2 0 0.2 }\n",
+    )
+    .unwrap();
+    let log = dir.join("run.mcap");
+    ok(regatta()
+        .args(["run", "--steps", "50", "--log"])
+        .arg(&log)
+        .arg(&world)
+        .output()
+        .unwrap());
+    let info = ok(regatta().args(["log", "info"]).arg(&log).output().unwrap());
+    assert!(info.contains("/my_robot/pose ") && info.contains("/my_robot_2/pose "), "{info}");
+    ok(regatta()
+        .args(["log", "export"])
+        .arg(&log)
+        .arg("--csv")
+        .arg(dir.join("csv"))
+        .output()
+        .unwrap());
+    let poses = std::fs::read_to_string(dir.join("csv/pose.csv")).unwrap();
+    assert!(poses.contains(",my robot,") && poses.contains(",my-robot,"), "{poses}");
+    ok(regatta()
+        .arg("gltf")
+        .arg(&world)
+        .arg("-o")
+        .arg(dir.join("run.glb"))
+        .arg("--log")
+        .arg(&log)
+        .output()
+        .unwrap());
+    let printed = ok(regatta()
+        .arg("plot")
+        .arg(&log)
+        .arg("--out")
+        .arg(dir.join("plots"))
+        .output()
+        .unwrap());
+    assert!(printed.contains("top.png"), "{printed}");
+    std::fs::remove_dir_all(dir).ok();
+}
