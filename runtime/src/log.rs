@@ -2,11 +2,12 @@
 //!
 //! Format decisions:
 //! - One channel per robot and sensor: `/{robot}/pose`, `/wheels`, `/proximity`, `/ambient`,
-//!   `/retina`, `/k213`, `/contacts`, `/controller` (regatta's own schemas: the reproducible
-//!   record), and beside them Foxglove's well-known schemas (`foxglove`: scene, transforms,
-//!   poses, images, events) so that Foxglove and ROS 2 tools show a log as it is.
-//!   `{robot}` is the robot's name made a valid ROS 2 token (`channels`); `--channels` picks
-//!   the channels a log holds, and the log's metadata says which.
+//!   `/retina`, `/k213`, `/contacts` (when contact begins or ends, with what is touched),
+//!   `/visits` (each entry into a buoy's visit disc), `/controller` (regatta's own schemas:
+//!   the reproducible record), and beside them Foxglove's well-known schemas (`foxglove`:
+//!   scene, transforms, poses, images, events) so that Foxglove and ROS 2 tools show a log
+//!   as it is. `{robot}` is the robot's name made a valid ROS 2 token (`channels`);
+//!   `--channels` picks the channels a log holds, and the log's metadata says which.
 //! - Chunks of 4 MB (uncompressed) with zstd level 1: the size and speed targets of a ten-minute
 //!   regatta at full rate (18.9 MB; logging costs about 45 % of the speed) both hold.
 //! - Messages are CDR-encoded with a `ros2msg` schema per channel (the ROS 2 convention that
@@ -118,6 +119,7 @@ struct RobotChannels {
     retina: Option<u16>,
     k213: Option<u16>,
     contacts: Option<u16>,
+    visits: Option<u16>,
     controller: Option<u16>,
 }
 
@@ -126,6 +128,10 @@ pub struct Recorder<W: Write + Seek> {
     writer: mcap::Writer<W>,
     robots: Vec<RobotChannels>,
     foxglove: Option<foxglove::Foxglove>,
+    /// What robots can touch, named once ([`Simulation::obstacle_names`]).
+    obstacle_names: Vec<String>,
+    /// Per robot: visits already written.
+    visits_written: Vec<usize>,
     sequence: u32,
     cdr: Cdr,
 }
@@ -137,7 +143,8 @@ pub const SCHEMAS: &[(&str, &str)] = &[
     ("regatta/msg/Readings8", "# Eight sensor readings, 0..1023\nfloat64 t\nuint16[8] values\n"),
     ("regatta/msg/Retina", "# EDI retina: analog[150]; per enabled filter (in `filters` order) 150 filtered values and the digital values over the region of interest\nfloat64 t\nbool dark\nuint16 roi_first\nuint16 roi_last\nfloat32[] analog\nstring[] filters\nfloat32[] filtered\nuint16[] digital\n"),
     ("regatta/msg/LinearCamera", "# K213: grey levels, pixel 0 at the left, and the light level\nfloat64 t\nuint16[] pixels\nuint16 light_level\n"),
-    ("regatta/msg/Contact", "# A contact began (touching) or ended; contacts begun so far\nfloat64 t\nbool touching\nuint64 contacts\n"),
+    ("regatta/msg/Contact", "# A contact began (touching) or ended; contacts begun so far; what is touched now\nfloat64 t\nbool touching\nuint64 contacts\nstring[] with\n"),
+    ("regatta/msg/Visit", "# The robot entered a buoy's visit disc (its radius plus two body diameters): buoy number (from 1, in file order), its name, visits so far\nfloat64 t\nuint32 buoy\nstring name\nuint32 visits\n"),
     ("regatta/msg/ControllerEvent", "# A controller call failed\nfloat64 t\nstring error\n"),
 ];
 
@@ -347,6 +354,7 @@ impl<W: Write + Seek> Recorder<W> {
             (Channel::Retina, "regatta/msg/Retina"),
             (Channel::K213, "regatta/msg/LinearCamera"),
             (Channel::Contacts, "regatta/msg/Contact"),
+            (Channel::Visits, "regatta/msg/Visit"),
             (Channel::Controller, "regatta/msg/ControllerEvent"),
         ];
         for (name, text) in SCHEMAS {
@@ -390,6 +398,7 @@ impl<W: Write + Seek> Recorder<W> {
                 retina: channel(Channel::Retina, robot.panoramic.is_some())?,
                 k213: channel(Channel::K213, robot.linear_camera.is_some())?,
                 contacts: channel(Channel::Contacts, true)?,
+                visits: channel(Channel::Visits, true)?,
                 controller: channel(Channel::Controller, true)?,
             });
         }
@@ -414,6 +423,8 @@ impl<W: Write + Seek> Recorder<W> {
             writer,
             robots,
             foxglove,
+            obstacle_names: simulation.obstacle_names(),
+            visits_written: vec![0; simulation.robots.len()],
             sequence,
             cdr,
         })
@@ -446,7 +457,7 @@ impl<W: Write + Seek> Recorder<W> {
         for (index, robot) in simulation.robots.iter().enumerate() {
             let rig = &simulation.compiled.rig.robots[index];
             let channels = &self.robots[index];
-            let (pose, wheels, proximity, ambient, retina, k213, contacts, controller) = (
+            let (pose, wheels, proximity, ambient, retina, k213, contacts, visits, controller) = (
                 channels.pose,
                 channels.wheels,
                 channels.proximity,
@@ -454,6 +465,7 @@ impl<W: Write + Seek> Recorder<W> {
                 channels.retina,
                 channels.k213,
                 channels.contacts,
+                channels.visits,
                 channels.controller,
             );
             let updated = robot.updated;
@@ -540,7 +552,25 @@ impl<W: Write + Seek> Recorder<W> {
                 self.cdr.f64(t);
                 self.cdr.bool(robot.contacts.is_touching());
                 self.cdr.u64(robot.contacts.events);
+                let touching = robot.contacts.touching();
+                self.cdr
+                    .u32(touching.iter().filter(|&&touched| touched).count() as u32);
+                for (name, _) in self.obstacle_names.iter().zip(touching).filter(|(_, &t)| t) {
+                    self.cdr.string(name);
+                }
                 self.write(contacts, ns(t))?;
+            }
+            let landmarks = &simulation.compiled.landmarks;
+            while self.visits_written[index] < robot.visits.sequence.len() {
+                let n = self.visits_written[index];
+                let buoy = robot.visits.sequence[n];
+                self.cdr.start();
+                self.cdr.f64(robot.visits.times[n]);
+                self.cdr.u32(buoy as u32 + 1);
+                self.cdr.string(&landmarks[buoy].name);
+                self.cdr.u32(n as u32 + 1);
+                self.write(visits, ns(robot.visits.times[n]))?;
+                self.visits_written[index] += 1;
             }
         }
         if let Some(foxglove) = &mut self.foxglove {
@@ -590,6 +620,8 @@ pub struct LogContents {
     pub topics: Vec<TopicInfo>,
     /// The `regatta` metadata record as written (world hash, version, time step, …).
     pub metadata: BTreeMap<String, String>,
+    /// The world's time step (s), from the metadata.
+    pub time_step: Option<f64>,
     /// The end record's entries, if the run finished writing it.
     pub end: Option<BTreeMap<String, String>>,
     /// (topic, log time ns, CDR bytes), in file order.
@@ -602,6 +634,7 @@ pub struct LogContents {
 /// Reads a log; a file cut short yields what its complete chunks hold, and says so.
 pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
     let mut run = None;
+    let mut time_step = None;
     let mut end = None;
     let mut truncated = None;
     let mut schemas = BTreeMap::new();
@@ -628,6 +661,10 @@ pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
                 }
             }
             Ok(mcap::records::Record::Metadata(metadata)) if metadata.name == "regatta" => {
+                time_step = metadata
+                    .metadata
+                    .get("time_step")
+                    .and_then(|t| t.parse::<f64>().ok());
                 run = Some(RunInfo::from_metadata(&metadata.metadata)?);
                 raw_metadata = metadata.metadata;
             }
@@ -666,6 +703,7 @@ pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
         run,
         topics,
         metadata: raw_metadata,
+        time_step,
         end,
         messages,
         truncated,

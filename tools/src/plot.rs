@@ -108,8 +108,16 @@ pub fn plot(args: PlotArgs) -> anyhow::Result<Outcome> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut robots = decode(&contents, &compiled)?;
-    // Visits, found as the simulation finds them: entering a landmark's visit disc.
+    // Visits: from the log's visit channels; a log without them (older, or written without
+    // `visits`) gets them found as the simulation finds them, entering a visit disc.
+    let logged_visits = contents
+        .topics
+        .iter()
+        .any(|t| t.schema == "regatta/msg/Visit");
     for (data, rig) in robots.iter_mut().zip(&compiled.rig.robots) {
+        if logged_visits {
+            continue;
+        }
         let mut inside = vec![false; compiled.landmarks.len()];
         for &(t, x, z, _) in &data.poses {
             for (k, landmark) in compiled.landmarks.iter().enumerate() {
@@ -418,6 +426,11 @@ fn decode(
                         robot.contacts.push((t, x, z));
                     }
                     robot.contact_counts.push((t, count as f64));
+                }
+                "visits" => {
+                    let t = r.f64()?;
+                    let buoy = r.u32()? as usize;
+                    robot.visits.push((t, buoy.saturating_sub(1)));
                 }
                 "proximity" | "ambient" => {
                     let t = r.f64()?;

@@ -207,7 +207,10 @@ fn robots_with_spaces_in_their_names_keep_them_across_export_gltf_and_plot() {
         .output()
         .unwrap());
     let info = ok(regatta().args(["log", "info"]).arg(&log).output().unwrap());
-    assert!(info.contains("/my_robot/pose ") && info.contains("/my_robot_2/pose "), "{info}");
+    assert!(
+        info.contains("/my_robot/pose ") && info.contains("/my_robot_2/pose "),
+        "{info}"
+    );
     ok(regatta()
         .args(["log", "export"])
         .arg(&log)
@@ -216,7 +219,10 @@ fn robots_with_spaces_in_their_names_keep_them_across_export_gltf_and_plot() {
         .output()
         .unwrap());
     let poses = std::fs::read_to_string(dir.join("csv/pose.csv")).unwrap();
-    assert!(poses.contains(",my robot,") && poses.contains(",my-robot,"), "{poses}");
+    assert!(
+        poses.contains(",my robot,") && poses.contains(",my-robot,"),
+        "{poses}"
+    );
     ok(regatta()
         .arg("gltf")
         .arg(&world)

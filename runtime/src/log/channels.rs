@@ -21,6 +21,7 @@ pub enum Channel {
     Retina,
     K213,
     Contacts,
+    Visits,
     Controller,
     // Foxglove's well-known schemas.
     Scene,
@@ -31,7 +32,7 @@ pub enum Channel {
 }
 
 impl Channel {
-    pub const ALL: [Channel; 13] = [
+    pub const ALL: [Channel; 14] = [
         Channel::Pose,
         Channel::Wheels,
         Channel::Proximity,
@@ -39,6 +40,7 @@ impl Channel {
         Channel::Retina,
         Channel::K213,
         Channel::Contacts,
+        Channel::Visits,
         Channel::Controller,
         Channel::Scene,
         Channel::Transforms,
@@ -57,6 +59,7 @@ impl Channel {
             Channel::Retina => "retina",
             Channel::K213 => "k213",
             Channel::Contacts => "contacts",
+            Channel::Visits => "visits",
             Channel::Controller => "controller",
             Channel::Scene => "scene",
             Channel::Transforms => "tf",
@@ -83,9 +86,9 @@ pub struct Channels(u16);
 impl Channels {
     /// regatta's own channels: what logs held before the Foxglove ones existed, and what a
     /// log without a `channels` entry holds.
-    pub const REGATTA: Channels = Channels(0xff);
-    pub const FOXGLOVE: Channels = Channels(0x1f00);
-    pub const ALL: Channels = Channels(0x1fff);
+    pub const REGATTA: Channels = Channels(0x1ff);
+    pub const FOXGLOVE: Channels = Channels(0x3e00);
+    pub const ALL: Channels = Channels(0x3fff);
     pub const NONE: Channels = Channels(0);
 
     pub fn contains(self, channel: Channel) -> bool {
@@ -128,7 +131,7 @@ impl fmt::Display for Channels {
 
 /// A `--channels` value that names no channel.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown channel '{0}': expected all, regatta, foxglove, or any of pose, wheels, proximity, ambient, retina, k213, contacts, controller, scene, tf, world_pose, images, events (comma-separated)")]
+#[error("unknown channel '{0}': expected all, regatta, foxglove, or any of pose, wheels, proximity, ambient, retina, k213, contacts, visits, controller, scene, tf, world_pose, images, events (comma-separated)")]
 pub struct UnknownChannel(pub String);
 
 impl FromStr for Channels {
