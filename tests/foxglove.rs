@@ -232,6 +232,7 @@ fn record(world: &str, steps: u64, channels: Channels) -> Vec<u8> {
         lenient: false,
         steps_requested: steps,
         channels,
+        controllers: Vec::new(),
     };
     let mut sink = std::io::Cursor::new(Vec::new());
     let mut recorder = Recorder::new(&mut sink, &mut simulation, &run).unwrap();
@@ -254,6 +255,7 @@ fn compile(world: &str) -> (regatta_runtime::Compiled, String) {
         &regatta_schema::Options {
             strict: true,
             base_dir: Some(regatta_tests::root().join("worlds")),
+            proto_path: Vec::new(),
         },
     );
     assert!(!checked.has_errors(), "{}", checked.render(false));

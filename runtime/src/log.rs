@@ -59,6 +59,10 @@ pub struct RunInfo {
     pub steps_requested: u64,
     /// The channels recorded.
     pub channels: Channels,
+    /// Robots whose controller is not the one their world gives (a `--controller` override,
+    /// a Webots name mapped to a built-in, lenient mode's fallback): (robot, controller,
+    /// controllerArgs). Written only when there is one, so other logs do not change.
+    pub controllers: Vec<(String, String, Vec<String>)>,
 }
 
 impl RunInfo {
@@ -67,7 +71,7 @@ impl RunInfo {
         let mut hash = Sha256::new();
         hash.update(self.world_text.as_bytes());
         let digest: String = hash.finalize().iter().map(|b| format!("{b:02x}")).collect();
-        BTreeMap::from([
+        let mut metadata = BTreeMap::from([
             ("world_name".to_owned(), self.world_name.clone()),
             ("world".to_owned(), self.world_text.clone()),
             ("world_sha256".to_owned(), digest),
@@ -83,7 +87,18 @@ impl RunInfo {
                 "regatta_version".to_owned(),
                 env!("CARGO_PKG_VERSION").to_owned(),
             ),
-        ])
+        ]);
+        if !self.controllers.is_empty() {
+            let lines: Vec<String> = self
+                .controllers
+                .iter()
+                .map(|(robot, controller, args)| {
+                    format!("{robot}\t{controller}\t{}", args.join("\u{1f}"))
+                })
+                .collect();
+            metadata.insert("controllers".to_owned(), lines.join("\n"));
+        }
+        metadata
     }
 
     /// Reads the metadata back.
@@ -106,6 +121,26 @@ impl RunInfo {
                     .map_err(|_| LogError::MissingField("channels"))?,
                 None => Channels::REGATTA,
             },
+            controllers: metadata
+                .get("controllers")
+                .map(|text| {
+                    text.lines()
+                        .filter_map(|line| {
+                            let mut parts = line.splitn(3, '\t');
+                            let robot = parts.next()?.to_owned();
+                            let controller = parts.next()?.to_owned();
+                            let args = parts
+                                .next()
+                                .unwrap_or("")
+                                .split('\u{1f}')
+                                .filter(|a| !a.is_empty())
+                                .map(str::to_owned)
+                                .collect();
+                            Some((robot, controller, args))
+                        })
+                        .collect()
+                })
+                .unwrap_or_default(),
         })
     }
 }
@@ -591,6 +626,16 @@ impl<W: Write + Seek> Recorder<W> {
             ("time".to_owned(), format!("{}", simulation.time)),
             ("interrupted".to_owned(), interrupted.to_string()),
         ]);
+        let mut end = end;
+        // Robots that fell off the world: only then is the key written.
+        for robot in &simulation.robots {
+            if let Some(fall) = robot.fell {
+                end.insert(
+                    format!("fell.{}", robot.name),
+                    format!("t={} x={} z={}", fall.time, fall.pose.x, fall.pose.z),
+                );
+            }
+        }
         self.writer
             .write_metadata(&mcap::records::Metadata {
                 name: "regatta.end".to_owned(),

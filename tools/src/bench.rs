@@ -159,6 +159,7 @@ fn gltf(points: usize, runs: usize) -> anyhow::Result<Outcome> {
         &regatta_schema::Options {
             strict: true,
             base_dir: None,
+            proto_path: Vec::new(),
         },
     );
     if checked.has_errors() {

@@ -294,6 +294,7 @@ fn write_outputs(
         lenient: experiment.lenient,
         steps_requested: evolution.settings.steps,
         channels: regatta_runtime::log::Channels::ALL,
+        controllers: Vec::new(),
     };
     let mut recorder =
         regatta_runtime::log::Recorder::new(std::io::BufWriter::new(file), &mut simulation, &run)?;

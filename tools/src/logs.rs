@@ -35,13 +35,29 @@ pub(crate) fn compile_embedded(run: &RunInfo) -> anyhow::Result<regatta_runtime:
         &regatta_schema::Options {
             strict: !run.lenient,
             base_dir: base,
+            proto_path: crate::world::proto_path(),
         },
     );
     if checked.has_errors() {
         eprint!("{}", checked.render(false));
         bail!("the world embedded in the log no longer checks with this regatta");
     }
-    Ok(regatta_runtime::compile(&checked.scene))
+    let mut compiled = regatta_runtime::compile(&checked.scene);
+    // The controllers the run had: Webots names mapped as `run` maps them, then what the log
+    // says the run changed.
+    crate::webots::resolve_controllers(
+        &mut compiled,
+        &crate::webots::ControllerOverride::default(),
+        true,
+        None,
+    )?;
+    for (robot, controller, args) in &run.controllers {
+        if let Some(rig) = compiled.rig.robots.iter_mut().find(|r| &r.name == robot) {
+            rig.controller = controller.clone();
+            rig.controller_args = args.clone();
+        }
+    }
+    Ok(compiled)
 }
 
 #[derive(clap::Args)]

@@ -17,6 +17,7 @@ mod run;
 mod schema;
 mod serial;
 mod vision;
+mod webots;
 mod world;
 
 use std::io::IsTerminal;
@@ -31,6 +32,10 @@ struct Cli {
     /// When to colour diagnostics.
     #[arg(long, global = true, value_enum, default_value_t = Color::Auto)]
     color: Color,
+    /// A folder where `webots://` PROTOs are looked for before regatta's stand-ins (a Webots
+    /// installation or any folder of PROTOs); repeatable, after it REGATTA_PROTO_PATH's.
+    #[arg(long = "proto-path", global = true, value_name = "DIR")]
+    proto_path: Vec<std::path::PathBuf>,
     #[command(subcommand)]
     command: Command,
 }
@@ -112,6 +117,9 @@ fn main() -> ExitCode {
         Color::Never => false,
         Color::Auto => std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none(),
     };
+    world::set_proto_path(regatta_schema::proto_path::from_flags_and_env(
+        &cli.proto_path,
+    ));
     let result = match cli.command {
         Command::Check(args) => check::run(args, color),
         Command::Schema(args) => schema::run(args),

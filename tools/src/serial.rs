@@ -52,10 +52,27 @@ pub struct ServeArgs {
     /// Read a foreign file leniently.
     #[arg(long)]
     lenient: bool,
+    #[command(flatten)]
+    controllers: crate::webots::ControllerOverride,
 }
 
 pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
-    let loaded = crate::world::load(&args.world, args.lenient, color)?;
+    let mut loaded = crate::world::load(&args.world, args.lenient, color)?;
+    crate::webots::refuse_unbuilt_robots(&loaded)?;
+    let served = match &args.robot {
+        Some(name) => Some(crate::world::robot_named(
+            &loaded.compiled,
+            &args.world,
+            name,
+        )?),
+        None => (!loaded.compiled.rig.robots.is_empty()).then_some(0),
+    };
+    crate::webots::resolve_controllers(
+        &mut loaded.compiled,
+        &args.controllers,
+        args.lenient,
+        served,
+    )?;
     let compiled = &loaded.compiled;
     let robot = match &args.robot {
         Some(name) => crate::world::robot_named(compiled, &args.world, name)?,
