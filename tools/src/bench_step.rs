@@ -114,6 +114,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             seed: simulation.seed,
             lenient: false,
             steps_requested: 0,
+            channels: regatta_runtime::log::Channels::ALL,
             controllers: Vec::new(),
         };
         let mut sink = std::io::Cursor::new(Vec::new());

@@ -8,11 +8,10 @@ mod bench_step;
 mod check;
 mod evolve;
 mod explain;
-mod figures;
 mod fmt;
-mod font;
 mod gltf;
 mod logs;
+mod plot;
 mod render;
 mod run;
 mod schema;
@@ -76,10 +75,10 @@ enum Command {
     Evolve(evolve::Args),
     /// Re-run a log's world and seed and check that every message is the same.
     Replay(logs::ReplayArgs),
-    /// Work with sensor logs (export to CSV).
+    /// Work with sensor logs (export to CSV, print what a log holds).
     Log(logs::LogArgs),
-    /// Pictures of a log: the arena from above with the trajectories, and retina kymographs.
-    Plot(logs::PlotArgs),
+    /// Figures of a log: the arena from above, retina kymographs, and (--series) sensor time series.
+    Plot(plot::PlotArgs),
 }
 
 /// What a subcommand reports back.
@@ -136,7 +135,7 @@ fn main() -> ExitCode {
         Command::Drive(args) => serial::drive(args),
         Command::Replay(args) => logs::replay(args),
         Command::Log(args) => logs::log(args),
-        Command::Plot(args) => logs::plot(args),
+        Command::Plot(args) => plot::plot(args),
     };
     match result {
         Ok(Outcome::Clean) => ExitCode::SUCCESS,

@@ -30,6 +30,10 @@ pub struct Args {
     /// Record every sensor and actuator to this MCAP file.
     #[arg(long, value_name = "FILE.mcap")]
     log: Option<PathBuf>,
+    /// The log's channels, comma-separated: `all`, `regatta` (the reproducible record),
+    /// `foxglove` (scene, tf, world_pose, images, events), or single channels.
+    #[arg(long, value_name = "LIST", default_value = "all", requires = "log")]
+    channels: regatta_runtime::log::Channels,
     /// What renders vision devices.
     #[arg(long, value_enum, default_value_t)]
     renderer: crate::vision::RendererKind,
@@ -80,6 +84,7 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 &mut simulation,
                 args.lenient,
                 steps,
+                args.channels,
             )
         })
         .transpose()?;

@@ -46,6 +46,9 @@ pub struct ServeArgs {
     /// Record every sensor and actuator to this MCAP file, as `regatta run --log` does.
     #[arg(long, value_name = "FILE.mcap")]
     log: Option<PathBuf>,
+    /// The log's channels, as for `regatta run`.
+    #[arg(long, value_name = "LIST", default_value = "all", requires = "log")]
+    channels: regatta_runtime::log::Channels,
     /// Read a foreign file leniently.
     #[arg(long)]
     lenient: bool,
@@ -96,6 +99,7 @@ pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
                 &mut simulation,
                 args.lenient,
                 max_steps.unwrap_or(0),
+                args.channels,
             )
         })
         .transpose()?;

@@ -120,6 +120,7 @@ pub fn create_recorder(
     simulation: &mut regatta_runtime::sim::Simulation,
     lenient: bool,
     steps_requested: u64,
+    channels: regatta_runtime::log::Channels,
 ) -> anyhow::Result<Recorder<std::io::BufWriter<std::fs::File>>> {
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent)
@@ -133,6 +134,7 @@ pub fn create_recorder(
         seed: simulation.seed,
         lenient,
         steps_requested,
+        channels,
         controllers: changed_controllers(loaded),
     };
     Ok(Recorder::new(

@@ -89,6 +89,14 @@ pub struct Visits {
     inside: Vec<bool>,
 }
 
+impl Visits {
+    /// The radius of the disc a robot's centre enters to visit a landmark of `radius`: the
+    /// landmark's radius plus two body diameters.
+    pub fn disc_radius(radius: f64, body_radius: f64) -> f64 {
+        radius + 4.0 * body_radius
+    }
+}
+
 /// The Panoramic turret of a simulated robot.
 pub struct PanoramicState {
     pub model: Panoramic,
@@ -748,7 +756,7 @@ impl<'c> Simulation<'c> {
                     robot.pose.z - landmark.center.y,
                 )
                 .length();
-                let inside = distance <= landmark.radius + 4.0 * rig.body_radius;
+                let inside = distance <= Visits::disc_radius(landmark.radius, rig.body_radius);
                 if inside && !robot.visits.inside[k] {
                     robot.visits.sequence.push(k);
                     robot.visits.times.push(self.time);
