@@ -71,6 +71,18 @@ fn summary(checked: &regatta_schema::Checked, compiled: &Compiled) -> String {
                 d.direction.to_array().map(round)
             );
         }
+        for c in &r.cameras {
+            let _ = writeln!(
+                out,
+                "  camera {} {}×{} fov {} at {:?} looking {:?}",
+                c.name,
+                c.width,
+                c.height,
+                c.field_of_view,
+                c.frame.translation.to_array().map(round),
+                (c.frame.linear * glam::DVec3::X).to_array().map(round)
+            );
+        }
         if let Some(TurretRig::Linear(c)) = &r.turret {
             let _ = writeln!(
                 out,
@@ -207,4 +219,53 @@ fn khepera_world_in_r2020a_and_r2023b_is_the_same_up_to_the_axis_change() {
         travelled = p.0.hypot(p.1).max(travelled);
     }
     assert!(travelled > 0.3, "the robot hardly moved");
+}
+
+/// The e-puck's camera is a real vision device: the ray caster draws a planar projection of
+/// what is in front of it, it costs nothing while nobody reads it, and a log records it.
+#[test]
+fn epuck_camera_sees_what_is_ahead_only_when_read() {
+    let world = root().join("tests/data/webots/e-puck_camera.wbt");
+    let compiled = load(&world, None);
+    let rig = &compiled.rig.robots[0];
+    assert_eq!(rig.cameras.len(), 1);
+    let camera = &rig.cameras[0];
+    assert_eq!((camera.width, camera.height), (52, 39));
+    // "void" reads nothing from the camera: no image is taken.
+    let mut simulation = Simulation::new(&compiled, Some(1)).expect("runs");
+    simulation.step();
+    assert!(simulation.robots[0].cameras[0].image.rgb.is_empty());
+    assert_eq!(simulation.robots[0].updated.cameras, 0);
+    // What a log records, it renders.
+    simulation.sense_everything();
+    simulation.step();
+    let image = &simulation.robots[0].cameras[0].image;
+    assert_eq!(
+        (image.width, image.height, image.rgb.len()),
+        (52, 39, 52 * 39 * 3)
+    );
+    let pixel = |column: usize, row: usize| {
+        let at = 3 * (row * 52 + column);
+        [image.rgb[at], image.rgb[at + 1], image.rgb[at + 2]]
+    };
+    // The red box ahead, lit on the face the camera sees.
+    let centre = pixel(26, 19);
+    assert!(
+        centre[0] > 100 && centre[1] == 0 && centre[2] == 0,
+        "{centre:?}"
+    );
+    // The box is 0.05 m wide, 0.275 m from the camera: its image is 2·atan(0.025/0.275)
+    // of the 0.84 rad field, about 11 of the 52 columns.
+    let red: Vec<usize> = (0..52).filter(|&c| pixel(c, 19) == centre).collect();
+    assert!((10..=12).contains(&red.len()), "{red:?}");
+    assert_eq!(red[0] + red[red.len() - 1], 51, "centred: {red:?}");
+    // The blue sky above the box and the wall.
+    assert_eq!(pixel(26, 0), [0, 0, 255]);
+    // Through the Khepera API too.
+    use regatta_runtime::khepera::Khepera;
+    let mut io = simulation.khepera(0);
+    let mut cameras = io.cameras();
+    assert_eq!(cameras.len(), 1);
+    assert_eq!(cameras[0].size(), (52, 39));
+    assert_eq!(cameras[0].image().unwrap().len(), 52 * 39 * 3);
 }

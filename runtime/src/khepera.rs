@@ -36,6 +36,8 @@ pub struct Senses {
     pub ambient: bool,
     /// The turret's vision device (Panoramic or K213).
     pub vision: bool,
+    /// The 2-D colour cameras.
+    pub camera: bool,
 }
 
 impl Senses {
@@ -44,12 +46,20 @@ impl Senses {
         proximity: true,
         ambient: true,
         vision: true,
+        camera: true,
     };
     /// No sensor.
     pub const NONE: Senses = Senses {
         proximity: false,
         ambient: false,
         vision: false,
+        camera: false,
+    };
+    /// What a robot driven over the Khepera serial protocol can read: everything but the 2-D
+    /// cameras, which the protocol has no message for.
+    pub const PROTOCOL: Senses = Senses {
+        camera: false,
+        ..Senses::ALL
     };
 
     /// The sensors either set holds.
@@ -58,6 +68,7 @@ impl Senses {
             proximity: self.proximity | other.proximity,
             ambient: self.ambient | other.ambient,
             vision: self.vision | other.vision,
+            camera: self.camera | other.camera,
         }
     }
 }
@@ -90,6 +101,21 @@ pub trait Khepera {
     fn panoramic(&mut self) -> Option<&mut dyn PanoramicTurret>;
     /// The K213 linear camera, if mounted.
     fn linear_camera(&mut self) -> Option<&mut dyn LinearCameraTurret>;
+    /// The robot's 2-D colour cameras (the e-puck's), in the order it carries them; none
+    /// unless the backend has them.
+    fn cameras(&mut self) -> Vec<&mut dyn Camera> {
+        Vec::new()
+    }
+}
+
+/// A 2-D colour camera.
+pub trait Camera {
+    /// Its name in the world.
+    fn name(&self) -> &str;
+    /// Width and height in pixels.
+    fn size(&self) -> (usize, usize);
+    /// The last image: row-major RGB, 3 bytes a pixel, the top row first.
+    fn image(&mut self) -> Result<Vec<u8>, KheperaError>;
 }
 
 /// The Panoramic turret (EDI retina).

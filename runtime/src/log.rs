@@ -365,6 +365,7 @@ impl<W: Write + Seek> Recorder<W> {
             vision: wanted.contains(Channel::Retina)
                 || wanted.contains(Channel::K213)
                 || wanted.contains(Channel::Images),
+            camera: wanted.contains(Channel::Images),
         };
         let simulation = &*simulation;
         let options = mcap::WriteOptions::new()

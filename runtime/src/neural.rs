@@ -171,6 +171,7 @@ impl Topology {
             proximity: self.inputs.iter().any(|i| matches!(i, Input::Ir(_))),
             ambient: self.inputs.iter().any(|i| matches!(i, Input::Ambient(_))),
             vision: self.inputs.contains(&Input::Retina),
+            camera: false,
         }
     }
 }

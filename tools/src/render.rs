@@ -55,11 +55,16 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         Some(name) => vec![crate::world::robot_named(compiled, &args.world, name)?],
         None => (0..compiled.rig.robots.len()).collect(),
     };
+    let with_cameras: Vec<usize> = robots
+        .iter()
+        .copied()
+        .filter(|&r| !compiled.rig.robots[r].cameras.is_empty())
+        .collect();
     let with_vision: Vec<usize> = robots
         .into_iter()
         .filter(|&r| compiled.rig.robots[r].turret.is_some())
         .collect();
-    if with_vision.is_empty() {
+    if with_vision.is_empty() && with_cameras.is_empty() {
         eprintln!("no robot carries a vision device: nothing to render");
         return Ok(Outcome::Clean);
     }
@@ -86,6 +91,7 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         std::fs::create_dir_all(&args.out)
             .with_context(|| format!("cannot create {}", args.out.display()))?;
     }
+    render_cameras(&args, compiled, &poses, &with_cameras)?;
     for (slot, &robot) in with_vision.iter().enumerate() {
         let rig = &compiled.rig.robots[robot];
         let from_gpu = gpu_luminance.get(slot);
@@ -146,6 +152,65 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         }
     }
     Ok(Outcome::Clean)
+}
+
+/// Enlargement of camera images in the PNGs.
+const CAMERA_SCALE: u32 = 4;
+
+/// Every 2-D camera of `robots`, rendered by the ray caster at the robots' poses in the file
+/// (without noise: the picture of the scene, not of one noisy frame).
+fn render_cameras(
+    args: &Args,
+    compiled: &regatta_runtime::Compiled,
+    poses: &Poses,
+    robots: &[usize],
+) -> anyhow::Result<()> {
+    if robots.is_empty() {
+        return Ok(());
+    }
+    let caster = regatta_runtime::render::raycast::RayCaster::new(&compiled.graph, &compiled.plan);
+    for &robot in robots {
+        let rig = &compiled.rig.robots[robot];
+        let view = caster.prepare(&compiled.plan, poses, Some(robot));
+        for camera_rig in &rig.cameras {
+            let camera_rig = regatta_runtime::compile::rig::CameraRig {
+                noise: 0.0,
+                ..camera_rig.clone()
+            };
+            let camera = regatta_runtime::camera::Camera::new(&camera_rig);
+            let mut image = regatta_runtime::camera::CameraImage::default();
+            let mut unused = regatta_runtime::sim::noise::Stream::new(0, robot, 0, 0);
+            camera.update(
+                &caster,
+                &view,
+                rig.start,
+                rig.floor_y,
+                &mut unused,
+                &mut image,
+            );
+            match args.format {
+                Format::Json => println!(
+                    "{}",
+                    json!({"robot": rig.name, "device": "Camera", "name": camera_rig.name, "width": image.width, "height": image.height, "rgb": image.rgb})
+                ),
+                Format::Png => {
+                    let (w, h) = (image.width as u32, image.height as u32);
+                    let picture = RgbImage::from_fn(w * CAMERA_SCALE, h * CAMERA_SCALE, |x, y| {
+                        let at = 3 * ((y / CAMERA_SCALE) * w + x / CAMERA_SCALE) as usize;
+                        Rgb([image.rgb[at], image.rgb[at + 1], image.rgb[at + 2]])
+                    });
+                    let path = args
+                        .out
+                        .join(format!("{}-camera-{}.png", rig.name, camera_rig.name));
+                    picture
+                        .save(&path)
+                        .with_context(|| format!("cannot write {}", path.display()))?;
+                    println!("{}", path.display());
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 fn panoramic_json(name: &str, roi: (usize, usize), output: &RetinaOutput) -> serde_json::Value {

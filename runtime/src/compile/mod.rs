@@ -21,8 +21,8 @@ use graph::{
 };
 pub use plan::Plan;
 use rig::{
-    filter_set, DistanceSensorRig, LightSensorRig, LinearCameraRig, Optics, PanoramicRig, Pose2,
-    RobotRig, SensorRig, TurretRig,
+    filter_set, CameraRig, DistanceSensorRig, LightSensorRig, LinearCameraRig, Optics,
+    PanoramicRig, Pose2, RobotRig, SensorRig, TurretRig,
 };
 
 /// World-wide settings the runtime needs.
@@ -505,6 +505,7 @@ impl Compiler<'_> {
             distance_sensors: Vec::new(),
             light_sensors: Vec::new(),
             turret: None,
+            cameras: Vec::new(),
         });
         // The robot's group sits where the simulation puts the robot: upright on the floor.
         let start_frame = start.frame(robot_frame.translation.y);
@@ -582,13 +583,13 @@ impl Compiler<'_> {
         let robot_name = self.rig.robots[robot].name.clone();
         let width = scene.int(node, "width").max(1) as usize;
         let height = scene.int(node, "height").max(1) as usize;
-        let forward = device.apply_vector(DVec3::X).normalize_or(DVec3::X);
-        if forward.y.abs() > 1e-6 || forward.x < 1.0 - 1e-6 {
-            self.warnings.push(format!(
-                "camera '{name}' of robot '{robot_name}' does not look straight ahead; it is simulated looking along the robot's heading"
-            ));
-        }
         if height == 1 {
+            let forward = device.apply_vector(DVec3::X).normalize_or(DVec3::X);
+            if forward.y.abs() > 1e-6 || forward.x < 1.0 - 1e-6 {
+                self.warnings.push(format!(
+                    "camera '{name}' of robot '{robot_name}' does not look straight ahead; the linear camera is simulated looking along the robot's heading"
+                ));
+            }
             if self.rig.robots[robot].turret.is_some() {
                 self.warnings.push(format!(
                     "robot '{robot_name}' has two turrets; camera '{name}' is left out"
@@ -608,9 +609,23 @@ impl Compiler<'_> {
             }));
             return;
         }
-        self.warnings.push(format!(
-            "camera '{name}' of robot '{robot_name}' ({width}×{height}) is a 2-D camera, which regatta does not simulate yet; a controller cannot read it"
-        ));
+        if scene.string(node, "projection") != "planar" || scene.bool(node, "spherical") {
+            self.warnings.push(format!(
+                "camera '{name}' of robot '{robot_name}' asks for a {} projection; regatta renders it planar",
+                if scene.bool(node, "spherical") { "spherical" } else { scene.string(node, "projection") }
+            ));
+        }
+        self.rig.robots[robot].cameras.push(CameraRig {
+            name,
+            frame: device,
+            width,
+            height,
+            field_of_view: scene.float(node, "fieldOfView"),
+            near: scene.float(node, "near"),
+            far: scene.float(node, "far"),
+            noise: scene.float(node, "noise"),
+            period: scene.float(node, "samplingPeriod"),
+        });
     }
 
     fn turret(&mut self, node: NodeId, robot: usize) {

@@ -78,6 +78,11 @@ impl Plan {
                 )),
                 None => None,
             })
+            .chain(rig.robots.iter().flat_map(|r| {
+                r.cameras
+                    .iter()
+                    .map(|c| (r.floor_y + c.frame.translation.y, c.tan_half_band()))
+            }))
             .collect();
         let mut visible = Vec::new();
         let mut own_visible = vec![Vec::new(); rig.robots.len()];
@@ -124,7 +129,11 @@ impl Plan {
                                 )
                             });
                         // …and by its own turret from a fixed place.
-                        let seen_by_self = own_turret_sees(rig, robot, &primitive.bounds);
+                        let seen_by_self = own_turret_sees(rig, robot, &primitive.bounds)
+                            || rig.robots[robot]
+                                .cameras
+                                .iter()
+                                .any(|c| own_camera_sees(c, &primitive.bounds));
                         if seen_by_self {
                             own_visible[robot].push(index);
                         }
@@ -242,6 +251,55 @@ fn distance_to_box(p: DVec3, b: &Aabb) -> f64 {
 
 /// Whether a robot's own turret can see one of its own parts (robot-frame bounds): the part
 /// spans tan-elevations between `(y − h)/d` over its corners' horizontal distances d.
+/// Whether a 2-D camera can see a part of its own robot (bounds in the robot's frame): the
+/// part is in front of the camera, inside its frustum, and does not enclose it (the housing
+/// a camera sits in, or the body it is set into, would hide everything).
+fn own_camera_sees(camera: &crate::compile::rig::CameraRig, bounds: &Aabb) -> bool {
+    let eye = camera.frame.translation;
+    let margin = 1e-9;
+    let encloses = (bounds.min.x - margin..=bounds.max.x + margin).contains(&eye.x)
+        && (bounds.min.y - margin..=bounds.max.y + margin).contains(&eye.y)
+        && (bounds.min.z - margin..=bounds.max.z + margin).contains(&eye.z);
+    if encloses {
+        return false;
+    }
+    // The four side planes of the frustum, as inward normals in the robot's frame: a box with
+    // every corner outside one plane is outside the frustum.
+    let tan_h = libm::tan(camera.field_of_view / 2.0);
+    let tan_v = camera.tan_half_vertical();
+    let normals = [
+        DVec3::new(tan_h, 0.0, 1.0),
+        DVec3::new(tan_h, 0.0, -1.0),
+        DVec3::new(tan_v, -1.0, 0.0),
+        DVec3::new(tan_v, 1.0, 0.0),
+        DVec3::new(1.0, 0.0, 0.0),
+    ]
+    .map(|n| camera.frame.linear * n);
+    let corners = (0..8).map(|i| {
+        DVec3::new(
+            if i & 1 == 0 {
+                bounds.min.x
+            } else {
+                bounds.max.x
+            },
+            if i & 2 == 0 {
+                bounds.min.y
+            } else {
+                bounds.max.y
+            },
+            if i & 4 == 0 {
+                bounds.min.z
+            } else {
+                bounds.max.z
+            },
+        ) - eye
+    });
+    let corners: Vec<DVec3> = corners.collect();
+    normals
+        .iter()
+        .all(|n| corners.iter().any(|c| n.dot(*c) >= 0.0))
+}
+
 fn own_turret_sees(rig: &SensorRig, robot: usize, bounds: &Aabb) -> bool {
     let (height, tan_half) = match &rig.robots[robot].turret {
         Some(TurretRig::Panoramic(p)) => (p.height, libm::tan(HALF_BAND)),

@@ -176,6 +176,68 @@ pub struct LinearCameraRig {
     pub period: f64,
 }
 
+/// A 2-D colour camera (Webots' `Camera` of more than one row: the e-puck's 52×39): a planar
+/// projection rendered by the ray caster.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraRig {
+    pub name: String,
+    /// The camera in the robot's frame: it looks along its +x, +y is up in the image and +z
+    /// to the right (the robot frame's convention).
+    pub frame: crate::geometry::Frame,
+    pub width: usize,
+    pub height: usize,
+    /// Horizontal field of view (rad); pixels are square.
+    pub field_of_view: f64,
+    /// Nothing nearer than this along a pixel's ray is seen (m).
+    pub near: f64,
+    /// Nothing farther is seen (m); 0 is no limit.
+    pub far: f64,
+    /// Gaussian noise of each colour channel, as a fraction of full scale.
+    pub noise: f64,
+    pub period: f64,
+}
+
+impl CameraRig {
+    /// Tangent of half the vertical field of view.
+    pub fn tan_half_vertical(&self) -> f64 {
+        libm::tan(self.field_of_view / 2.0) * self.height as f64 / self.width as f64
+    }
+
+    /// The direction of pixel (column, row)'s centre in the camera's frame (row 0 at the top,
+    /// column 0 at the left), not normalised.
+    pub fn pixel_direction(&self, column: usize, row: usize) -> DVec3 {
+        let tan_h = libm::tan(self.field_of_view / 2.0);
+        let right = (2.0 * (column as f64 + 0.5) / self.width as f64 - 1.0) * tan_h;
+        let up = (1.0 - 2.0 * (row as f64 + 0.5) / self.height as f64) * self.tan_half_vertical();
+        DVec3::new(1.0, up, right)
+    }
+
+    /// The steepest tan-elevation (in the robot's frame) any pixel's ray can have: the band
+    /// of heights the camera can see at a distance.
+    pub fn tan_half_band(&self) -> f64 {
+        let mut steepest: f64 = 0.0;
+        for (column, row) in [
+            (0, 0),
+            (self.width - 1, 0),
+            (0, self.height - 1),
+            (self.width - 1, self.height - 1),
+        ] {
+            // The extreme rays pass through the image's corners, not the corner pixels' centres.
+            let mut d = self.pixel_direction(column, row);
+            d.y *= self.height as f64 / (self.height as f64 - 1.0).max(1.0);
+            d.z *= self.width as f64 / (self.width as f64 - 1.0).max(1.0);
+            let d = self.frame.linear * d;
+            let horizontal = (d.x * d.x + d.z * d.z).sqrt();
+            steepest = steepest.max(if horizontal > 0.0 {
+                d.y.abs() / horizontal
+            } else {
+                f64::INFINITY
+            });
+        }
+        steepest
+    }
+}
+
 /// The turret on top of a robot.
 #[derive(Clone, Debug, PartialEq)]
 pub enum TurretRig {
@@ -208,6 +270,8 @@ pub struct RobotRig {
     pub distance_sensors: Vec<DistanceSensorRig>,
     pub light_sensors: Vec<LightSensorRig>,
     pub turret: Option<TurretRig>,
+    /// 2-D cameras, in the order the robot carries them.
+    pub cameras: Vec<CameraRig>,
 }
 
 /// Every robot of the world, in the order they appear in the file.
@@ -219,7 +283,14 @@ pub struct SensorRig {
 impl SensorRig {
     /// Whether any robot carries a vision device (and so anything must be rendered).
     pub fn has_vision(&self) -> bool {
-        self.robots.iter().any(|r| r.turret.is_some())
+        self.robots
+            .iter()
+            .any(|r| r.turret.is_some() || !r.cameras.is_empty())
+    }
+
+    /// Whether any robot carries a 2-D camera (which the ray caster renders).
+    pub fn has_cameras(&self) -> bool {
+        self.robots.iter().any(|r| !r.cameras.is_empty())
     }
 
     pub fn robot(&self, name: &str) -> Option<usize> {

@@ -7,6 +7,7 @@
 //! - `/tf` (`foxglove_msgs/msg/FrameTransform`): `world` → each robot's frame, every step.
 //! - `/{robot}/world_pose` (`foxglove_msgs/msg/PoseInFrame`): the robot's pose in `world`.
 //! - `/{robot}/retina/{filter}/image`, `/{robot}/retina/analog/image` when no filter is on,
+//!   `/{robot}/camera/{name}/image` for each 2-D camera (`rgb8`, as the camera took it),
 //!   and `/{robot}/k213/image` (`foxglove_msgs/msg/RawImage`, `mono8`, one pixel high): what
 //!   the vision device produced, at its own rate. Digital values are scaled to 0…255; the
 //!   analog image (luminance over its mean) maps 0…2 to 0…255.
@@ -73,6 +74,8 @@ struct RobotState {
     /// One image channel per enabled filter (or the analog one), in output order.
     retina_images: Vec<u16>,
     k213_image: Option<u16>,
+    /// One channel per 2-D camera.
+    camera_images: Vec<u16>,
     visits_seen: usize,
 }
 
@@ -143,7 +146,18 @@ impl Foxglove {
             };
             let mut retina_images = Vec::new();
             let mut k213_image = None;
+            let mut camera_images = Vec::new();
             if channels.contains(Channel::Images) {
+                for camera in &robot.cameras {
+                    camera_images.push(add(
+                        &format!(
+                            "/{token}/camera/{}/image",
+                            super::channels::sanitize(&camera.model.rig.name)
+                        ),
+                        "foxglove_msgs/msg/RawImage",
+                        &owner,
+                    )?);
+                }
                 if let Some(turret) = &robot.panoramic {
                     let filters: Vec<&str> =
                         turret.model.rig.filters.iter().map(|k| k.name()).collect();
@@ -173,6 +187,7 @@ impl Foxglove {
                 world_pose,
                 retina_images,
                 k213_image,
+                camera_images,
                 visits_seen: 0,
             });
         }
@@ -266,6 +281,29 @@ impl Foxglove {
                     self.raw_image(cdr, ns(read_at), index, "k213");
                     write(writer, sequence, channel, ns(read_at), &cdr.buf)?;
                 }
+            }
+            for (c, camera) in robot.cameras.iter().enumerate() {
+                let Some(&channel) = self.robots[index].camera_images.get(c) else {
+                    continue;
+                };
+                if robot.updated.cameras & (1 << c.min(63)) == 0 {
+                    continue;
+                }
+                let image = &camera.image;
+                cdr.start();
+                time(cdr, ns(read_at));
+                cdr.string(&format!(
+                    "{}/camera/{}",
+                    self.robots[index].frame,
+                    super::channels::sanitize(&camera.model.rig.name)
+                ));
+                cdr.u32(image.width as u32);
+                cdr.u32(image.height as u32);
+                cdr.string("rgb8");
+                cdr.u32(3 * image.width as u32);
+                cdr.u32(image.rgb.len() as u32);
+                cdr.buf.extend_from_slice(&image.rgb);
+                write(writer, sequence, channel, ns(read_at), &cdr.buf)?;
             }
             let Some(channel) = self.events else {
                 continue;

@@ -215,8 +215,20 @@ impl<'g> RayCaster<'g> {
 
     /// Linear RGB arriving at `origin` from `direction`.
     pub fn rgb(&self, frame: &Prepared, origin: DVec3, direction: DVec3) -> [f64; 3] {
+        self.rgb_within(frame, origin, direction, f64::INFINITY)
+    }
+
+    /// [`RayCaster::rgb`] seeing nothing farther than `t_max` along `direction` (the
+    /// background beyond).
+    pub fn rgb_within(
+        &self,
+        frame: &Prepared,
+        origin: DVec3,
+        direction: DVec3,
+        t_max: f64,
+    ) -> [f64; 3] {
         let ray = Ray { origin, direction };
-        match self.trace(frame, &ray, f64::INFINITY) {
+        match self.trace(frame, &ray, t_max) {
             Some(hit) => {
                 let material = &self.graph.materials[self.graph.primitives[hit.primitive].material];
                 let mut occluded =

@@ -45,6 +45,8 @@ pub struct Updated {
     pub proximity: bool,
     pub ambient: bool,
     pub vision: bool,
+    /// Which 2-D cameras took an image (bit i: camera i).
+    pub cameras: u64,
     /// A contact began or ended.
     pub contact: bool,
     /// The controller returned an error.
@@ -115,6 +117,16 @@ pub struct LinearCameraState {
     sensed: bool,
 }
 
+/// A 2-D camera of a simulated robot.
+pub struct CameraState {
+    pub model: crate::camera::Camera,
+    pub image: crate::camera::CameraImage,
+    noise: Stream,
+    due: f64,
+    /// Whether the camera is refreshed (someone reads it).
+    sensed: bool,
+}
+
 /// One simulated robot.
 pub struct RobotState {
     pub name: String,
@@ -138,6 +150,7 @@ pub struct RobotState {
     wheel_stream: Stream,
     pub panoramic: Option<PanoramicState>,
     pub linear_camera: Option<LinearCameraState>,
+    pub cameras: Vec<CameraState>,
     controller: Option<Box<dyn Controller>>,
     /// Controller calls that returned an error, and the last message.
     pub controller_errors: u64,
@@ -172,6 +185,8 @@ impl RobotState {
 pub struct Simulation<'c> {
     pub compiled: &'c Compiled,
     renderer: Option<Renderer<'c>>,
+    /// The ray caster 2-D cameras render with, when a robot has one.
+    camera_caster: Option<crate::render::raycast::RayCaster<'c>>,
     /// A batched backend that renders every due vision device of a step in one call,
     /// replacing the CPU renderer.
     vision: Option<Box<dyn VisionBackend + 'c>>,
@@ -264,6 +279,18 @@ impl<'c> Simulation<'c> {
                     }),
                     _ => None,
                 },
+                cameras: rig
+                    .cameras
+                    .iter()
+                    .enumerate()
+                    .map(|(c, camera)| CameraState {
+                        model: crate::camera::Camera::new(camera),
+                        image: crate::camera::CameraImage::default(),
+                        noise: Stream::new(seed, index, kind::CAMERA, c),
+                        due: 0.0,
+                        sensed: true,
+                    })
+                    .collect(),
                 controller: Some(controller),
                 controller_errors: 0,
                 last_controller_error: None,
@@ -280,9 +307,14 @@ impl<'c> Simulation<'c> {
                 fell: None,
             });
         }
+        let camera_caster = compiled
+            .rig
+            .has_cameras()
+            .then(|| crate::render::raycast::RayCaster::new(&compiled.graph, &compiled.plan));
         let mut simulation = Simulation {
             compiled,
             renderer,
+            camera_caster,
             vision: None,
             vision_error: None,
             vision_buffers: Vec::new(),
@@ -343,11 +375,11 @@ impl<'c> Simulation<'c> {
         let t = self.time;
         for robot in &mut self.robots {
             robot.updated = Updated::default();
-            // A robot driven from outside may read anything.
+            // A robot driven from outside may read anything its protocol reads.
             let reads = robot
                 .controller
                 .as_ref()
-                .map_or(Senses::ALL, |c| c.senses());
+                .map_or(Senses::PROTOCOL, |c| c.senses());
             robot.senses = reads.union(self.always_sensed);
             let vision = robot.senses.vision;
             if let Some(turret) = &mut robot.panoramic {
@@ -355,6 +387,9 @@ impl<'c> Simulation<'c> {
             }
             if let Some(camera) = &mut robot.linear_camera {
                 camera.sensed = vision;
+            }
+            for camera in &mut robot.cameras {
+                camera.sensed = robot.senses.camera;
             }
         }
         self.update_sensors(t);
@@ -521,6 +556,26 @@ impl<'c> Simulation<'c> {
                         sensor,
                         &mut robot.ambient_streams[s],
                     );
+                }
+            }
+            // 2-D cameras always render on the CPU, with the ray caster.
+            if let (true, Some(caster)) = (senses.camera, &self.camera_caster) {
+                let mut view = None;
+                for (c, camera) in robot.cameras.iter_mut().enumerate() {
+                    if due(&mut camera.due, t, camera.model.rig.period) {
+                        robot.updated.cameras |= 1 << c.min(63);
+                        let view = view.get_or_insert_with(|| {
+                            caster.prepare(&compiled.plan, poses, Some(index))
+                        });
+                        camera.model.update(
+                            caster,
+                            view,
+                            robot.pose,
+                            rig.floor_y,
+                            &mut camera.noise,
+                            &mut camera.image,
+                        );
+                    }
                 }
             }
             if !senses.vision {
@@ -861,6 +916,31 @@ impl Khepera for SimulatedKhepera<'_> {
             .linear_camera
             .as_mut()
             .map(|c| c as &mut dyn LinearCameraTurret)
+    }
+
+    fn cameras(&mut self) -> Vec<&mut dyn crate::khepera::Camera> {
+        self.robot
+            .cameras
+            .iter_mut()
+            .map(|c| c as &mut dyn crate::khepera::Camera)
+            .collect()
+    }
+}
+
+impl crate::khepera::Camera for CameraState {
+    fn name(&self) -> &str {
+        &self.model.rig.name
+    }
+
+    fn size(&self) -> (usize, usize) {
+        (self.model.rig.width, self.model.rig.height)
+    }
+
+    fn image(&mut self) -> Result<Vec<u8>, KheperaError> {
+        if !self.sensed {
+            return Err(KheperaError::NotSensed("camera"));
+        }
+        Ok(self.image.rgb.clone())
     }
 }
 

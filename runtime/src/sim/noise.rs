@@ -35,6 +35,7 @@ pub mod kind {
     pub const PROXIMITY: u64 = 2;
     pub const AMBIENT: u64 = 3;
     pub const CONTROLLER: u64 = 4;
+    pub const CAMERA: u64 = 5;
 }
 
 impl Stream {
