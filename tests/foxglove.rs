@@ -494,3 +494,43 @@ fn channels_choose_what_a_log_holds_and_change_no_result() {
     let read = regatta_runtime::log::read(&some).unwrap();
     assert_eq!(read.run.channels.to_string(), "pose,scene,tf");
 }
+
+/// A 2-D camera's images are `rgb8` RawImages, each the image the camera took at that step.
+#[test]
+fn camera_images_are_logged_as_the_camera_took_them() {
+    let text =
+        std::fs::read_to_string(regatta_tests::root().join("tests/data/webots/e-puck_camera.wbt"))
+            .unwrap();
+    let bytes = record(&text, 3, Channels::ALL);
+    let (messages, metadata) = read_all(&bytes);
+    let images: Vec<&Value> = messages
+        .iter()
+        .filter(|(topic, schema, _, _)| {
+            topic == "/e_puck/camera/camera/image" && schema == "foxglove_msgs/msg/RawImage"
+        })
+        .map(|(_, _, _, value)| value)
+        .collect();
+    assert_eq!(images.len(), 3, "one image a step (samplingPeriod 0)");
+    assert_eq!(metadata["/e_puck/camera/camera/image"]["robot"], "e-puck");
+    let (compiled, _) = compile(&text);
+    let mut simulation = Simulation::new(&compiled, None).unwrap();
+    simulation.sense_everything();
+    simulation.step();
+    let taken = &simulation.robots[0].cameras[0].image.rgb;
+    let first = images[0];
+    assert_eq!(first.get("width").f(), 52.0);
+    assert_eq!(first.get("height").f(), 39.0);
+    assert_eq!(first.get("encoding").s(), "rgb8");
+    assert_eq!(first.get("step").f(), 156.0);
+    let data: Vec<u8> = first
+        .get("data")
+        .list()
+        .iter()
+        .map(|v| v.f() as u8)
+        .collect();
+    assert_eq!(&data, taken);
+    // Without the images channel, no image is taken (nor logged).
+    let bytes = record(&text, 3, "regatta".parse().unwrap());
+    let (messages, _) = read_all(&bytes);
+    assert!(messages.iter().all(|(topic, ..)| !topic.contains("camera")));
+}

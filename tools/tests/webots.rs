@@ -246,3 +246,49 @@ fn a_robot_driving_off_its_floor_is_reported_in_the_summary_and_the_log() {
     assert!(bytes.windows(needle.len()).any(|w| w == needle));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `regatta render` draws the 2-D cameras: the e-puck's 52×39 and the Khepera gripper world's
+/// 64×64, enlarged four times, and their pixels as JSON.
+#[test]
+fn render_draws_the_epuck_and_gripper_cameras() {
+    let dir = std::env::temp_dir().join(format!("regatta-cameras-{}", std::process::id()));
+    let epuck = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/webots/e-puck_camera.wbt");
+    let gripper =
+        corpus().join("webots/projects/robots/k-team/khepera1/worlds/khepera_gripper.wbt");
+    for (world, png, size) in [
+        (&epuck, "e-puck-camera-camera.png", (52, 39)),
+        (&gripper, "khepera-camera-camera.png", (64, 64)),
+    ] {
+        let output = regatta()
+            .arg("render")
+            .arg(world)
+            .arg("--lenient")
+            .arg("--out")
+            .arg(&dir)
+            .output()
+            .expect("regatta runs");
+        let (stdout, stderr) = text(&output);
+        assert!(output.status.success(), "{stderr}");
+        assert!(stdout.contains(png), "{stdout}");
+        let picture = image::open(dir.join(png)).expect("a PNG").to_rgb8();
+        assert_eq!(picture.dimensions(), (4 * size.0, 4 * size.1));
+        let output = regatta()
+            .arg("render")
+            .arg(world)
+            .args(["--lenient", "--format", "json"])
+            .output()
+            .expect("regatta runs");
+        let (stdout, _) = text(&output);
+        let line = stdout
+            .lines()
+            .find(|l| l.contains("\"device\":\"Camera\""))
+            .expect("the camera's JSON");
+        let value: serde_json::Value = serde_json::from_str(line).unwrap();
+        assert_eq!(value["width"], size.0);
+        assert_eq!(
+            value["rgb"].as_array().unwrap().len(),
+            (3 * size.0 * size.1) as usize
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
