@@ -51,6 +51,16 @@ pub fn explain(name: &str, loaded: &crate::world::Loaded) -> String {
         },
         loaded.checked.scene.nodes.len()
     );
+    if !loaded.checked.substitutions.is_empty() {
+        let _ = writeln!(out, "\nWebots PROTOs replaced by regatta's stand-ins");
+        for s in &loaded.checked.substitutions {
+            let _ = writeln!(
+                out,
+                "  {} ← {}: built-in stand-in worlds/protos/webots/{}.proto",
+                s.name, s.url, s.name
+            );
+        }
+    }
     let mut shapes: BTreeMap<&str, usize> = BTreeMap::new();
     for p in &graph.primitives {
         *shapes.entry(p.shape.name()).or_default() += 1;
@@ -158,6 +168,26 @@ pub fn explain(name: &str, loaded: &crate::world::Loaded) -> String {
             }
             None => {}
         }
+        for c in &robot.cameras {
+            let _ = writeln!(
+                out,
+                "    Camera \"{}\": {}×{} pixels over {:.1}°, planar, ray cast{}, {}",
+                c.name,
+                c.width,
+                c.height,
+                c.field_of_view.to_degrees(),
+                if c.noise > 0.0 {
+                    format!(", noise {}", c.noise)
+                } else {
+                    String::new()
+                },
+                if c.period > 0.0 {
+                    format!("every {} ms when read", c.period * 1000.0)
+                } else {
+                    "every step when read".to_owned()
+                }
+            );
+        }
     }
     let _ = writeln!(out, "\nplan");
     let renderer = match plan.renderer {
@@ -170,7 +200,7 @@ pub fn explain(name: &str, loaded: &crate::world::Loaded) -> String {
         let own: usize = plan.own_visible.iter().map(Vec::len).sum();
         let _ = writeln!(
             out,
-            "  visible: {} primitives (+{own} seen by their own robot's turret)",
+            "  visible: {} primitives (+{own} seen by their own robot's devices)",
             plan.visible.len()
         );
         let r = plan.region;
