@@ -82,6 +82,70 @@ pub fn resolve(name: &str) -> Resolution {
     Resolution::Unknown
 }
 
+/// The controller a robot runs when lenient mode replaces one regatta does not have: the
+/// Khepera's and e-puck's default in Webots is obstacle avoidance.
+pub const LENIENT_DEFAULT: &str = "braitenberg";
+
+/// What resolving a robot's controller did, to tell the user.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Resolved {
+    /// The name is regatta's own.
+    Same,
+    /// A Webots name runs as a built-in (a note).
+    Mapped(String),
+    /// Lenient mode replaced a controller regatta does not have (a warning).
+    Replaced(String),
+}
+
+/// Resolves a robot's controller name to a built-in one, in place: what `run`, `serve`,
+/// `batch` and `evolve` all do. `Err` is strict mode's refusal, with the reason.
+pub fn resolve_robot(
+    robot: &mut crate::compile::rig::RobotRig,
+    lenient: bool,
+) -> Result<Resolved, String> {
+    let name = robot.controller.clone();
+    match resolve(&name) {
+        Resolution::Builtin(builtin, why) => {
+            if builtin == name {
+                return Ok(Resolved::Same);
+            }
+            robot.controller = builtin.to_owned();
+            Ok(Resolved::Mapped(format!(
+                "robot '{}': Webots controller \"{name}\" ({why}) runs as regatta's \"{builtin}\"",
+                robot.name
+            )))
+        }
+        Resolution::External(how) => {
+            let message = format!(
+                "robot '{}' has controller \"{name}\": {how}; `regatta serve WORLD --robot {}` drives it over the Khepera serial protocol, or --controller chooses a built-in one",
+                robot.name, robot.name
+            );
+            if !lenient {
+                return Err(message);
+            }
+            robot.controller = LENIENT_DEFAULT.to_owned();
+            robot.controller_args.clear();
+            Ok(Resolved::Replaced(format!(
+                "{message}; lenient mode runs \"{LENIENT_DEFAULT}\" instead"
+            )))
+        }
+        Resolution::Unknown => {
+            let message = format!(
+                "robot '{}' has controller \"{name}\", which regatta does not have (built in: none, braitenberg, regatta, neural, and the Webots names in the README)",
+                robot.name
+            );
+            if !lenient {
+                return Err(format!("{message}; --controller chooses one"));
+            }
+            robot.controller = LENIENT_DEFAULT.to_owned();
+            robot.controller_args.clear();
+            Ok(Resolved::Replaced(format!(
+                "{message}; lenient mode runs \"{LENIENT_DEFAULT}\" instead (--controller chooses another)"
+            )))
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

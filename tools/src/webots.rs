@@ -4,7 +4,7 @@
 //! `--controller` override.
 
 use anyhow::bail;
-use regatta_runtime::webots_controllers::{resolve, Resolution};
+use regatta_runtime::webots_controllers::{resolve, resolve_robot, Resolution, Resolved};
 use regatta_runtime::Compiled;
 
 use crate::world::Loaded;
@@ -22,44 +22,13 @@ pub struct ControllerOverride {
     pub args: Vec<String>,
 }
 
-/// The controller a DifferentialWheels robot runs when lenient mode replaces one regatta
-/// does not have: the Khepera's and e-puck's default in Webots is obstacle avoidance.
-const LENIENT_DEFAULT: &str = "braitenberg";
-
 /// Fails when the world has robots regatta could not build (their PROTO has no stand-in and
 /// was not found), naming each.
 pub fn refuse_unbuilt_robots(loaded: &Loaded) -> anyhow::Result<()> {
-    let unbuilt = &loaded.checked.unbuilt_robots;
-    if unbuilt.is_empty() {
-        return Ok(());
+    match regatta_schema::webots::unbuilt_refusal(&loaded.checked) {
+        Some(refusal) => bail!("{refusal}"),
+        None => Ok(()),
     }
-    let lines: Vec<String> = unbuilt
-        .iter()
-        .map(|robot| {
-            let source = &loaded.checked.sources[robot.file.0 as usize];
-            let (line, column) = line_column(&source.text, robot.span.start as usize);
-            let from = match &robot.url {
-                Some(url) => format!(" (its PROTO: {url})"),
-                None => String::new(),
-            };
-            format!(
-                "  {}:{line}:{column}: '{}'{from}",
-                source.name, robot.type_name
-            )
-        })
-        .collect();
-    bail!(
-        "the world has {} robot(s) regatta could not build, so it is not simulated:\n{}\nregatta has stand-ins for Khepera1, Khepera2 and E-puck (and its own Khepera); --proto-path DIR can point at a folder with the others' PROTOs",
-        unbuilt.len(),
-        lines.join("\n")
-    )
-}
-
-fn line_column(text: &str, offset: usize) -> (usize, usize) {
-    let before = &text[..offset.min(text.len())];
-    let line = before.matches('\n').count() + 1;
-    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-    (line, column)
 }
 
 /// Applies `--controller` overrides and resolves every robot's controller name to a built-in
@@ -110,46 +79,18 @@ pub fn resolve_controllers(
     for (index, robot) in compiled.rig.robots.iter_mut().enumerate() {
         if Some(index) == served {
             // Driven over the protocol: its own controller never runs, but must be buildable.
-            if !matches!(resolve(&robot.controller), Resolution::Builtin(..)) {
-                robot.controller = "none".to_owned();
+            robot.controller = match resolve(&robot.controller) {
+                Resolution::Builtin(builtin, _) => builtin,
+                _ => "none",
             }
+            .to_owned();
             continue;
         }
-        let name = robot.controller.clone();
-        match resolve(&name) {
-            Resolution::Builtin(builtin, why) => {
-                if builtin != name {
-                    eprintln!(
-                        "note: robot '{}': Webots controller \"{name}\" ({why}) runs as regatta's \"{builtin}\"",
-                        robot.name
-                    );
-                    robot.controller = builtin.to_owned();
-                }
-            }
-            Resolution::External(how) => {
-                let message = format!(
-                    "robot '{}' has controller \"{name}\": {how}; `regatta serve WORLD --robot {}` drives it over the Khepera serial protocol, or --controller chooses a built-in one",
-                    robot.name, robot.name
-                );
-                if !lenient {
-                    bail!("{message}");
-                }
-                eprintln!("warning: {message}; lenient mode runs \"{LENIENT_DEFAULT}\" instead");
-                robot.controller = LENIENT_DEFAULT.to_owned();
-                robot.controller_args.clear();
-            }
-            Resolution::Unknown => {
-                let message = format!(
-                    "robot '{}' has controller \"{name}\", which regatta does not have (built in: none, braitenberg, regatta, neural, and the Webots names in the README)",
-                    robot.name
-                );
-                if !lenient {
-                    bail!("{message}; --controller chooses one");
-                }
-                eprintln!("warning: {message}; lenient mode runs \"{LENIENT_DEFAULT}\" instead (--controller chooses another)");
-                robot.controller = LENIENT_DEFAULT.to_owned();
-                robot.controller_args.clear();
-            }
+        match resolve_robot(robot, lenient) {
+            Ok(Resolved::Same) => {}
+            Ok(Resolved::Mapped(note)) => eprintln!("note: {note}"),
+            Ok(Resolved::Replaced(warning)) => eprintln!("warning: {warning}"),
+            Err(refusal) => bail!("{refusal}"),
         }
     }
     Ok(())

@@ -252,7 +252,8 @@ fn a_robot_driving_off_its_floor_is_reported_in_the_summary_and_the_log() {
 #[test]
 fn render_draws_the_epuck_and_gripper_cameras() {
     let dir = std::env::temp_dir().join(format!("regatta-cameras-{}", std::process::id()));
-    let epuck = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/webots/e-puck_camera.wbt");
+    let epuck =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/webots/e-puck_camera.wbt");
     let gripper =
         corpus().join("webots/projects/robots/k-team/khepera1/worlds/khepera_gripper.wbt");
     for (world, png, size) in [
@@ -290,5 +291,74 @@ fn render_draws_the_epuck_and_gripper_cameras() {
             (3 * size.0 * size.1) as usize
         );
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `batch` (and `evolve`, which loads worlds the same way) map Webots controller names as
+/// `run` does, refuse what `run` refuses, and fall back in lenient mode as `run` does.
+#[test]
+fn batch_maps_webots_controllers_as_run_does() {
+    let dir = std::env::temp_dir().join(format!("regatta-batch-webots-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let world = |name: &str, controller: &str| {
+        let path = dir.join(name);
+        std::fs::write(
+            &path,
+            format!(
+                "#VRML_SIM R2023b utf8\nRectangleArena {{ floorSize 1 1 }}\nE-puck {{ controller \"{controller}\" }}\n"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    let batch = |path: &Path, extra: &[&str]| {
+        regatta()
+            .arg("batch")
+            .arg(path)
+            .args(["--seeds", "1", "--duration", "2", "--fitness", "avoidance"])
+            .args(extra)
+            .output()
+            .expect("regatta runs")
+    };
+    let mapped = world("mapped.wbt", "e-puck_avoid_obstacles");
+    let output = batch(&mapped, &[]);
+    let (stdout, stderr) = text(&output);
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("Webots controller \"e-puck_avoid_obstacles\""),
+        "{stderr}"
+    );
+    let row: serde_json::Value = serde_json::from_str(stdout.lines().next().unwrap()).unwrap();
+    assert_eq!(row["robots"][0]["controller"], "braitenberg", "{row}");
+    // The same run as `run --json` gives, controller for controller.
+    let single = regatta()
+        .arg("run")
+        .arg(&mapped)
+        .args([
+            "--seed",
+            "1",
+            "--duration",
+            "2",
+            "--json",
+            "--fitness",
+            "avoidance",
+        ])
+        .output()
+        .unwrap();
+    let (single_stdout, single_stderr) = text(&single);
+    assert!(single.status.success(), "{single_stderr}");
+    let single: serde_json::Value = serde_json::from_str(&single_stdout).unwrap();
+    assert_eq!(row["fitness"], single["fitness"]);
+    let unknown = world("unknown.wbt", "khepera_gripper");
+    let output = batch(&unknown, &[]);
+    assert!(!output.status.success());
+    assert!(text(&output).1.contains("\"khepera_gripper\""));
+    let output = batch(&unknown, &["--lenient"]);
+    let (_, stderr) = text(&output);
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("lenient mode runs \"braitenberg\" instead"),
+        "{stderr}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

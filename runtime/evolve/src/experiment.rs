@@ -30,6 +30,9 @@ pub enum LoadError {
         errors: usize,
         rendered: String,
     },
+    /// Robots regatta could not build, or a controller it does not have (strict mode).
+    #[error("cannot run {name}: {reason}")]
+    Refused { name: String, reason: String },
     #[error("cannot run {name}: {source}")]
     Start {
         name: String,
@@ -84,7 +87,8 @@ pub struct Experiment {
     pub compiled: Compiled,
     /// The network of its `neural` robots, if any (the first robot's: they must share it).
     pub network: Option<WorldNetwork>,
-    /// Warnings of the check, rendered (empty when none).
+    /// Warnings of the check, rendered, and notes on controllers mapped from Webots' names
+    /// (empty when none).
     pub warnings: String,
 }
 
@@ -144,12 +148,35 @@ impl Experiment {
                 rendered: render(true),
             });
         }
-        let warnings = if lenient {
+        let mut warnings = if lenient {
             render(false)
         } else {
             String::new()
         };
-        let compiled = regatta_runtime::compile(&checked.scene);
+        if let Some(reason) = regatta_schema::webots::unbuilt_refusal(&checked) {
+            return Err(LoadError::Refused {
+                name: name.to_owned(),
+                reason,
+            });
+        }
+        let mut compiled = regatta_runtime::compile(&checked.scene);
+        // Webots controller names, as `regatta run` maps them.
+        for robot in &mut compiled.rig.robots {
+            use regatta_runtime::webots_controllers::{resolve_robot, Resolved};
+            match resolve_robot(robot, lenient) {
+                Ok(Resolved::Same) => {}
+                Ok(Resolved::Mapped(note)) => warnings.push_str(&format!("note: {note}\n")),
+                Ok(Resolved::Replaced(warning)) => {
+                    warnings.push_str(&format!("warning: {warning}\n"))
+                }
+                Err(reason) => {
+                    return Err(LoadError::Refused {
+                        name: name.to_owned(),
+                        reason,
+                    })
+                }
+            }
+        }
         // A world that cannot start is refused now, not once per evaluation.
         Simulation::new(&compiled, None).map_err(|source| LoadError::Start {
             name: name.to_owned(),
