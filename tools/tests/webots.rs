@@ -362,3 +362,92 @@ fn batch_maps_webots_controllers_as_run_does() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// An `"<extern>"` e-puck (webots_ros2's world) is driven by `regatta serve`: a client over
+/// TCP runs braitenberg through the Khepera protocol, and the served run records the same
+/// poses, wheels and sensors as the same controller run in-process.
+#[test]
+fn an_extern_epuck_is_driven_by_serve() {
+    use std::io::BufRead;
+    use std::process::Stdio;
+    let dir = std::env::temp_dir().join(format!("regatta-extern-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let world = corpus().join(
+        "webots-ext/cyberbotics+webots_ros2/_versions/R2023b/webots_ros2_epuck/worlds/epuck_world.wbt",
+    );
+    let served_log = dir.join("served.mcap");
+    let mut server = regatta()
+        .arg("serve")
+        .arg(&world)
+        .args(["--lenient", "--tcp", "127.0.0.1:0", "--steps", "150"])
+        .args(["--channels", "regatta", "--log"])
+        .arg(&served_log)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = std::io::BufReader::new(server.stdout.take().unwrap()).lines();
+    let banner = lines.next().unwrap().unwrap();
+    assert!(banner.contains("serving robot 'e-puck'"), "{banner}");
+    let address = banner
+        .split("tcp ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .unwrap()
+        .to_owned();
+    let drive = regatta()
+        .args(["drive", "--tcp", &address, "--controller", "braitenberg"])
+        .args(["--steps", "150", "--period", "0"])
+        .output()
+        .unwrap();
+    assert!(drive.status.success(), "{:?}", text(&drive));
+    assert!(server.wait().unwrap().success());
+    let rest: Vec<String> = lines.map_while(Result::ok).collect();
+    assert!(
+        rest.iter().any(|l| l.starts_with("served 150 steps")),
+        "{rest:?}"
+    );
+    let run_log = dir.join("run.mcap");
+    let run = regatta()
+        .arg("run")
+        .arg(&world)
+        .args([
+            "--lenient",
+            "--controller",
+            "e-puck=braitenberg",
+            "--steps",
+            "150",
+        ])
+        .args(["--channels", "regatta", "--log"])
+        .arg(&run_log)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{:?}", text(&run));
+    for (log, csv) in [(&served_log, "served"), (&run_log, "run")] {
+        let export = regatta()
+            .args(["log", "export"])
+            .arg(log)
+            .arg("--csv")
+            .arg(dir.join(csv))
+            .output()
+            .unwrap();
+        assert!(export.status.success(), "{:?}", text(&export));
+    }
+    for channel in ["pose.csv", "wheels.csv", "proximity.csv"] {
+        let served = std::fs::read_to_string(dir.join("served").join(channel)).unwrap();
+        let run = std::fs::read_to_string(dir.join("run").join(channel)).unwrap();
+        assert_eq!(served.lines().count(), 151, "{channel}");
+        assert_eq!(
+            served, run,
+            "{channel} differs between served and in-process runs"
+        );
+    }
+    // It moved.
+    let poses = std::fs::read_to_string(dir.join("served/pose.csv")).unwrap();
+    let last = poses.lines().last().unwrap();
+    assert_ne!(
+        poses.lines().nth(1).unwrap().split(',').nth(2),
+        last.split(',').nth(2)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
