@@ -4,6 +4,7 @@
 mod bench;
 mod bench_retina;
 mod bench_step;
+mod bench_swarm;
 mod check;
 mod explain;
 mod fmt;

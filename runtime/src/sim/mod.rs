@@ -164,6 +164,40 @@ pub struct Simulation<'c> {
     pub always_sensed: Senses,
     /// Buffers a step fills and the next reuses: stepping allocates nothing once warm.
     scratch: StepScratch,
+    /// Wall time spent in each phase, when profiling (`regatta bench step`); never read by
+    /// the simulation itself, so it changes no result.
+    profile: Option<PhaseTimes>,
+}
+
+/// Wall time spent in each phase of the steps run while profiling.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// Sensors: IR, ambient light, vision.
+    pub sense: std::time::Duration,
+    /// Controllers.
+    pub control: std::time::Duration,
+    /// Wheels moved along their arcs.
+    pub kinematics: std::time::Duration,
+    /// Bodies pushed apart, contacts and visits counted.
+    pub collisions: std::time::Duration,
+}
+
+/// Times a phase when profiling.
+struct PhaseClock(Option<std::time::Instant>);
+
+impl PhaseClock {
+    fn start(on: bool) -> PhaseClock {
+        PhaseClock(on.then(std::time::Instant::now))
+    }
+
+    /// Adds the time since the last lap to `slot` and starts the next lap.
+    fn lap(&mut self, slot: Option<&mut std::time::Duration>) {
+        if let (Some(started), Some(slot)) = (self.0, slot) {
+            let now = std::time::Instant::now();
+            *slot += now - started;
+            self.0 = Some(now);
+        }
+    }
 }
 
 /// A step's working buffers.
@@ -269,6 +303,7 @@ impl<'c> Simulation<'c> {
             seed,
             always_sensed: Senses::NONE,
             scratch: StepScratch::default(),
+            profile: None,
         };
         let plan = &compiled.plan;
         simulation.scratch.lights_move = plan
@@ -291,6 +326,16 @@ impl<'c> Simulation<'c> {
     /// records. Other robots' readings and noise streams do not change.
     pub fn sense_everything(&mut self) {
         self.always_sensed = Senses::ALL;
+    }
+
+    /// Starts (or stops) adding up the wall time of each phase of the steps that follow.
+    pub fn set_profiling(&mut self, on: bool) {
+        self.profile = on.then(PhaseTimes::default);
+    }
+
+    /// The wall time of each phase since profiling started.
+    pub fn phase_times(&self) -> Option<PhaseTimes> {
+        self.profile
     }
 
     /// Replaces a robot's controller (a library user's own).
@@ -332,12 +377,15 @@ impl<'c> Simulation<'c> {
                 camera.sensed = vision;
             }
         }
+        let mut clock = PhaseClock::start(self.profile.is_some());
         self.update_sensors(t);
+        clock.lap(self.profile.as_mut().map(|p| &mut p.sense));
     }
 
     /// The second half of a step: runs the built-in controllers, moves the robots and
     /// advances time.
     pub fn act(&mut self) {
+        let mut clock = PhaseClock::start(self.profile.is_some());
         let rigs = &self.compiled.rig.robots;
         for (index, robot) in self.robots.iter_mut().enumerate() {
             let Some(mut controller) = robot.controller.take() else {
@@ -354,10 +402,12 @@ impl<'c> Simulation<'c> {
             }
             robot.controller = Some(controller);
         }
-        self.move_robots();
+        clock.lap(self.profile.as_mut().map(|p| &mut p.control));
+        self.move_robots(&mut clock);
         self.steps += 1;
         self.time = self.steps as f64 * self.time_step;
         self.track_visits();
+        clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));
     }
 
     /// Takes a robot's built-in controller away, so that something outside drives it.
@@ -540,7 +590,7 @@ impl<'c> Simulation<'c> {
         }
     }
 
-    fn move_robots(&mut self) {
+    fn move_robots(&mut self, clock: &mut PhaseClock) {
         let dt = self.time_step;
         let rigs = &self.compiled.rig.robots;
         let mut speeds = std::mem::take(&mut self.scratch.speeds);
@@ -580,7 +630,9 @@ impl<'c> Simulation<'c> {
                 robot.travel.0 += left * h;
                 robot.travel.1 += right * h;
             }
+            clock.lap(self.profile.as_mut().map(|p| &mut p.kinematics));
             self.resolve_collisions(&mut touched);
+            clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));
         }
         for (robot, touched) in self.robots.iter_mut().zip(&touched) {
             let contacts = &mut robot.contacts;
