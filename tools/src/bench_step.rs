@@ -49,6 +49,10 @@ pub struct Args {
     /// Swarms: directory for swarm.csv and swarm.png (swarm-ir.* with `--ir-only`).
     #[arg(long, default_value = "out/bench")]
     out: PathBuf,
+    /// Swarms: only write each generated world to this directory (swarm-N.wbt), to run or
+    /// inspect it.
+    #[arg(long, value_name = "DIR")]
+    write_worlds: Option<PathBuf>,
 }
 
 /// Steps per second of a world over about `millis` ms; `everything` refreshes the sensors no
@@ -106,6 +110,20 @@ fn swarms(args: Args, threads: usize) -> anyhow::Result<Outcome> {
         ir_only: args.ir_only,
         seed: args.seed,
     };
+    if let Some(directory) = &args.write_worlds {
+        std::fs::create_dir_all(directory)
+            .with_context(|| format!("cannot create {}", directory.display()))?;
+        for &robots in &args.robots {
+            let path = directory.join(format!(
+                "swarm-{robots}{}.wbt",
+                if args.ir_only { "-ir" } else { "" }
+            ));
+            std::fs::write(&path, crate::bench_swarm::swarm_world(&spec(robots)))
+                .with_context(|| format!("cannot write {}", path.display()))?;
+            println!("wrote {}", path.display());
+        }
+        return Ok(Outcome::Clean);
+    }
     if args.memory_child {
         // Peak memory of building and stepping one swarm (a fresh process per size).
         let row = measure(

@@ -3,6 +3,7 @@
 //! kinematics and collisions run. All randomness comes from the run's seed, one stream per
 //! robot and per sensor; robots are visited in file order; nothing depends on wall time.
 
+mod broad_phase;
 pub mod kinematics;
 pub mod noise;
 pub mod sensors;
@@ -20,6 +21,7 @@ use crate::optics::{LinearCamera, LinearCameraOutput, Panoramic, Renderer, Retin
 use crate::render::Poses;
 use crate::retina::FilterKind;
 use crate::vision::{VisionBackend, VisionError, VisionRequest, WorldInstance};
+use broad_phase::BroadPhase;
 use noise::{kind, Stream};
 use world2d::{Footprint, Slab};
 
@@ -61,15 +63,35 @@ pub struct Contacts {
     /// Longest unbroken contact (s).
     pub longest: f64,
     current: f64,
-    /// Contact events per obstacle (static obstacles, then robots).
-    pub per_obstacle: Vec<u64>,
-    touching: Vec<bool>,
+    /// Contact events per obstacle, for the obstacles ever touched, by obstacle (static
+    /// obstacles are numbered first, then robots): kept sparse, so that a swarm's table grows
+    /// with its contacts, not with the square of its size.
+    pub per_obstacle: Vec<(u32, u64)>,
+    /// The obstacles touched at the end of the last step, ascending.
+    touching: Vec<u32>,
 }
 
 impl Contacts {
     /// Whether the robot ended the last step touching something.
     pub fn is_touching(&self) -> bool {
-        self.touching.iter().any(|&t| t)
+        !self.touching.is_empty()
+    }
+
+    /// Contact events with one obstacle (static obstacles first, then robots).
+    pub fn events_with(&self, obstacle: usize) -> u64 {
+        self.per_obstacle
+            .binary_search_by_key(&(obstacle as u32), |&(k, _)| k)
+            .map_or(0, |i| self.per_obstacle[i].1)
+    }
+
+    fn count_event(&mut self, obstacle: u32) {
+        match self
+            .per_obstacle
+            .binary_search_by_key(&obstacle, |&(k, _)| k)
+        {
+            Ok(i) => self.per_obstacle[i].1 += 1,
+            Err(i) => self.per_obstacle.insert(i, (obstacle, 1)),
+        }
     }
 }
 
@@ -78,7 +100,8 @@ impl Contacts {
 pub struct Visits {
     /// Landmark indices in the order they were entered.
     pub sequence: Vec<usize>,
-    inside: Vec<bool>,
+    /// The landmarks whose visit disc holds the robot now, ascending.
+    inside: Vec<u32>,
 }
 
 /// The Panoramic turret of a simulated robot.
@@ -128,6 +151,14 @@ pub struct RobotState {
     pub last_controller_error: Option<String>,
     pub contacts: Contacts,
     pub visits: Visits,
+    /// Working lists, kept from step to step (the robot's own, so that robots can be sensed
+    /// side by side): static obstacles and robots near enough for the IR sensors, obstacles
+    /// touched in this step.
+    nearby: Vec<u32>,
+    nearby_robots: Vec<u32>,
+    touched: Vec<u32>,
+    /// A batched backend is to render this robot's vision device in this step.
+    vision_requested: bool,
 }
 
 impl RobotState {
@@ -154,6 +185,8 @@ pub struct Simulation<'c> {
     pub vision_error: Option<VisionError>,
     vision_buffers: Vec<Vec<f64>>,
     pub slab: Slab,
+    /// Grids over the floor: what pairs bodies without testing every pair.
+    broad: BroadPhase,
     pub robots: Vec<RobotState>,
     /// Simulated time (s) and steps done.
     pub time: f64,
@@ -209,10 +242,13 @@ struct StepScratch {
     lights: Vec<crate::render::WorldLight>,
     lights_move: bool,
     requests: Vec<VisionRequest>,
-    /// One robot's obstacles its IR sensors could see.
-    nearby: Vec<u32>,
     speeds: Vec<(f64, f64)>,
-    touched: Vec<Vec<bool>>,
+    /// Collision candidates of one robot.
+    candidates: Vec<u32>,
+    /// How far each robot was pushed since the robots' grid was filed (an upper bound).
+    drift: Vec<f64>,
+    /// One robot's landmarks inside at the last step.
+    was_inside: Vec<u32>,
 }
 
 impl<'c> Simulation<'c> {
@@ -226,8 +262,7 @@ impl<'c> Simulation<'c> {
         let slab = Slab::new(&compiled.graph, &compiled.rig);
         let renderer = (compiled.plan.renderer != crate::compile::plan::RendererChoice::None)
             .then(|| Renderer::new(&compiled.graph, &compiled.plan, false));
-        let landmarks = compiled.landmarks.len();
-        let obstacles = slab.obstacles.len() + compiled.rig.robots.len();
+        let broad = BroadPhase::new(compiled, &slab);
         let mut robots = Vec::with_capacity(compiled.rig.robots.len());
         for (index, rig) in compiled.rig.robots.iter().enumerate() {
             let controller =
@@ -278,15 +313,12 @@ impl<'c> Simulation<'c> {
                 controller: Some(controller),
                 controller_errors: 0,
                 last_controller_error: None,
-                contacts: Contacts {
-                    per_obstacle: vec![0; obstacles],
-                    touching: vec![false; obstacles],
-                    ..Contacts::default()
-                },
-                visits: Visits {
-                    sequence: Vec::new(),
-                    inside: vec![false; landmarks],
-                },
+                contacts: Contacts::default(),
+                visits: Visits::default(),
+                nearby: Vec::new(),
+                nearby_robots: Vec::new(),
+                touched: Vec::new(),
+                vision_requested: false,
             });
         }
         let mut simulation = Simulation {
@@ -296,6 +328,7 @@ impl<'c> Simulation<'c> {
             vision_error: None,
             vision_buffers: Vec::new(),
             slab,
+            broad,
             robots,
             time: 0.0,
             steps: 0,
@@ -445,7 +478,6 @@ impl<'c> Simulation<'c> {
             lights,
             lights_move,
             requests,
-            nearby,
             ..
         } = scratch;
         poses.poses.clear();
@@ -473,101 +505,36 @@ impl<'c> Simulation<'c> {
         {
             *lights = crate::render::world_lights(&compiled.graph, &compiled.plan, poses);
         }
-        let lights = &*lights;
-        requests.clear();
+        // Where every robot is, once per step, for every robot's IR sensors.
+        if self.robots.len() > 1 && self.robots.iter().any(|r| r.senses.proximity) {
+            self.broad
+                .file_robots(placements.len(), |i| DVec2::new(placements[i].x, placements[i].z));
+        }
+        let shared = SenseShared {
+            compiled,
+            slab: &self.slab,
+            broad: &self.broad,
+            placements,
+            lights,
+            poses,
+            renderer: self.renderer.as_ref().filter(|_| self.vision.is_none()),
+            batched: self.vision.is_some(),
+            t,
+        };
         for (index, robot) in self.robots.iter_mut().enumerate() {
-            let rig = &compiled.rig.robots[index];
-            let mut nearby_found = false;
-            let senses = robot.senses;
-            let proximity_sensors = if senses.proximity { 8 } else { 0 };
-            for (s, sensor) in rig
-                .distance_sensors
+            shared.sense(index, robot);
+        }
+        requests.clear();
+        if !shared.batched {
+            return;
+        }
+        requests.extend(
+            self.robots
                 .iter()
                 .enumerate()
-                .take(proximity_sensors)
-            {
-                if due(&mut robot.ir_due[s], t, sensor.period) {
-                    if !nearby_found {
-                        sensors::nearby_obstacles(
-                            &self.slab,
-                            &placements[index],
-                            &rig.distance_sensors,
-                            nearby,
-                        );
-                        nearby_found = true;
-                    }
-                    robot.updated.proximity = true;
-                    robot.proximity[s] = sensors::proximity(
-                        &self.slab,
-                        nearby,
-                        placements,
-                        index,
-                        &compiled.rig.robots,
-                        sensor,
-                        &mut robot.ir_streams[s],
-                    );
-                }
-            }
-            let ambient_sensors = if senses.ambient { 8 } else { 0 };
-            for (s, sensor) in rig.light_sensors.iter().enumerate().take(ambient_sensors) {
-                if due(&mut robot.ambient_due[s], t, sensor.period) {
-                    robot.updated.ambient = true;
-                    robot.ambient[s] = sensors::ambient(
-                        lights,
-                        &self.slab,
-                        placements,
-                        index,
-                        sensor,
-                        &mut robot.ambient_streams[s],
-                    );
-                }
-            }
-            if !senses.vision {
-                continue;
-            }
-            if self.vision.is_some() {
-                let due_now = match (&mut robot.panoramic, &mut robot.linear_camera) {
-                    (Some(turret), _) => due(&mut turret.due, t, turret.model.rig.period),
-                    (None, Some(camera)) => due(&mut camera.due, t, camera.model.rig.period),
-                    (None, None) => false,
-                };
-                if due_now {
-                    requests.push(VisionRequest {
-                        instance: 0,
-                        robot: index,
-                    });
-                }
-                continue;
-            }
-            if let Some(renderer) = &self.renderer {
-                if let Some(turret) = &mut robot.panoramic {
-                    if due(&mut turret.due, t, turret.model.rig.period) {
-                        robot.updated.vision = true;
-                        let view = renderer.view(&compiled.plan, poses, index);
-                        turret.model.update(
-                            renderer,
-                            &view,
-                            robot.pose,
-                            rig.floor_y,
-                            &mut turret.output,
-                        );
-                    }
-                }
-                if let Some(camera) = &mut robot.linear_camera {
-                    if due(&mut camera.due, t, camera.model.rig.period) {
-                        robot.updated.vision = true;
-                        let view = renderer.view(&compiled.plan, poses, index);
-                        camera.model.update(
-                            renderer,
-                            &view,
-                            robot.pose,
-                            rig.floor_y,
-                            &mut camera.output,
-                        );
-                    }
-                }
-            }
-        }
+                .filter(|(_, r)| r.vision_requested)
+                .map(|(robot, _)| VisionRequest { instance: 0, robot }),
+        );
         if requests.is_empty() || self.vision_error.is_some() {
             return;
         }
@@ -594,7 +561,6 @@ impl<'c> Simulation<'c> {
         let dt = self.time_step;
         let rigs = &self.compiled.rig.robots;
         let mut speeds = std::mem::take(&mut self.scratch.speeds);
-        let mut touched = std::mem::take(&mut self.scratch.touched);
         // Wheel speeds (m/s) of every robot for this step.
         speeds.clear();
         speeds.extend(self.robots.iter_mut().zip(rigs).map(|(robot, rig)| {
@@ -619,10 +585,8 @@ impl<'c> Simulation<'c> {
             .unwrap_or(1)
             .clamp(1, 256);
         let h = dt / sub_steps as f64;
-        touched.resize_with(self.robots.len(), Vec::new);
-        for row in &mut touched {
-            row.clear();
-            row.resize(self.slab.obstacles.len() + rigs.len(), false);
+        for robot in &mut self.robots {
+            robot.touched.clear();
         }
         for _ in 0..sub_steps {
             for ((robot, rig), &(left, right)) in self.robots.iter_mut().zip(rigs).zip(&speeds) {
@@ -631,18 +595,22 @@ impl<'c> Simulation<'c> {
                 robot.travel.1 += right * h;
             }
             clock.lap(self.profile.as_mut().map(|p| &mut p.kinematics));
-            self.resolve_collisions(&mut touched);
+            self.resolve_collisions();
             clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));
         }
-        for (robot, touched) in self.robots.iter_mut().zip(&touched) {
-            let contacts = &mut robot.contacts;
-            let any = touched.iter().any(|&t| t);
-            for (k, &now) in touched.iter().enumerate() {
-                if now && !contacts.touching[k] {
-                    contacts.per_obstacle[k] += 1;
+        for robot in &mut self.robots {
+            robot.touched.sort_unstable();
+            robot.touched.dedup();
+            let RobotState {
+                contacts, touched, ..
+            } = robot;
+            let any = !touched.is_empty();
+            for &k in touched.iter() {
+                if contacts.touching.binary_search(&k).is_err() {
+                    contacts.count_event(k);
                 }
             }
-            let was = contacts.touching.iter().any(|&t| t);
+            let was = !contacts.touching.is_empty();
             if any && !was {
                 contacts.events += 1;
             }
@@ -657,44 +625,100 @@ impl<'c> Simulation<'c> {
             contacts.touching.clone_from(touched);
         }
         self.scratch.speeds = speeds;
-        self.scratch.touched = touched;
     }
 
-    /// Pushes bodies out of obstacles and out of each other.
-    fn resolve_collisions(&mut self, touched: &mut [Vec<bool>]) {
+    /// Pushes bodies out of obstacles and out of each other: up to 3 passes, each robot
+    /// against each static obstacle in order, then each pair of robots in order, every push
+    /// seen by the tests after it. The grids only leave out pairs that cannot touch, so the
+    /// pushes are those of testing every pair.
+    fn resolve_collisions(&mut self) {
         let rigs = &self.compiled.rig.robots;
         let statics = self.slab.obstacles.len();
+        let mut candidates = std::mem::take(&mut self.scratch.candidates);
+        let mut drift = std::mem::take(&mut self.scratch.drift);
+        let max_radius = self.broad.max_radius;
         for _ in 0..3 {
             // A pass that pushes nothing leaves the next one nothing new to find.
             let mut pushed = false;
             for (index, robot) in self.robots.iter_mut().enumerate() {
                 let rig = &rigs[index];
                 let (floor, top) = (rig.floor_y, rig.floor_y + rig.body_height);
-                for (k, obstacle) in self.slab.obstacles.iter().enumerate() {
+                let reach = rig.body_radius + 1e-6;
+                // Candidates from where the robot is; asked again if pushes carry it further
+                // than SLACK from there.
+                let mut anchor = DVec2::new(robot.pose.x, robot.pose.z);
+                let (lo, hi) = broad_phase::square(anchor, reach + SLACK);
+                self.broad.statics.query(lo, hi, &mut candidates);
+                let mut next = 0;
+                while let Some(&k) = candidates.get(next) {
+                    next += 1;
+                    let center = DVec2::new(robot.pose.x, robot.pose.z);
+                    if center.distance(anchor) > SLACK {
+                        anchor = center;
+                        let (lo, hi) = broad_phase::square(anchor, reach + SLACK);
+                        self.broad.statics.query(lo, hi, &mut candidates);
+                        next = candidates.partition_point(|&c| c < k);
+                        continue;
+                    }
+                    let obstacle = &self.slab.obstacles[k as usize];
                     if obstacle.y1 <= floor + 1e-6 || obstacle.y0 >= top {
                         continue;
                     }
-                    let center = DVec2::new(robot.pose.x, robot.pose.z);
                     if let Some((depth, normal)) =
                         obstacle.shape.penetration(center, rig.body_radius)
                     {
                         let moved = center + normal * depth;
                         robot.pose.x = moved.x;
                         robot.pose.z = moved.y;
-                        touched[index][k] = true;
+                        robot.touched.push(k);
                         pushed = true;
                     } else if obstacle
                         .shape
                         .penetration(center, rig.body_radius + 1e-6)
                         .is_some()
                     {
-                        touched[index][k] = true;
+                        robot.touched.push(k);
                     }
                 }
             }
-            for a in 0..self.robots.len() {
-                for b in a + 1..self.robots.len() {
-                    let (ra, rb) = (rigs[a].body_radius, rigs[b].body_radius);
+            let count = self.robots.len();
+            if count > 1 {
+                let robots = &self.robots;
+                self.broad
+                    .file_robots(count, |i| DVec2::new(robots[i].pose.x, robots[i].pose.z));
+                drift.clear();
+                drift.resize(count, 0.0);
+            }
+            // The largest drift of any robot since the grid was filed.
+            let mut max_drift = 0.0f64;
+            for a in 0..count.saturating_sub(1) {
+                let ra = rigs[a].body_radius;
+                // Candidates b > a whose filed centre is near enough that they might touch a,
+                // allowing for SLACK of motion of a, or of anyone, before they are asked again.
+                let (mut anchor, mut drift_then) = (
+                    DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z),
+                    max_drift,
+                );
+                let query = |anchor: DVec2, drift_then: f64, out: &mut Vec<u32>| {
+                    let (lo, hi) =
+                        broad_phase::square(anchor, ra + max_radius + drift_then + SLACK);
+                    self.broad.robots.query(lo, hi, out);
+                };
+                query(anchor, drift_then, &mut candidates);
+                let mut next = candidates.partition_point(|&c| c as usize <= a);
+                let mut moved = 0.0;
+                while let Some(&b) = candidates.get(next) {
+                    next += 1;
+                    let b = b as usize;
+                    if moved + (max_drift - drift_then) > SLACK {
+                        anchor = DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z);
+                        drift_then = max_drift;
+                        moved = 0.0;
+                        query(anchor, drift_then, &mut candidates);
+                        next = candidates.partition_point(|&c| (c as usize) < b);
+                        continue;
+                    }
+                    let rb = rigs[b].body_radius;
                     let ca = DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z);
                     let cb = DVec2::new(self.robots[b].pose.x, self.robots[b].pose.z);
                     if let Some((depth, normal)) = (Footprint::Circle {
@@ -708,33 +732,170 @@ impl<'c> Simulation<'c> {
                         self.robots[a].pose.z += half.y;
                         self.robots[b].pose.x -= half.x;
                         self.robots[b].pose.z -= half.y;
-                        touched[a][statics + b] = true;
-                        touched[b][statics + a] = true;
+                        self.robots[a].touched.push((statics + b) as u32);
+                        self.robots[b].touched.push((statics + a) as u32);
                         pushed = true;
+                        // Bounds on how far each has gone since the grid was filed.
+                        let step = half.length() * (1.0 + 1e-9);
+                        drift[a] += step;
+                        drift[b] += step;
+                        moved += step;
+                        max_drift = max_drift.max(drift[a]).max(drift[b]);
                     }
                 }
+                let _ = anchor;
             }
             if !pushed {
                 break;
             }
         }
+        self.scratch.candidates = candidates;
+        self.scratch.drift = drift;
     }
 
     /// Counts entries into each landmark's visit disc (its radius plus two body diameters).
     fn track_visits(&mut self) {
         let compiled = self.compiled;
+        let mut candidates = std::mem::take(&mut self.scratch.candidates);
+        let mut was = std::mem::take(&mut self.scratch.was_inside);
         for (robot, rig) in self.robots.iter_mut().zip(&compiled.rig.robots) {
-            for (k, landmark) in compiled.landmarks.iter().enumerate() {
+            let center = DVec2::new(robot.pose.x, robot.pose.z);
+            self.broad.landmarks.query(center, center, &mut candidates);
+            let visits = &mut robot.visits;
+            was.clear();
+            was.extend_from_slice(&visits.inside);
+            visits.inside.clear();
+            for &k in &candidates {
+                let landmark = &compiled.landmarks[k as usize];
                 let distance = DVec2::new(
                     robot.pose.x - landmark.center.x,
                     robot.pose.z - landmark.center.y,
                 )
                 .length();
-                let inside = distance <= landmark.radius + 4.0 * rig.body_radius;
-                if inside && !robot.visits.inside[k] {
-                    robot.visits.sequence.push(k);
+                if distance <= landmark.radius + 4.0 * rig.body_radius {
+                    if was.binary_search(&k).is_err() {
+                        visits.sequence.push(k as usize);
+                    }
+                    visits.inside.push(k);
                 }
-                robot.visits.inside[k] = inside;
+            }
+        }
+        self.scratch.was_inside = was;
+        self.scratch.candidates = candidates;
+    }
+}
+
+/// How far a robot may move before its collision candidates are asked again (m).
+const SLACK: f64 = 0.005;
+
+/// What every robot's sensing reads in a step, shared and never written while robots sense:
+/// so robots can be sensed side by side, each writing only its own state.
+struct SenseShared<'s, 'c> {
+    compiled: &'c Compiled,
+    slab: &'s Slab,
+    broad: &'s BroadPhase,
+    placements: &'s [crate::compile::rig::Placement],
+    lights: &'s [crate::render::WorldLight],
+    poses: &'s Poses,
+    /// The CPU renderer, unless a batched backend renders vision.
+    renderer: Option<&'s Renderer<'c>>,
+    batched: bool,
+    t: f64,
+}
+
+impl SenseShared<'_, '_> {
+    /// Refreshes one robot's due sensors.
+    fn sense(&self, index: usize, robot: &mut RobotState) {
+        let (compiled, t) = (self.compiled, self.t);
+        let rig = &compiled.rig.robots[index];
+        let senses = robot.senses;
+        robot.vision_requested = false;
+        let proximity_sensors = if senses.proximity { 8 } else { 0 };
+        let mut nearby_found = false;
+        for (s, sensor) in rig
+            .distance_sensors
+            .iter()
+            .enumerate()
+            .take(proximity_sensors)
+        {
+            if !due(&mut robot.ir_due[s], t, sensor.period) {
+                continue;
+            }
+            if !nearby_found {
+                let placement = &self.placements[index];
+                sensors::nearby_obstacles(
+                    self.slab,
+                    &self.broad.statics,
+                    placement,
+                    &rig.distance_sensors,
+                    &mut robot.nearby,
+                );
+                robot.nearby_robots.clear();
+                if self.placements.len() > 1 {
+                    let reach = sensors::ir_reach(&rig.distance_sensors) + self.broad.max_radius;
+                    let (lo, hi) =
+                        broad_phase::square(DVec2::new(placement.x, placement.z), reach);
+                    self.broad.robots.query(lo, hi, &mut robot.nearby_robots);
+                }
+                nearby_found = true;
+            }
+            robot.updated.proximity = true;
+            robot.proximity[s] = sensors::proximity(
+                self.slab,
+                &robot.nearby,
+                &robot.nearby_robots,
+                self.placements,
+                index,
+                &compiled.rig.robots,
+                sensor,
+                &mut robot.ir_streams[s],
+            );
+        }
+        let ambient_sensors = if senses.ambient { 8 } else { 0 };
+        for (s, sensor) in rig.light_sensors.iter().enumerate().take(ambient_sensors) {
+            if due(&mut robot.ambient_due[s], t, sensor.period) {
+                robot.updated.ambient = true;
+                robot.ambient[s] = sensors::ambient(
+                    self.lights,
+                    self.slab,
+                    &self.broad.statics,
+                    self.placements,
+                    index,
+                    sensor,
+                    &mut robot.ambient_streams[s],
+                );
+            }
+        }
+        if !senses.vision {
+            return;
+        }
+        if self.batched {
+            robot.vision_requested = match (&mut robot.panoramic, &mut robot.linear_camera) {
+                (Some(turret), _) => due(&mut turret.due, t, turret.model.rig.period),
+                (None, Some(camera)) => due(&mut camera.due, t, camera.model.rig.period),
+                (None, None) => false,
+            };
+            return;
+        }
+        let Some(renderer) = self.renderer else {
+            return;
+        };
+        if let Some(turret) = &mut robot.panoramic {
+            if due(&mut turret.due, t, turret.model.rig.period) {
+                robot.updated.vision = true;
+                let view = renderer.view(&compiled.plan, self.poses, index);
+                turret
+                    .model
+                    .update(renderer, &view, robot.pose, rig.floor_y, &mut turret.output);
+            }
+        }
+        if let Some(camera) = &mut robot.linear_camera {
+            if due(&mut camera.due, t, camera.model.rig.period) {
+                robot.updated.vision = true;
+                let view = renderer.view(&compiled.plan, self.poses, index);
+                camera
+                    .model
+                    .update(renderer, &view, robot.pose, rig.floor_y, &mut camera.output);
             }
         }
     }
