@@ -17,7 +17,9 @@ use crate::controllers;
 use crate::khepera::{
     Controller, Khepera, KheperaError, LedAction, LinearCameraTurret, PanoramicTurret, Senses,
 };
-use crate::optics::{LinearCamera, LinearCameraOutput, Panoramic, Renderer, RetinaOutput};
+use crate::optics::{
+    LinearCamera, LinearCameraOutput, Panoramic, Renderer, RetinaOutput, ViewOf,
+};
 use crate::render::Poses;
 use crate::retina::FilterKind;
 use crate::vision::{VisionBackend, VisionError, VisionRequest, WorldInstance};
@@ -162,6 +164,16 @@ pub struct RobotState {
 }
 
 impl RobotState {
+    /// Whether its vision device is read and due at `t` (without moving its due time).
+    fn vision_due(&self, t: f64) -> bool {
+        let next = match (&self.panoramic, &self.linear_camera) {
+            (Some(turret), _) => (turret.due, turret.model.rig.period),
+            (None, Some(camera)) => (camera.due, camera.model.rig.period),
+            (None, None) => return false,
+        };
+        self.senses.vision && (next.1 <= 0.0 || t + 1e-12 >= next.0)
+    }
+
     /// The encoder counters (pulses), as the robot reports them.
     pub fn counters(&self, rig: &RobotRig) -> (i32, i32) {
         let pulses = |travel: f64, offset: i64| {
@@ -249,6 +261,8 @@ struct StepScratch {
     drift: Vec<f64>,
     /// One robot's landmarks inside at the last step.
     was_inside: Vec<u32>,
+    /// The world placed once for every viewer of the step (column renderer).
+    frame: Option<crate::render::column::ColumnFrame>,
 }
 
 impl<'c> Simulation<'c> {
@@ -420,9 +434,9 @@ impl<'c> Simulation<'c> {
     pub fn act(&mut self) {
         let mut clock = PhaseClock::start(self.profile.is_some());
         let rigs = &self.compiled.rig.robots;
-        for (index, robot) in self.robots.iter_mut().enumerate() {
+        let control = |index: usize, robot: &mut RobotState| {
             let Some(mut controller) = robot.controller.take() else {
-                continue;
+                return;
             };
             let mut io = SimulatedKhepera {
                 robot,
@@ -434,6 +448,18 @@ impl<'c> Simulation<'c> {
                 robot.last_controller_error = Some(error.to_string());
             }
             robot.controller = Some(controller);
+        };
+        // Each controller drives its own robot only: side by side, the same results.
+        if parallel(&self.robots) {
+            use rayon::prelude::*;
+            self.robots
+                .par_iter_mut()
+                .enumerate()
+                .for_each(|(index, robot)| control(index, robot));
+        } else {
+            for (index, robot) in self.robots.iter_mut().enumerate() {
+                control(index, robot);
+            }
         }
         clock.lap(self.profile.as_mut().map(|p| &mut p.control));
         self.move_robots(&mut clock);
@@ -510,6 +536,15 @@ impl<'c> Simulation<'c> {
             self.broad
                 .file_robots(placements.len(), |i| DVec2::new(placements[i].x, placements[i].z));
         }
+        let renderer = self.renderer.as_ref().filter(|_| self.vision.is_none());
+        // The world placed once, for every robot's vision device, when one is due.
+        let frame = &mut scratch.frame;
+        match renderer {
+            Some(renderer) if self.robots.iter().any(|r| r.vision_due(t)) => {
+                renderer.prepare_shared(&compiled.plan, poses, frame)
+            }
+            _ => {}
+        }
         let shared = SenseShared {
             compiled,
             slab: &self.slab,
@@ -517,12 +552,24 @@ impl<'c> Simulation<'c> {
             placements,
             lights,
             poses,
-            renderer: self.renderer.as_ref().filter(|_| self.vision.is_none()),
+            renderer,
+            frame: frame.as_ref(),
             batched: self.vision.is_some(),
             t,
         };
-        for (index, robot) in self.robots.iter_mut().enumerate() {
-            shared.sense(index, robot);
+        // Each robot reads only what is shared and writes only itself: side by side when
+        // there is enough work, and the same results either way.
+        if parallel(&self.robots) {
+            use rayon::prelude::*;
+            self.robots
+                .par_iter_mut()
+                .enumerate()
+                .with_max_len(1)
+                .for_each(|(index, robot)| shared.sense(index, robot));
+        } else {
+            for (index, robot) in self.robots.iter_mut().enumerate() {
+                shared.sense(index, robot);
+            }
         }
         requests.clear();
         if !shared.batched {
@@ -785,6 +832,12 @@ impl<'c> Simulation<'c> {
     }
 }
 
+/// Whether robots are sensed and controlled side by side: with more than one thread and
+/// enough robots to share (a few robots cost less than handing them out).
+fn parallel(robots: &[RobotState]) -> bool {
+    robots.len() >= 8 && rayon::current_num_threads() > 1
+}
+
 /// How far a robot may move before its collision candidates are asked again (m).
 const SLACK: f64 = 0.005;
 
@@ -799,6 +852,8 @@ struct SenseShared<'s, 'c> {
     poses: &'s Poses,
     /// The CPU renderer, unless a batched backend renders vision.
     renderer: Option<&'s Renderer<'c>>,
+    /// The step's frame, when the renderer shares one between viewers.
+    frame: Option<&'s crate::render::column::ColumnFrame>,
     batched: bool,
     t: f64,
 }
@@ -880,22 +935,29 @@ impl SenseShared<'_, '_> {
         let Some(renderer) = self.renderer else {
             return;
         };
+        // The shared frame, or a viewer's own (the ray caster's).
+        let own;
+        let view = match self.frame {
+            Some(frame) => ViewOf::Columns(frame, Some(index)),
+            None => {
+                own = renderer.view(&compiled.plan, self.poses, index);
+                own.of()
+            }
+        };
         if let Some(turret) = &mut robot.panoramic {
             if due(&mut turret.due, t, turret.model.rig.period) {
                 robot.updated.vision = true;
-                let view = renderer.view(&compiled.plan, self.poses, index);
                 turret
                     .model
-                    .update(renderer, &view, robot.pose, rig.floor_y, &mut turret.output);
+                    .update_of(renderer, view, robot.pose, rig.floor_y, &mut turret.output);
             }
         }
         if let Some(camera) = &mut robot.linear_camera {
             if due(&mut camera.due, t, camera.model.rig.period) {
                 robot.updated.vision = true;
-                let view = renderer.view(&compiled.plan, self.poses, index);
                 camera
                     .model
-                    .update(renderer, &view, robot.pose, rig.floor_y, &mut camera.output);
+                    .update_of(renderer, view, robot.pose, rig.floor_y, &mut camera.output);
             }
         }
     }
