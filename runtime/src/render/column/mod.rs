@@ -290,6 +290,8 @@ pub struct Strip {
     directions: Vec<(f64, f64)>,
     /// Whether the windows tile the strip: centres one width apart, falling.
     contiguous: bool,
+    /// The lowest and highest relative azimuths the windows cover.
+    extent: (f64, f64),
 }
 
 impl Strip {
@@ -301,7 +303,10 @@ impl Strip {
         let contiguous = centers
             .windows(2)
             .all(|pair| ((pair[0] - pair[1]) - width).abs() <= 1e-9 * width);
+        let lo = centers.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = centers.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         Strip {
+            extent: (lo - width / 2.0, hi + width / 2.0),
             centers,
             width,
             tan_half_band: libm::tan(half_band),
@@ -312,10 +317,7 @@ impl Strip {
 
     /// The relative azimuths the windows cover, lowest and highest (`None` when empty).
     fn extent(&self) -> Option<(f64, f64)> {
-        let lo = self.centers.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = self.centers.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let half = self.width / 2.0;
-        (lo <= hi).then_some((lo - half, hi + half))
+        (self.extent.0 <= self.extent.1).then_some(self.extent)
     }
 }
 
@@ -503,7 +505,10 @@ impl<'g> ColumnScene<'g> {
         let stride = stride.max(1);
         let pixels = strip.centers.len().min(out.len());
         let half = strip.width / 2.0;
-        let sector = strip.extent().and_then(|(lo, hi)| Sector::new(heading, lo, hi));
+        // Parts wholly behind the strip face no photodiode: left out where there are many.
+        let sector = (frame.others.len() > sweep::FEW)
+            .then(|| strip.extent().and_then(|(lo, hi)| Sector::new(heading, lo, hi)))
+            .flatten();
         self.look_into(frame, viewer, eye, heading, sector, look);
         let look = &*look;
         sweep.start(look);

@@ -81,8 +81,7 @@ impl Look {
     }
 
     /// The objects whose azimuth interval meets the open interval `(a, b)`, in object order:
-    /// every object tested (the reference the sweep is checked against).
-    #[cfg(test)]
+    /// every object tested (the sweep's answer, and cheaper for a few objects).
     pub(super) fn facing_over(&self, a: f64, b: f64, out: &mut Vec<u32>) {
         out.clear();
         out.extend(
@@ -119,6 +118,22 @@ impl Look {
     }
 }
 
+/// Below this many objects (or edges), testing each is cheaper than keeping them in order.
+pub(super) const FEW: usize = 32;
+
+/// Sorts a few numbers ascending (insertion sort).
+fn sort_small(values: &mut [f64]) {
+    for i in 1..values.len() {
+        let value = values[i];
+        let mut j = i;
+        while j > 0 && values[j - 1] > value {
+            values[j] = values[j - 1];
+            j -= 1;
+        }
+        values[j] = value;
+    }
+}
+
 /// The angular sweep over one look: asked for the objects facing azimuth intervals `(a, b)`
 /// with `a` never decreasing, it keeps the objects whose intervals have opened and not yet
 /// closed, so each answer costs the objects open there, not every object. Its answers are
@@ -133,6 +148,8 @@ pub(super) struct Sweep {
     open: Vec<u32>,
     /// The last query's start.
     last: f64,
+    /// Few objects: each query tests them all.
+    brute: bool,
 }
 
 impl Sweep {
@@ -140,6 +157,10 @@ impl Sweep {
     pub(super) fn start(&mut self, look: &Look) {
         self.order.clear();
         self.open.clear();
+        self.brute = look.objects.len() <= FEW;
+        if self.brute {
+            return;
+        }
         for (index, object) in look.objects.iter().enumerate() {
             if object.wraps {
                 self.open.push(index as u32);
@@ -156,6 +177,9 @@ impl Sweep {
 
     /// The objects whose azimuth interval meets `(a, b)`, in object order, into `out`.
     pub(super) fn facing_over(&mut self, look: &Look, a: f64, b: f64, out: &mut Vec<u32>) {
+        if self.brute {
+            return look.facing_over(a, b, out);
+        }
         if a < self.last {
             // Backwards (overlapping windows): start again.
             self.start(look);
@@ -282,6 +306,8 @@ impl ColumnScene<'_> {
         breaks.clear();
         edges.clear();
         let statics = frame.statics.len();
+        // Leaving parts out pays when there are many.
+        let crowd = sector.is_some();
         // The previous object placed, its interval, and whether it was left out.
         let mut previous: Option<(&Upright, Option<Interval>, bool)> = None;
         for (order, object) in frame.objects_for(viewer).enumerate() {
@@ -299,7 +325,7 @@ impl ColumnScene<'_> {
                     (interval, true)
                 }
                 _ => {
-                    if let Some(sector) = sector.filter(|_| order >= statics) {
+                    if let Some(sector) = sector.filter(|_| order >= statics && crowd) {
                         let (center, radius) = object.footprint.bounding_circle();
                         let offset = center - eye2;
                         if sector.excludes(DVec2::new(offset.x, -offset.y), radius) {
@@ -388,8 +414,13 @@ impl ColumnScene<'_> {
                 breaks.push(edge.angle);
             }
         }
-        // O(B log B); equal edges are merged below, so their order does not matter.
-        breaks.sort_unstable_by(f64::total_cmp);
+        // Equal edges are merged below, so their order does not matter: insertion for the
+        // dozen edges of an arena, O(B log B) for a crowd.
+        if breaks.len() <= FEW {
+            sort_small(breaks);
+        } else {
+            breaks.sort_unstable_by(f64::total_cmp);
+        }
         // Objects may share an edge: one is enough.
         breaks.dedup();
         look.eye = eye;
