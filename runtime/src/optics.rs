@@ -219,7 +219,8 @@ pub struct RetinaOutput {
 /// A Panoramic turret ready to update: strips precomputed, I_bda calibrated per filter.
 pub struct Panoramic {
     pub rig: PanoramicRig,
-    strip: Strip,
+    /// The retina's strip, the same for every turret: shared.
+    strip: std::sync::Arc<Strip>,
     settings: FilterSettings,
     i_bda: Vec<(FilterKind, f64)>,
     /// The enabled filters, built for the retina's length, in the order of `i_bda`.
@@ -229,7 +230,6 @@ pub struct Panoramic {
 
 impl Panoramic {
     pub fn new(rig: &PanoramicRig) -> Panoramic {
-        let centers = (0..PIXELS).map(retina::pixel_azimuth).collect();
         let settings = FilterSettings {
             filters: rig.filters,
             lambda: rig.lambda,
@@ -255,7 +255,7 @@ impl Panoramic {
             .collect();
         Panoramic {
             rig: rig.clone(),
-            strip: Strip::new(centers, PIXEL_WIDTH, HALF_BAND),
+            strip: retina_strip(),
             settings,
             i_bda,
             filters,
@@ -362,6 +362,17 @@ impl Panoramic {
             );
         }
     }
+}
+
+/// The EDI retina's strip, built once and shared by every Panoramic turret.
+fn retina_strip() -> std::sync::Arc<Strip> {
+    static STRIP: std::sync::OnceLock<std::sync::Arc<Strip>> = std::sync::OnceLock::new();
+    STRIP
+        .get_or_init(|| {
+            let centers = (0..PIXELS).map(retina::pixel_azimuth).collect();
+            std::sync::Arc::new(Strip::new(centers, PIXEL_WIDTH, HALF_BAND))
+        })
+        .clone()
 }
 
 /// The two flat views of paper optics: the left one centred at +60°, the right at −60°.

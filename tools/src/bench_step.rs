@@ -134,7 +134,8 @@ fn swarms(args: Args, threads: usize) -> anyhow::Result<Outcome> {
             ),
         )?;
         let peak = crate::bench::peak_resident_bytes().unwrap_or(0);
-        println!("{peak} {}", row.steps);
+        let now = crate::bench::resident_bytes().unwrap_or(0);
+        println!("{peak} {} {now}", row.steps);
         return Ok(Outcome::Clean);
     }
     let budget = args.seconds.map_or(

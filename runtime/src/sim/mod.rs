@@ -261,6 +261,9 @@ struct StepScratch {
     drift: Vec<f64>,
     /// One robot's landmarks inside at the last step.
     was_inside: Vec<u32>,
+    /// Where each robot was before the sub-step, and which go back there.
+    before: Vec<DVec2>,
+    marked: Vec<bool>,
     /// The world placed once for every viewer of the step (column renderer).
     frame: Option<crate::render::column::ColumnFrame>,
 }
@@ -327,11 +330,20 @@ impl<'c> Simulation<'c> {
                 controller: Some(controller),
                 controller_errors: 0,
                 last_controller_error: None,
-                contacts: Contacts::default(),
-                visits: Visits::default(),
-                nearby: Vec::new(),
-                nearby_robots: Vec::new(),
-                touched: Vec::new(),
+                // Room for a few contacts and visits at once: a step allocates only when a
+                // record outgrows it (amortised doubling), never as routine.
+                contacts: Contacts {
+                    per_obstacle: Vec::with_capacity(8),
+                    touching: Vec::with_capacity(8),
+                    ..Contacts::default()
+                },
+                visits: Visits {
+                    sequence: Vec::with_capacity(64),
+                    inside: Vec::with_capacity(4),
+                },
+                nearby: Vec::with_capacity(16),
+                nearby_robots: Vec::with_capacity(32),
+                touched: Vec::with_capacity(8),
                 vision_requested: false,
             });
         }
@@ -636,13 +648,19 @@ impl<'c> Simulation<'c> {
             robot.touched.clear();
         }
         for _ in 0..sub_steps {
+            self.scratch.before.clear();
+            self.scratch
+                .before
+                .extend(self.robots.iter().map(|r| DVec2::new(r.pose.x, r.pose.z)));
             for ((robot, rig), &(left, right)) in self.robots.iter_mut().zip(rigs).zip(&speeds) {
                 robot.pose = kinematics::advance(robot.pose, left, right, rig.axle_length, h);
                 robot.travel.0 += left * h;
                 robot.travel.1 += right * h;
             }
             clock.lap(self.profile.as_mut().map(|p| &mut p.kinematics));
-            self.resolve_collisions();
+            if self.resolve_collisions() {
+                self.settle();
+            }
             clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));
         }
         for robot in &mut self.robots {
@@ -678,13 +696,14 @@ impl<'c> Simulation<'c> {
     /// against each static obstacle in order, then each pair of robots in order, every push
     /// seen by the tests after it. The grids only leave out pairs that cannot touch, so the
     /// pushes are those of testing every pair.
-    fn resolve_collisions(&mut self) {
+    fn resolve_collisions(&mut self) -> bool {
         let rigs = &self.compiled.rig.robots;
         let statics = self.slab.obstacles.len();
         let mut candidates = std::mem::take(&mut self.scratch.candidates);
         let mut drift = std::mem::take(&mut self.scratch.drift);
         let max_radius = self.broad.max_radius;
-        for _ in 0..3 {
+        let mut unsettled = false;
+        for pass in 0..PASSES {
             // A pass that pushes nothing leaves the next one nothing new to find.
             let mut pushed = false;
             for (index, robot) in self.robots.iter_mut().enumerate() {
@@ -795,9 +814,80 @@ impl<'c> Simulation<'c> {
             if !pushed {
                 break;
             }
+            // The last pass still pushed: what it left may overlap (a pressing crowd).
+            unsettled = pass + 1 == PASSES;
         }
         self.scratch.candidates = candidates;
         self.scratch.drift = drift;
+        unsettled
+    }
+
+    /// After the passes of a crowd: every robot still overlapping something beyond the
+    /// tolerance goes back to where it was before this sub-step (where nothing overlapped),
+    /// until nothing does. Blocked robots stay put; the others keep their motion.
+    fn settle(&mut self) {
+        let rigs = &self.compiled.rig.robots;
+        let mut candidates = std::mem::take(&mut self.scratch.candidates);
+        let mut marked = std::mem::take(&mut self.scratch.marked);
+        let max_radius = self.broad.max_radius;
+        for _ in 0..=self.robots.len() {
+            marked.clear();
+            marked.resize(self.robots.len(), false);
+            let mut any = false;
+            for (index, robot) in self.robots.iter().enumerate() {
+                let rig = &rigs[index];
+                let (floor, top) = (rig.floor_y, rig.floor_y + rig.body_height);
+                let center = DVec2::new(robot.pose.x, robot.pose.z);
+                let (lo, hi) = broad_phase::square(center, rig.body_radius);
+                self.broad.statics.query(lo, hi, &mut candidates);
+                let in_wall = candidates.iter().any(|&k| {
+                    let obstacle = &self.slab.obstacles[k as usize];
+                    !(obstacle.y1 <= floor + 1e-6 || obstacle.y0 >= top)
+                        && obstacle
+                            .shape
+                            .penetration(center, rig.body_radius)
+                            .is_some_and(|(depth, _)| depth > PENETRATION_TOLERANCE)
+                });
+                if in_wall {
+                    marked[index] = true;
+                    any = true;
+                }
+            }
+            let robots = &self.robots;
+            self.broad
+                .file_robots(robots.len(), |i| DVec2::new(robots[i].pose.x, robots[i].pose.z));
+            for a in 0..robots.len() {
+                let ca = DVec2::new(robots[a].pose.x, robots[a].pose.z);
+                let ra = rigs[a].body_radius;
+                let (lo, hi) = broad_phase::square(ca, ra + max_radius);
+                self.broad.robots.query(lo, hi, &mut candidates);
+                for &b in candidates.iter().filter(|&&b| b as usize > a) {
+                    let b = b as usize;
+                    let cb = DVec2::new(robots[b].pose.x, robots[b].pose.z);
+                    if ca.distance(cb) < ra + rigs[b].body_radius - PENETRATION_TOLERANCE {
+                        marked[a] = true;
+                        marked[b] = true;
+                        any = true;
+                    }
+                }
+            }
+            if !any {
+                break;
+            }
+            for ((robot, &back), before) in self
+                .robots
+                .iter_mut()
+                .zip(&marked)
+                .zip(&self.scratch.before)
+            {
+                if back {
+                    robot.pose.x = before.x;
+                    robot.pose.z = before.y;
+                }
+            }
+        }
+        self.scratch.candidates = candidates;
+        self.scratch.marked = marked;
     }
 
     /// Counts entries into each landmark's visit disc (its radius plus two body diameters).
@@ -837,6 +927,9 @@ impl<'c> Simulation<'c> {
 fn parallel(robots: &[RobotState]) -> bool {
     robots.len() >= 8 && rayon::current_num_threads() > 1
 }
+
+/// Collision passes in one sub-step, at most.
+const PASSES: usize = 3;
 
 /// How far a robot may move before its collision candidates are asked again (m).
 const SLACK: f64 = 0.005;

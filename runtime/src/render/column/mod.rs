@@ -477,7 +477,29 @@ impl<'g> ColumnScene<'g> {
     ) {
         with_workspace(|workspace| {
             self.integrate_with(
-                workspace, frame, viewer, eye, heading, strip, samples, stride, out,
+                workspace, frame, viewer, eye, heading, strip, samples, stride, false, out,
+            )
+        })
+    }
+
+    /// [`ColumnScene::integrate_for`] the long way: no part left out, and every object tested
+    /// against every region between edges. The reference the sweep is checked against (the
+    /// same numbers, bit for bit), at a cost that grows with objects × edges.
+    #[allow(clippy::too_many_arguments)]
+    pub fn integrate_exhaustive(
+        &self,
+        frame: &ColumnFrame,
+        viewer: Option<usize>,
+        eye: DVec3,
+        heading: f64,
+        strip: &Strip,
+        samples: usize,
+        stride: usize,
+        out: &mut [f64],
+    ) {
+        with_workspace(|workspace| {
+            self.integrate_with(
+                workspace, frame, viewer, eye, heading, strip, samples, stride, true, out,
             )
         })
     }
@@ -493,6 +515,7 @@ impl<'g> ColumnScene<'g> {
         strip: &Strip,
         samples: usize,
         stride: usize,
+        exhaustive: bool,
         out: &mut [f64],
     ) {
         let Workspace {
@@ -506,12 +529,12 @@ impl<'g> ColumnScene<'g> {
         let pixels = strip.centers.len().min(out.len());
         let half = strip.width / 2.0;
         // Parts wholly behind the strip face no photodiode: left out where there are many.
-        let sector = (frame.others.len() > sweep::FEW)
+        let sector = (frame.others.len() > sweep::FEW && !exhaustive)
             .then(|| strip.extent().and_then(|(lo, hi)| Sector::new(heading, lo, hi)))
             .flatten();
         self.look_into(frame, viewer, eye, heading, sector, look);
         let look = &*look;
-        sweep.start(look);
+        sweep.start(look, exhaustive);
         let band = 2.0 * band_atan(strip.tan_half_band);
         let sky = luminance(self.background(1.0));
         let ground = luminance(self.background(-1.0));

@@ -153,11 +153,12 @@ pub(super) struct Sweep {
 }
 
 impl Sweep {
-    /// Starts a sweep over `look` from the far left (−∞).
-    pub(super) fn start(&mut self, look: &Look) {
+    /// Starts a sweep over `look` from the far left (−∞); `exhaustive` tests every object
+    /// at each query instead.
+    pub(super) fn start(&mut self, look: &Look, exhaustive: bool) {
         self.order.clear();
         self.open.clear();
-        self.brute = look.objects.len() <= FEW;
+        self.brute = exhaustive || look.objects.len() <= FEW;
         if self.brute {
             return;
         }
@@ -182,7 +183,7 @@ impl Sweep {
         }
         if a < self.last {
             // Backwards (overlapping windows): start again.
-            self.start(look);
+            self.start(look, false);
         }
         self.last = a;
         let objects = &look.objects;
