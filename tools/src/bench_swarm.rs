@@ -418,7 +418,7 @@ pub fn plot_cost(
                     .collect();
                 chart
                     .draw_series(LineSeries::new(line, RED.stroke_width(1)))?
-                    .label(format!("fit {from}→{to}: cost ∝ N^{slope:.2}"))
+                    .label(format!("fit {from} to {to} robots: cost ~ N^{slope:.2}"))
                     .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
             }
         }

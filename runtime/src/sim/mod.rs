@@ -897,7 +897,13 @@ impl<'c> Simulation<'c> {
         let mut was = std::mem::take(&mut self.scratch.was_inside);
         for (robot, rig) in self.robots.iter_mut().zip(&compiled.rig.robots) {
             let center = DVec2::new(robot.pose.x, robot.pose.z);
-            self.broad.landmarks.query(center, center, &mut candidates);
+            if compiled.landmarks.len() <= FEW_LANDMARKS {
+                // A few: each tested, as the grid would hand them (ascending).
+                candidates.clear();
+                candidates.extend(0..compiled.landmarks.len() as u32);
+            } else {
+                self.broad.landmarks.query(center, center, &mut candidates);
+            }
             let visits = &mut robot.visits;
             was.clear();
             was.extend_from_slice(&visits.inside);
@@ -927,6 +933,9 @@ impl<'c> Simulation<'c> {
 fn parallel(robots: &[RobotState]) -> bool {
     robots.len() >= 8 && rayon::current_num_threads() > 1
 }
+
+/// Below this many landmarks, each is tested rather than looked up in the grid.
+const FEW_LANDMARKS: usize = 8;
 
 /// Collision passes in one sub-step, at most.
 const PASSES: usize = 3;

@@ -69,7 +69,13 @@ pub fn nearby_obstacles(
 ) {
     let reach = ir_reach(sensors);
     let center = DVec2::new(placement.x, placement.z);
-    grid.query(center - reach, center + reach, nearby);
+    if slab.obstacles.len() <= 16 {
+        // A few: each tested (the same list the grid would give).
+        nearby.clear();
+        nearby.extend(0..slab.obstacles.len() as u32);
+    } else {
+        grid.query(center - reach, center + reach, nearby);
+    }
     nearby.retain(|&index| slab.obstacles[index as usize].shape.distance(center) <= reach);
 }
 

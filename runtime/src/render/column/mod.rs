@@ -972,6 +972,7 @@ impl<'g> ColumnScene<'g> {
 
 #[cfg(test)]
 mod tests {
+    use super::photodiode::{index_below, rotate_small};
     use super::*;
 
     #[test]

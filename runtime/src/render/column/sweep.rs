@@ -177,6 +177,7 @@ impl Sweep {
     }
 
     /// The objects whose azimuth interval meets `(a, b)`, in object order, into `out`.
+    #[inline]
     pub(super) fn facing_over(&mut self, look: &Look, a: f64, b: f64, out: &mut Vec<u32>) {
         if self.brute {
             return look.facing_over(a, b, out);
