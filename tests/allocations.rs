@@ -74,7 +74,11 @@ fn a_warm_step_allocates_nothing() {
             COUNTING.store(true, Ordering::SeqCst);
             simulation.run(200);
             COUNTING.store(false, Ordering::SeqCst);
-            let touching = simulation.robots.iter().filter(|r| r.contacts.events > 0).count();
+            let touching = simulation
+                .robots
+                .iter()
+                .filter(|r| r.contacts.events > 0)
+                .count();
             assert!(touching > 0, "the crowd touches");
             assert_eq!(
                 ALLOCATIONS.load(Ordering::SeqCst),

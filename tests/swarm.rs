@@ -51,7 +51,11 @@ fn crowd_world(
 }
 
 fn strip() -> Strip {
-    Strip::new((0..PIXELS).map(pixel_azimuth).collect(), PIXEL_WIDTH, HALF_BAND)
+    Strip::new(
+        (0..PIXELS).map(pixel_azimuth).collect(),
+        PIXEL_WIDTH,
+        HALF_BAND,
+    )
 }
 
 proptest! {
@@ -137,7 +141,11 @@ fn fingerprint(simulation: &Simulation) -> Vec<String> {
                 .unwrap_or_default();
             format!(
                 "{:?} {:?} {:?} {:?} {} {digital}",
-                (r.pose.x.to_bits(), r.pose.z.to_bits(), r.pose.heading.to_bits()),
+                (
+                    r.pose.x.to_bits(),
+                    r.pose.z.to_bits(),
+                    r.pose.heading.to_bits()
+                ),
                 r.proximity,
                 r.ambient,
                 r.command,
@@ -190,7 +198,10 @@ fn a_packed_thousand_never_overlaps() {
             (i * 37 % 628) as f64 / 100.0
         );
     }
-    let text = text.replace("controller \"none\" controllerArgs \"bias=80\"", "controller \"none\"");
+    let text = text.replace(
+        "controller \"none\" controllerArgs \"bias=80\"",
+        "controller \"none\"",
+    );
     let compiled = compile_text(&text);
     let mut simulation = Simulation::new(&compiled, None).unwrap();
     let radius = compiled.rig.robots[0].body_radius;

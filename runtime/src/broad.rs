@@ -57,9 +57,8 @@ impl Grid {
             extent.max_element()
         };
         // Coarsen until the cell count is bounded.
-        let count = |cell: f64| {
-            ((extent.x / cell).ceil().max(1.0)) * ((extent.y / cell).ceil().max(1.0))
-        };
+        let count =
+            |cell: f64| ((extent.x / cell).ceil().max(1.0)) * ((extent.y / cell).ceil().max(1.0));
         while count(cell) > budget as f64 {
             cell *= 2.0;
         }
@@ -220,8 +219,16 @@ impl Grid {
         } else {
             f64::INFINITY
         };
-        let delta_x = if d.x != 0.0 { cell / d.x.abs() } else { f64::INFINITY };
-        let delta_z = if d.y != 0.0 { cell / d.y.abs() } else { f64::INFINITY };
+        let delta_x = if d.x != 0.0 {
+            cell / d.x.abs()
+        } else {
+            f64::INFINITY
+        };
+        let delta_z = if d.y != 0.0 {
+            cell / d.y.abs()
+        } else {
+            f64::INFINITY
+        };
         let (rows, columns) = (self.rows as i64, self.columns as i64);
         let limit = self.columns + self.rows + 2;
         for _ in 0..limit {
@@ -258,7 +265,9 @@ mod tests {
         let mut out = Vec::new();
         let mut seed = 7u64;
         let mut next = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
         for _ in 0..300 {

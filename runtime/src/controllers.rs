@@ -8,7 +8,10 @@
 //!   filter's output is scanned for light-intensity maxima (a negative lobe followed by a
 //!   positive one, both beyond `minContrast` LSB); the maximum nearest the centre of the retina
 //!   steers the robot by `lightGain` pulses/10 ms per pixel of distance from the centre, added
-//!   to the network's output.
+//!   to the network's output. A robot that stalls facing an obstacle (both commands within
+//!   ±`STALL_SPEED` while a front sensor reads more than `STALL_PROXIMITY`, for `STALL_STEPS`
+//!   steps: the Braitenberg network's deadlock in a corner) turns on the spot, away from the
+//!   nearer side, for `ESCAPE_STEPS` steps.
 
 use std::ops::ControlFlow;
 
@@ -22,8 +25,10 @@ pub const RIGHT_WEIGHTS: [f64; 8] = [-5.0, -15.0, -18.0, 6.0, 4.0, 4.0, 3.0, 5.0
 /// Why a controller could not be built from a world's fields.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ControllerError {
-    #[error("unknown controller \"{0}\"; built in: none, braitenberg, regatta")]
+    #[error("unknown controller \"{0}\"; built in: none, braitenberg, regatta, neural")]
     Unknown(String),
+    #[error(transparent)]
+    Network(#[from] crate::neural::NetworkError),
     #[error("controller argument \"{0}\" is not key=value")]
     Malformed(String),
     #[error("controller {controller} has no parameter \"{key}\"; it takes {known}")]
@@ -101,7 +106,30 @@ impl Parameters {
     }
 }
 
-/// Builds a built-in controller.
+/// Builds a robot's controller as its world sets it: [`build`], or for `neural` the network
+/// of its `network` field.
+pub fn build_for(
+    rig: &crate::compile::rig::RobotRig,
+) -> Result<Box<dyn Controller>, ControllerError> {
+    if rig.controller != "neural" {
+        return build(&rig.controller, &rig.controller_args);
+    }
+    if let Some(arg) = rig.controller_args.iter().find(|a| !a.trim().is_empty()) {
+        return Err(ControllerError::UnknownKey {
+            controller: "neural".to_owned(),
+            key: arg.clone(),
+            known: "nothing (its parameters are the NeuralNetwork's fields)".to_owned(),
+        });
+    }
+    match &rig.network {
+        Some(Ok(spec)) => Ok(Box::new(crate::neural::Neural::from_spec(spec)?)),
+        Some(Err(error)) => Err(error.clone().into()),
+        None => Err(crate::neural::NetworkError::NoNetwork.into()),
+    }
+}
+
+/// Builds a built-in controller from its name and arguments (`neural` needs its network:
+/// see [`build_for`]).
 pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, ControllerError> {
     match name {
         "none" | "" | "<none>" => Ok(Box::new(Idle)),
@@ -113,7 +141,9 @@ pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, Control
             thresholds: None,
             enabled: false,
             odd: Vec::new(),
+            escape: StallEscape::default(),
         })),
+        "neural" => Err(crate::neural::NetworkError::NoNetwork.into()),
         other => Err(ControllerError::Unknown(other.to_owned())),
     }
 }
@@ -142,7 +172,9 @@ pub fn braitenberg_speeds(proximity: &[u16; 8], parameters: &Parameters) -> (f64
     )
 }
 
-fn to_command(speed: f64) -> i32 {
+/// A wheel speed (pulses per 10 ms) as the robot takes it: rounded half away from zero,
+/// clamped to −127 … 127.
+pub fn to_command(speed: f64) -> i32 {
     libm::round(speed).clamp(-127.0, 127.0) as i32
 }
 
@@ -284,6 +316,57 @@ fn partition_point_u16(holds: impl Fn(u32) -> bool) -> u32 {
     lo
 }
 
+/// Commands this close to zero count as stopped.
+pub const STALL_SPEED: i32 = 1;
+/// A front IR reading above this counts as facing an obstacle.
+pub const STALL_PROXIMITY: u16 = 300;
+/// Steps stalled before turning away (about a second at 32 ms).
+pub const STALL_STEPS: u32 = 32;
+/// Steps of turning on the spot (about 0.8 s at 32 ms: roughly a right angle at the bias
+/// speed).
+pub const ESCAPE_STEPS: u32 = 24;
+
+/// Turns a stalled robot away from what it faces.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct StallEscape {
+    stalled: u32,
+    /// Steps left to turn, and the direction (+1 turns right).
+    escaping: u32,
+    direction: i32,
+}
+
+impl StallEscape {
+    /// The commands to send instead of `(left, right)`, if the robot must turn away.
+    pub fn check(
+        &mut self,
+        proximity: &[u16; 8],
+        (left, right): (i32, i32),
+        bias: f64,
+    ) -> Option<(i32, i32)> {
+        let turn = to_command(bias).max(1);
+        if self.escaping > 0 {
+            self.escaping -= 1;
+            return Some((self.direction * turn, -self.direction * turn));
+        }
+        let front = proximity[1..5].iter().copied().max().unwrap_or(0);
+        if left.abs() <= STALL_SPEED && right.abs() <= STALL_SPEED && front > STALL_PROXIMITY {
+            self.stalled += 1;
+        } else {
+            self.stalled = 0;
+        }
+        if self.stalled < STALL_STEPS {
+            return None;
+        }
+        self.stalled = 0;
+        self.escaping = ESCAPE_STEPS - 1;
+        // Away from the side that reads more (left sensors 0…2, right 3…5); right on a tie.
+        let left_side: u32 = proximity[0..3].iter().map(|&v| v as u32).sum();
+        let right_side: u32 = proximity[3..6].iter().map(|&v| v as u32).sum();
+        self.direction = if right_side > left_side { -1 } else { 1 };
+        Some((self.direction * turn, -self.direction * turn))
+    }
+}
+
 /// The paper's regatta controller.
 pub struct Regatta {
     pub parameters: Parameters,
@@ -292,6 +375,7 @@ pub struct Regatta {
     enabled: bool,
     /// The odd filter's last reading, its buffer reused.
     odd: Vec<u16>,
+    escape: StallEscape,
 }
 
 impl Controller for Regatta {
@@ -325,7 +409,12 @@ impl Controller for Regatta {
             left += self.parameters.light_gain * offset;
             right -= self.parameters.light_gain * offset;
         }
-        robot.set_speed(to_command(left), to_command(right))
+        let command = (to_command(left), to_command(right));
+        let (left, right) = self
+            .escape
+            .check(&proximity, command, self.parameters.bias)
+            .unwrap_or(command);
+        robot.set_speed(left, right)
     }
 
     fn senses(&self) -> Senses {

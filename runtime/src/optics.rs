@@ -127,9 +127,9 @@ impl<'g> Renderer<'g> {
         out: &mut [f64],
     ) {
         match (self, view) {
-            (Renderer::Columns(scene), ViewOf::Columns(frame, viewer)) => scene.integrate_for(
-                frame, viewer, eye, heading, strip, samples, stride, out,
-            ),
+            (Renderer::Columns(scene), ViewOf::Columns(frame, viewer)) => {
+                scene.integrate_for(frame, viewer, eye, heading, strip, samples, stride, out)
+            }
             (Renderer::Rays(caster), ViewOf::Rays(frame)) => {
                 let n = samples.max(1);
                 let half_band = libm::atan(strip.tan_half_band);

@@ -818,6 +818,7 @@ impl<'c> Lowerer<'c> {
             .map(|f| f.default_value.clone().unwrap_or(Value::Bool(false)))
             .collect();
         let mut written = vec![false; fields.len()];
+        let mut value_spans = vec![None; fields.len()];
         let mut seen: HashMap<&str, Span> = HashMap::new();
         for item in items {
             match item {
@@ -847,6 +848,20 @@ impl<'c> Lowerer<'c> {
                     if let Some(value) = self.lower_field_value(&field.value, field_spec.ty(), Some(field_spec), scope, &field.name.text, field.name.span) {
                         fields[index] = value;
                         written[index] = true;
+                        value_spans[index] = match &field.value {
+                            syntax::FieldValue::Value(value) => Some(Origin {
+                                file: scope.file,
+                                span: value.span,
+                            }),
+                            // Bound through IS: where the instance wrote it, if it did.
+                            syntax::FieldValue::Is(target) => scope
+                                .interface
+                                .as_ref()
+                                .and_then(|i| i.get(&target.text))
+                                .and_then(|(_, _, origin)| *origin)
+                                .map(|(file, span)| Origin { file, span }),
+                            syntax::FieldValue::Missing { .. } => None,
+                        };
                     }
                 }
                 BodyItem::Declaration(declaration) => self.strict_or_warn(
@@ -881,6 +896,7 @@ impl<'c> Lowerer<'c> {
                 spec: spec_id,
                 fields,
                 written,
+                value_spans,
                 def_name: None,
                 proto_names: Vec::new(),
                 origin,
@@ -962,6 +978,7 @@ impl<'c> Lowerer<'c> {
             SceneNode {
                 spec: group,
                 written: vec![true],
+                value_spans: vec![None; group_fields.len()],
                 fields: group_fields,
                 def_name: None,
                 proto_names: vec!["Inline".to_owned()],

@@ -38,6 +38,10 @@ pub struct SceneNode {
     pub fields: Vec<Value>,
     /// Whether each field was written (or bound through IS) rather than defaulted.
     pub written: Vec<bool>,
+    /// Where each field's value was written (for a field bound through IS, where the PROTO
+    /// instance wrote it; `None`: defaulted), for messages about values that only later
+    /// checks reject.
+    pub value_spans: Vec<Option<Origin>>,
     pub def_name: Option<String>,
     /// The PROTO whose instance this node is the root of (innermost first when nested).
     pub proto_names: Vec<String>,
@@ -72,6 +76,16 @@ impl Scene {
     /// The catalogue type of a node.
     pub fn spec(&self, id: NodeId) -> &'static NodeSpec {
         Catalogue::get().spec(self.node(id).spec)
+    }
+
+    /// Where a field's value was written, else where the node was: what a message about the
+    /// value points at.
+    pub fn value_span(&self, id: NodeId, name: &str) -> Origin {
+        let node = self.node(id);
+        self.spec(id)
+            .field_index(name)
+            .and_then(|index| node.value_spans.get(index).copied().flatten())
+            .unwrap_or(node.origin)
     }
 
     /// The type name of a node (the catalogue's, not an alias).

@@ -279,11 +279,7 @@ pub fn fitted_exponent(rows: &[Row]) -> Option<(f64, usize, usize)> {
     );
     let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
     let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    Some((
-        sxy / sxx,
-        chosen[0].robots,
-        chosen[chosen.len() - 1].robots,
-    ))
+    Some((sxy / sxx, chosen[0].robots, chosen[chosen.len() - 1].robots))
 }
 
 /// The table's lines.
@@ -368,7 +364,7 @@ pub fn plot_cost(
     title: &str,
 ) -> anyhow::Result<image::RgbImage> {
     use plotters::prelude::*;
-    register_font();
+    crate::figures::register_fonts();
     let (width, height) = (900u32, 600u32);
     let mut pixels = vec![255u8; (width * height * 3) as usize];
     {
@@ -411,7 +407,10 @@ pub fn plot_cost(
             let (a, b) = (from as f64, to as f64);
             let at = |n: f64| rows.iter().find(|r| r.robots as f64 == n);
             if let (Some(ra), Some(rb)) = (at(a), at(b)) {
-                let middle = ((a * b).sqrt(), (ra.seconds_per_step() * rb.seconds_per_step()).sqrt());
+                let middle = (
+                    (a * b).sqrt(),
+                    (ra.seconds_per_step() * rb.seconds_per_step()).sqrt(),
+                );
                 let line: Vec<(f64, f64)> = [a, b]
                     .iter()
                     .map(|&n| (n, middle.1 * (n / middle.0).powf(slope)))
@@ -432,18 +431,6 @@ pub fn plot_cost(
         root.present()?;
     }
     image::RgbImage::from_raw(width, height, pixels).context("plot buffer has the wrong size")
-}
-
-/// plotters' text goes through ab_glyph: the sans-serif face is a font shipped as a crate.
-fn register_font() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        let _ = plotters::style::register_font(
-            "sans-serif",
-            plotters::style::FontStyle::Normal,
-            epaint_default_fonts::UBUNTU_LIGHT,
-        );
-    });
 }
 
 /// Writes the CSV and PNG; returns their paths.

@@ -55,6 +55,8 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 }
             }
         };
+        let mut checked = checked;
+        crate::world::check_runtime(&mut checked);
         for diagnostic in &checked.diagnostics {
             if diagnostic.diagnostic.is_error() {
                 errors += 1;

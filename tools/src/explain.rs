@@ -123,9 +123,12 @@ pub fn explain(name: &str, loaded: &crate::world::Loaded) -> String {
         } else {
             let robots: Vec<_> = members.iter().map(|&i| &rig.robots[i]).collect();
             let span = |value: &dyn Fn(&&regatta_runtime::compile::rig::RobotRig) -> f64| {
-                robots.iter().map(value).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                    (lo.min(v), hi.max(v))
-                })
+                robots
+                    .iter()
+                    .map(value)
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                        (lo.min(v), hi.max(v))
+                    })
             };
             let (x0, x1) = span(&|r| r.start.x);
             let (z0, z1) = span(&|r| r.start.z);
@@ -137,7 +140,11 @@ pub fn explain(name: &str, loaded: &crate::world::Loaded) -> String {
                     robots[robots.len() - 1].name
                 )
             } else {
-                robots.iter().map(|r| r.name.as_str()).collect::<Vec<_>>().join(", ")
+                robots
+                    .iter()
+                    .map(|r| r.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
             };
             let _ = writeln!(
                 out,
@@ -234,7 +241,10 @@ pub fn explain(name: &str, loaded: &crate::world::Loaded) -> String {
 }
 
 /// What a robot is, for grouping: its PROTO (or node type) and what its turret is.
-fn robot_kind(scene: &regatta_schema::Scene, robot: &regatta_runtime::compile::rig::RobotRig) -> String {
+fn robot_kind(
+    scene: &regatta_schema::Scene,
+    robot: &regatta_runtime::compile::rig::RobotRig,
+) -> String {
     let node = scene.node(robot.node);
     let name = node
         .proto_names

@@ -37,6 +37,16 @@ pub struct Args {
     /// same for any number.
     #[arg(long)]
     threads: Option<usize>,
+    /// Print the run as one JSON object (docs/run.schema.json) instead of text.
+    #[arg(long)]
+    json: bool,
+    /// The fitness the JSON's top-level `fitness` reports (NAME[:key=value,...]).
+    #[arg(long, default_value = "regatta", value_parser = parse_fitness)]
+    fitness: regatta_evolve::Fitness,
+}
+
+pub(crate) fn parse_fitness(text: &str) -> Result<regatta_evolve::Fitness, String> {
+    regatta_evolve::Fitness::parse(text).map_err(|e| e.to_string())
 }
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
@@ -86,6 +96,10 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
         let interrupted = interrupted.clone();
         let _ = ctrlc::set_handler(move || interrupted.store(true, Ordering::SeqCst));
     }
+    let mut observer = args.json.then(|| {
+        regatta_evolve::experiment::sense_for_fitness(&mut simulation);
+        regatta_evolve::Observer::new(&simulation, &args.fitness)
+    });
     let progress = progress_bar(steps);
     let started = Instant::now();
     for step in 0..steps {
@@ -100,6 +114,9 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
             recorder
                 .record(&simulation)
                 .with_context(|| format!("while logging step {}", simulation.steps))?;
+        }
+        if let Some(observer) = &mut observer {
+            observer.after_step(&simulation);
         }
         if step % 1024 == 0 {
             if let Some(bar) = &progress {
@@ -129,6 +146,11 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 ""
             }
         );
+    }
+    if let Some(observer) = &observer {
+        let summary = observer.summary(&simulation, &args.world.display().to_string(), Some(wall));
+        println!("{}", serde_json::to_string_pretty(&summary)?);
+        return Ok(Outcome::Clean);
     }
     println!("world {}: seed {}", args.world.display(), simulation.seed);
     if let Some(vision) = vision {

@@ -14,9 +14,23 @@ pub struct Loaded {
     pub compiled: Compiled,
 }
 
+/// Adds what the runtime checks beyond the schema (each robot's network against its inputs
+/// and outputs), keeping the diagnostics in file and position order.
+pub fn check_runtime(checked: &mut Checked) {
+    let extra = regatta_runtime::neural::check_networks(&checked.scene);
+    if extra.is_empty() {
+        return;
+    }
+    checked.diagnostics.extend(extra);
+    checked
+        .diagnostics
+        .sort_by_key(|d| (d.file.0, d.diagnostic.span.start));
+}
+
 /// Checks `path` (printing warnings and errors to stderr) and compiles it; fails on errors.
 pub fn load(path: &Path, lenient: bool, color: bool) -> anyhow::Result<Loaded> {
-    let checked = check_file(path, !lenient)?;
+    let mut checked = check_file(path, !lenient)?;
+    check_runtime(&mut checked);
     let shown: Vec<_> = checked
         .diagnostics
         .iter()

@@ -37,13 +37,21 @@ fn temp_dir(name: &str) -> PathBuf {
 
 #[test]
 fn project_worlds_check_clean() {
-    let worlds =
-        ["regatta.wbt", "single_buoy.wbt", "k213.wbt"].map(|w| root().join("worlds").join(w));
+    let mut worlds: Vec<PathBuf> = std::fs::read_dir(root().join("worlds"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "wbt"))
+        .collect();
+    worlds.sort();
+    assert!(worlds.len() >= 10, "{worlds:?}");
     let output = regatta().arg("check").args(&worlds).output().unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(0), "{stderr}");
     assert!(
-        stderr.contains("checked 3 files: 0 errors, 0 warnings"),
+        stderr.contains(&format!(
+            "checked {} files: 0 errors, 0 warnings",
+            worlds.len()
+        )),
         "{stderr}"
     );
 }
@@ -289,12 +297,20 @@ fn a_swarm_logs_the_same_bytes_on_any_number_of_threads() {
         .arg(&dir)
         .output()
         .unwrap();
-    assert_eq!(written.status.code(), Some(0), "{}", String::from_utf8_lossy(&written.stderr));
+    assert_eq!(
+        written.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&written.stderr)
+    );
     let world = dir.join("swarm-30.wbt");
     let run = |name: &str, threads: Option<&str>, flag: Option<&str>| {
         let log = dir.join(name);
         let mut command = regatta();
-        command.args(["run", "--steps", "40", "--log"]).arg(&log).arg(&world);
+        command
+            .args(["run", "--steps", "40", "--log"])
+            .arg(&log)
+            .arg(&world);
         if let Some(threads) = threads {
             command.env("RAYON_NUM_THREADS", threads);
         }
@@ -302,13 +318,24 @@ fn a_swarm_logs_the_same_bytes_on_any_number_of_threads() {
             command.args(["--threads", flag]);
         }
         let output = command.output().unwrap();
-        assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+        assert_eq!(
+            output.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
         std::fs::read(log).unwrap()
     };
     let one = run("one.mcap", Some("1"), None);
     assert!(one.len() > 10_000);
-    assert!(one == run("four.mcap", Some("4"), None), "1 and 4 threads differ");
-    assert!(one == run("two.mcap", None, Some("2")), "--threads 2 differs");
+    assert!(
+        one == run("four.mcap", Some("4"), None),
+        "1 and 4 threads differ"
+    );
+    assert!(
+        one == run("two.mcap", None, Some("2")),
+        "--threads 2 differs"
+    );
     std::fs::remove_dir_all(dir).ok();
 }
 
@@ -317,13 +344,30 @@ fn a_swarm_logs_the_same_bytes_on_any_number_of_threads() {
 fn bench_step_measures_swarms_and_plots_them() {
     let dir = temp_dir("bench-swarm");
     let output = regatta()
-        .args(["bench", "step", "--robots", "1,12", "--ir-only", "--millis", "20", "--out"])
+        .args([
+            "bench",
+            "step",
+            "--robots",
+            "1,12",
+            "--ir-only",
+            "--millis",
+            "20",
+            "--out",
+        ])
         .arg(&dir)
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&output.stdout);
-    assert_eq!(output.status.code(), Some(0), "{text}{}", String::from_utf8_lossy(&output.stderr));
-    assert!(text.contains("robot-steps/s") && text.contains("fitted exponent 1→12"), "{text}");
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{text}{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        text.contains("robot-steps/s") && text.contains("fitted exponent 1→12"),
+        "{text}"
+    );
     let csv = std::fs::read_to_string(dir.join("swarm-ir.csv")).unwrap();
     assert_eq!(csv.lines().count(), 3, "{csv}");
     let png = std::fs::read(dir.join("swarm-ir.png")).unwrap();

@@ -17,9 +17,7 @@ use crate::controllers;
 use crate::khepera::{
     Controller, Khepera, KheperaError, LedAction, LinearCameraTurret, PanoramicTurret, Senses,
 };
-use crate::optics::{
-    LinearCamera, LinearCameraOutput, Panoramic, Renderer, RetinaOutput, ViewOf,
-};
+use crate::optics::{LinearCamera, LinearCameraOutput, Panoramic, Renderer, RetinaOutput, ViewOf};
 use crate::render::Poses;
 use crate::retina::FilterKind;
 use crate::vision::{VisionBackend, VisionError, VisionRequest, WorldInstance};
@@ -95,6 +93,12 @@ impl Contacts {
             Err(i) => self.per_obstacle.insert(i, (obstacle, 1)),
         }
     }
+
+    /// The obstacles it ended the last step touching, ascending (indices into
+    /// [`Simulation::obstacle_names`]).
+    pub fn touching(&self) -> &[u32] {
+        &self.touching
+    }
 }
 
 /// Visits to the world's landmarks (buoys).
@@ -102,6 +106,8 @@ impl Contacts {
 pub struct Visits {
     /// Landmark indices in the order they were entered.
     pub sequence: Vec<usize>,
+    /// When each entry of `sequence` happened (simulated s, the end of the step).
+    pub times: Vec<f64>,
     /// The landmarks whose visit disc holds the robot now, ascending.
     inside: Vec<u32>,
 }
@@ -283,11 +289,9 @@ impl<'c> Simulation<'c> {
         let mut robots = Vec::with_capacity(compiled.rig.robots.len());
         for (index, rig) in compiled.rig.robots.iter().enumerate() {
             let controller =
-                controllers::build(&rig.controller, &rig.controller_args).map_err(|source| {
-                    SimError::Controller {
-                        robot: rig.name.clone(),
-                        source,
-                    }
+                controllers::build_for(rig).map_err(|source| SimError::Controller {
+                    robot: rig.name.clone(),
+                    source,
                 })?;
             robots.push(RobotState {
                 name: rig.name.clone(),
@@ -339,6 +343,7 @@ impl<'c> Simulation<'c> {
                 },
                 visits: Visits {
                     sequence: Vec::with_capacity(64),
+                    times: Vec::with_capacity(64),
                     inside: Vec::with_capacity(4),
                 },
                 nearby: Vec::with_capacity(16),
@@ -545,8 +550,9 @@ impl<'c> Simulation<'c> {
         }
         // Where every robot is, once per step, for every robot's IR sensors.
         if self.robots.len() > 1 && self.robots.iter().any(|r| r.senses.proximity) {
-            self.broad
-                .file_robots(placements.len(), |i| DVec2::new(placements[i].x, placements[i].z));
+            self.broad.file_robots(placements.len(), |i| {
+                DVec2::new(placements[i].x, placements[i].z)
+            });
         }
         let renderer = self.renderer.as_ref().filter(|_| self.vision.is_none());
         // The world placed once, for every robot's vision device, when one is due.
@@ -854,8 +860,9 @@ impl<'c> Simulation<'c> {
                 }
             }
             let robots = &self.robots;
-            self.broad
-                .file_robots(robots.len(), |i| DVec2::new(robots[i].pose.x, robots[i].pose.z));
+            self.broad.file_robots(robots.len(), |i| {
+                DVec2::new(robots[i].pose.x, robots[i].pose.z)
+            });
             for a in 0..robots.len() {
                 let ca = DVec2::new(robots[a].pose.x, robots[a].pose.z);
                 let ra = rigs[a].body_radius;
@@ -890,11 +897,39 @@ impl<'c> Simulation<'c> {
         self.scratch.marked = marked;
     }
 
+    /// A name for everything a robot can touch, in [`Contacts::per_obstacle`] order: a buoy's
+    /// landmark name, else the outermost named group the obstacle stands in (a DEF or PROTO
+    /// name such as `Arena`), then the robots by name.
+    pub fn obstacle_names(&self) -> Vec<String> {
+        let graph = &self.compiled.graph;
+        let statics = self.slab.obstacles.iter().map(|obstacle| {
+            if let Some(landmark) = self
+                .compiled
+                .landmarks
+                .iter()
+                .find(|l| l.primitives.contains(&obstacle.primitive))
+            {
+                return landmark.name.clone();
+            }
+            let mut group = graph.primitives[obstacle.primitive].group;
+            let mut name = None;
+            while let Some(g) = group {
+                name = Some(&graph.groups[g].name);
+                group = graph.groups[g].parent;
+            }
+            name.cloned().unwrap_or_else(|| "an obstacle".to_owned())
+        });
+        statics
+            .chain(self.robots.iter().map(|r| r.name.clone()))
+            .collect()
+    }
+
     /// Counts entries into each landmark's visit disc (its radius plus two body diameters).
     fn track_visits(&mut self) {
         let compiled = self.compiled;
         let mut candidates = std::mem::take(&mut self.scratch.candidates);
         let mut was = std::mem::take(&mut self.scratch.was_inside);
+        let time = self.time;
         for (robot, rig) in self.robots.iter_mut().zip(&compiled.rig.robots) {
             let center = DVec2::new(robot.pose.x, robot.pose.z);
             if compiled.landmarks.len() <= FEW_LANDMARKS {
@@ -918,6 +953,7 @@ impl<'c> Simulation<'c> {
                 if distance <= landmark.radius + 4.0 * rig.body_radius {
                     if was.binary_search(&k).is_err() {
                         visits.sequence.push(k as usize);
+                        visits.times.push(time);
                     }
                     visits.inside.push(k);
                 }
@@ -990,8 +1026,7 @@ impl SenseShared<'_, '_> {
                 robot.nearby_robots.clear();
                 if self.placements.len() > 1 {
                     let reach = sensors::ir_reach(&rig.distance_sensors) + self.broad.max_radius;
-                    let (lo, hi) =
-                        broad_phase::square(DVec2::new(placement.x, placement.z), reach);
+                    let (lo, hi) = broad_phase::square(DVec2::new(placement.x, placement.z), reach);
                     self.broad.robots.query(lo, hi, &mut robot.nearby_robots);
                 }
                 nearby_found = true;

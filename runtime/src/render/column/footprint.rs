@@ -122,11 +122,19 @@ pub(super) fn corner_hiders(statics: &[Upright]) -> Vec<Vec<Hider>> {
 }
 
 /// The corners of a rectangular footprint, in the order [`Interval::corners`] counts them.
-pub(super) const RECT_CORNERS: [(f64, f64); 4] = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+pub(super) const RECT_CORNERS: [(f64, f64); 4] =
+    [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
 
 /// Corner `k` of a rectangular footprint (see [`RECT_CORNERS`]).
 #[inline]
-pub(super) fn rect_corner(center: DVec2, u: DVec2, v: DVec2, half_u: f64, half_v: f64, k: usize) -> DVec2 {
+pub(super) fn rect_corner(
+    center: DVec2,
+    u: DVec2,
+    v: DVec2,
+    half_u: f64,
+    half_v: f64,
+    k: usize,
+) -> DVec2 {
     let (su, sv) = RECT_CORNERS[k];
     center + u * (su * half_u) + v * (sv * half_v)
 }

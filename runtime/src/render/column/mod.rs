@@ -28,8 +28,8 @@ use crate::compile::plan::Plan;
 use crate::retina::luminance;
 use footprint::{corner_hiders, upright_of, Hider, Upright};
 use photodiode::{
-    band_atan, nearest_index, Band, Face, Free, LitSegments, LitSink, Raster,
-    Scratch, Segment, SegmentSink, Segments,
+    band_atan, nearest_index, Band, Face, Free, LitSegments, LitSink, Raster, Scratch, Segment,
+    SegmentSink, Segments,
 };
 pub use sweep::{EyeObject, Look};
 use sweep::{Sector, Sweep};
@@ -459,7 +459,16 @@ impl<'g> ColumnScene<'g> {
         stride: usize,
         out: &mut [f64],
     ) {
-        self.integrate_for(frame, frame.viewer, eye, heading, strip, samples, stride, out)
+        self.integrate_for(
+            frame,
+            frame.viewer,
+            eye,
+            heading,
+            strip,
+            samples,
+            stride,
+            out,
+        )
     }
 
     /// [`ColumnScene::integrate`] for `viewer` in a frame shared by every viewer of a step.
@@ -530,7 +539,11 @@ impl<'g> ColumnScene<'g> {
         let half = strip.width / 2.0;
         // Parts wholly behind the strip face no photodiode: left out where there are many.
         let sector = (frame.others.len() > sweep::FEW && !exhaustive)
-            .then(|| strip.extent().and_then(|(lo, hi)| Sector::new(heading, lo, hi)))
+            .then(|| {
+                strip
+                    .extent()
+                    .and_then(|(lo, hi)| Sector::new(heading, lo, hi))
+            })
             .flatten();
         self.look_into(frame, viewer, eye, heading, sector, look);
         let look = &*look;
@@ -964,7 +977,8 @@ impl<'g> ColumnScene<'g> {
                 )
             }
         };
-        let material = &self.graph.materials[self.graph.primitives[segment.primitive as usize].material];
+        let material =
+            &self.graph.materials[self.graph.primitives[segment.primitive as usize].material];
         let mut none = |_: DVec3, _: &LightKind| false;
         shade(material, None, point, normal, eye, &frame.lights, &mut none)
     }

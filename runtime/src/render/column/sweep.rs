@@ -6,8 +6,8 @@
 use glam::{DVec2, DVec3};
 
 use super::footprint::Relative;
-use super::photodiode::rotate_small;
 use super::footprint::{azimuth_interval, corner_of, wrap, Interval, PendingEdge, Upright};
+use super::photodiode::rotate_small;
 use super::{ColumnFrame, ColumnScene, Strip};
 use crate::geometry::Footprint;
 
@@ -244,7 +244,10 @@ impl Sector {
     #[inline]
     pub(super) fn excludes(&self, center: DVec2, radius: f64) -> bool {
         // Beyond `hi` anticlockwise and before `lo`.
-        let (after_hi, before_lo) = (self.hi.perp_dot(center) > 0.0, center.perp_dot(self.lo) > 0.0);
+        let (after_hi, before_lo) = (
+            self.hi.perp_dot(center) > 0.0,
+            center.perp_dot(self.lo) > 0.0,
+        );
         let outside = if self.narrow_back {
             after_hi && before_lo
         } else {
