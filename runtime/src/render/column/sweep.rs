@@ -229,7 +229,8 @@ impl Sector {
     pub(super) fn new(heading: f64, lo: f64, hi: f64) -> Option<Sector> {
         let margin = 1e-6;
         let (lo, hi) = (lo - margin, hi + margin);
-        if !(hi - lo < std::f64::consts::TAU) {
+        // A full turn (or NaN) leaves nothing behind.
+        if (hi - lo).partial_cmp(&std::f64::consts::TAU) != Some(std::cmp::Ordering::Less) {
             return None;
         }
         let at = |angle: f64| DVec2::new(libm::cos(heading + angle), libm::sin(heading + angle));
