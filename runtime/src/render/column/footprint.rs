@@ -78,7 +78,9 @@ pub(super) struct Hider {
 #[derive(Clone, Copy, Debug)]
 pub(super) struct PendingEdge {
     pub(super) angle: f64,
+    /// The hidden object's index in the look, and among the static objects.
     pub(super) object: u32,
+    pub(super) order: u32,
     pub(super) corner: u8,
     /// From the eye to the corner, in (x, z).
     pub(super) to_corner: DVec2,

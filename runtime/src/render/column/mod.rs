@@ -122,8 +122,11 @@ pub struct ColumnScene<'g> {
     graph: &'g RenderGraph,
     /// The static objects, shared by every frame.
     statics: Arc<[Upright]>,
-    /// Whether each primitive is in the plan's visible set.
+    /// Whether each primitive is in the plan's visible set, and in its robot's own.
     visible: Vec<bool>,
+    own_visible: Vec<bool>,
+    /// Whether every static object has fast shading (lights that do not move).
+    statics_fast: bool,
     /// Primitives attached to robots, in graph order, with their robot.
     robot_parts: Vec<(usize, usize)>,
     /// Lights and every primitive's fast shading, when no light moves (shared by every frame).
@@ -132,6 +135,9 @@ pub struct ColumnScene<'g> {
     hiders: Vec<Vec<Hider>>,
     /// Per static object, whether its footprint is the previous one's (a lamp on its buoy).
     same_footprint: Vec<bool>,
+    /// Per static object, whether an eye may leave it out when it is behind the strip: no
+    /// corner test names it (robot parts always may).
+    cullable: Vec<bool>,
 }
 
 /// The fast shading of each primitive, where it applies: an index into a table of the
@@ -254,24 +260,6 @@ pub struct ColumnFrame {
 }
 
 impl ColumnFrame {
-    /// The objects `viewer` sees, in the order that names them: static objects first, then
-    /// robot parts in graph order (the viewer's own parts as its turret sees them).
-    fn objects_for(&self, viewer: Option<usize>) -> impl Iterator<Item = &Upright> {
-        let parts = self
-            .others
-            .iter()
-            .zip(&self.own)
-            .zip(&self.part_robot)
-            .filter_map(move |((other, own), &robot)| {
-                if Some(robot) == viewer {
-                    own.as_ref()
-                } else {
-                    other.as_ref()
-                }
-            });
-        self.statics.iter().chain(parts)
-    }
-
     /// The fast shading of a primitive, if it has one.
     #[inline]
     fn fast_shade(&self, primitive: u32) -> Option<&FastShade> {
@@ -333,6 +321,10 @@ impl<'g> ColumnScene<'g> {
         for &p in &plan.visible {
             visible[p] = true;
         }
+        let mut own_visible = vec![false; graph.primitives.len()];
+        for &p in plan.own_visible.iter().flatten() {
+            own_visible[p] = true;
+        }
         let robot_parts = (0..graph.primitives.len())
             .filter_map(|p| match graph.primitives[p].owner {
                 Owner::Robot(robot) => Some((p, robot)),
@@ -354,8 +346,20 @@ impl<'g> ColumnScene<'g> {
         let same_footprint = (0..statics.len())
             .map(|i| i > 0 && statics[i].footprint == statics[i - 1].footprint)
             .collect();
+        let statics_fast = cached.as_ref().is_some_and(|(_, shades)| {
+            statics
+                .iter()
+                .all(|u| shades.get(u.primitive as u32).is_some())
+        });
+        let mut cullable: Vec<bool> = hiders.iter().map(Vec::is_empty).collect();
+        for hider in hiders.iter().flatten() {
+            cullable[hider.object as usize] = false;
+        }
         ColumnScene {
             graph,
+            own_visible,
+            statics_fast,
+            cullable,
             hiders,
             same_footprint,
             statics,
@@ -396,18 +400,22 @@ impl<'g> ColumnScene<'g> {
     /// Places every robot's parts for `poses` into `frame`, reusing its buffers: once per
     /// step, for every viewer.
     pub fn prepare_into(&self, plan: &Plan, poses: &Poses, frame: &mut ColumnFrame) {
-        frame.statics.clone_from(&self.statics);
+        if !Arc::ptr_eq(&frame.statics, &self.statics) {
+            frame.statics = self.statics.clone();
+        }
         frame.others.clear();
         frame.own.clear();
-        frame.part_robot.clear();
+        if frame.part_robot.len() != self.robot_parts.len() {
+            frame.part_robot.clear();
+            frame
+                .part_robot
+                .extend(self.robot_parts.iter().map(|&(_, robot)| robot));
+        }
         for &(index, robot) in &self.robot_parts {
             let (mut other, mut own) = (None, None);
             if robot < poses.poses.len() {
                 let primitive = &self.graph.primitives[index];
-                let own_wanted = plan
-                    .own_visible
-                    .get(robot)
-                    .is_some_and(|v| v.contains(&index));
+                let own_wanted = self.own_visible[index];
                 if self.visible[index] || own_wanted {
                     let placed = poses.frame(robot).then(&primitive.frame);
                     let upright = upright_of(self.graph, index, &placed);
@@ -417,7 +425,6 @@ impl<'g> ColumnScene<'g> {
             }
             frame.others.push(other);
             frame.own.push(own);
-            frame.part_robot.push(robot);
         }
         match &self.cached {
             Some((lights, shades)) => {
@@ -438,8 +445,11 @@ impl<'g> ColumnScene<'g> {
         }
         let shades = &frame.shades;
         let fast = |u: &Upright| shades.get(u.primitive as u32).is_some();
-        frame.all_fast = frame.statics.iter().all(fast)
-            && frame.others.iter().chain(&frame.own).flatten().all(fast);
+        let statics_fast = match &self.cached {
+            Some(_) => self.statics_fast,
+            None => frame.statics.iter().all(fast),
+        };
+        frame.all_fast = statics_fast && frame.others.iter().chain(&frame.own).flatten().all(fast);
     }
 
     /// Mean linear RGB over each pixel of `strip`, seen from `eye` facing `heading`, for the
@@ -538,7 +548,7 @@ impl<'g> ColumnScene<'g> {
         let pixels = strip.centers.len().min(out.len());
         let half = strip.width / 2.0;
         // Parts wholly behind the strip face no photodiode: left out where there are many.
-        let sector = (frame.others.len() > sweep::FEW && !exhaustive)
+        let sector = (frame.statics.len() + frame.others.len() > sweep::FEW && !exhaustive)
             .then(|| {
                 strip
                     .extent()

@@ -63,6 +63,8 @@ pub struct Look {
     pub(super) objects: Vec<EyeObject>,
     /// Silhouette edges (relative azimuths), sorted; hidden ones left out.
     pub(super) breaks: Vec<f64>,
+    /// Each static object's index among `objects`.
+    pub(super) static_slots: Vec<u32>,
     /// Edges waiting for the hidden-edge test.
     pub(super) edges: Vec<PendingEdge>,
 }
@@ -116,6 +118,11 @@ impl Look {
         );
         DVec2::new(cw, -sw)
     }
+}
+
+/// A closure over a frame's objects, typed so that it may keep references to them.
+fn typed<'f, F: FnMut(&'f Upright)>(_frame: &'f ColumnFrame, f: F) -> F {
+    f
 }
 
 /// Below this many objects (or edges), testing each is cheaper than keeping them in order.
@@ -306,18 +313,29 @@ impl ColumnScene<'_> {
             objects,
             breaks,
             edges,
+            static_slots,
             ..
         } = look;
         objects.clear();
         breaks.clear();
         edges.clear();
+        static_slots.clear();
         let statics = frame.statics.len();
-        // Leaving parts out pays when there are many.
-        let crowd = sector.is_some();
         // The previous object placed, its interval, and whether it was left out.
         let mut previous: Option<(&Upright, Option<Interval>, bool)> = None;
-        for (order, object) in frame.objects_for(viewer).enumerate() {
+        // Static objects, then robot parts (each viewer's own as its turret sees them), by
+        // two plain loops: the per-object work is small, so the iteration shows.
+        let mut order = 0usize;
+        let mut place = typed(frame, |object| {
+            let order = {
+                order += 1;
+                order - 1
+            };
             let index = objects.len();
+            // Static objects keep their order unless some may be left out.
+            if order < statics && sector.is_some() {
+                static_slots.push(index as u32);
+            }
             // A lamp on its buoy has the buoy's footprint: its interval is the buoy's.
             let shares_previous = |before: &Upright| match self.same_footprint.get(order) {
                 Some(&same) => same,
@@ -326,17 +344,19 @@ impl ColumnScene<'_> {
             let (interval, shared) = match previous {
                 Some((before, interval, left_out)) if shares_previous(before) => {
                     if left_out {
-                        continue;
+                        return;
                     }
                     (interval, true)
                 }
                 _ => {
-                    if let Some(sector) = sector.filter(|_| order >= statics && crowd) {
+                    // Robot parts, and static objects no corner test names.
+                    let may_leave = order >= statics || self.cullable[order];
+                    if let Some(sector) = sector.filter(|_| may_leave) {
                         let (center, radius) = object.footprint.bounding_circle();
                         let offset = center - eye2;
                         if sector.excludes(DVec2::new(offset.x, -offset.y), radius) {
                             previous = Some((object, None, true));
-                            continue;
+                            return;
                         }
                     }
                     (azimuth_interval(object, eye2, heading), false)
@@ -360,6 +380,7 @@ impl ColumnScene<'_> {
                                 Some(point) => edges.push(PendingEdge {
                                     angle: wrap(angle),
                                     object: index as u32,
+                                    order: order as u32,
                                     corner,
                                     to_corner: point - eye2,
                                 }),
@@ -414,9 +435,18 @@ impl ColumnScene<'_> {
                 bottom: object.bottom,
                 primitive: object.primitive as u32,
             });
+        });
+        for object in frame.statics.iter() {
+            place(object);
+        }
+        for ((other, own), &robot) in frame.others.iter().zip(&frame.own).zip(&frame.part_robot) {
+            let part = if Some(robot) == viewer { own } else { other };
+            if let Some(object) = part {
+                place(object);
+            }
         }
         for edge in edges.iter() {
-            if !self.edge_hidden(objects, edge) {
+            if !self.edge_hidden(objects, static_slots, edge) {
                 breaks.push(edge.angle);
             }
         }
@@ -439,16 +469,20 @@ impl ColumnScene<'_> {
     /// whose side covers the edge's whole elevation range. Then nothing of the rectangle shows
     /// near that azimuth, the column integrand is as smooth there as on either side, and the
     /// edge need not cut the strip (the end of one arena wall behind the next, at each
-    /// corner). Only static objects have hiders, and static objects keep their indices.
-    fn edge_hidden(&self, objects: &[EyeObject], edge: &PendingEdge) -> bool {
-        let index = edge.object as usize;
-        let hidden = &objects[index];
-        self.hiders[index]
+    /// corner). Only static objects have hiders.
+    fn edge_hidden(&self, objects: &[EyeObject], slots: &[u32], edge: &PendingEdge) -> bool {
+        let hidden = &objects[edge.object as usize];
+        self.hiders[edge.order as usize]
             .iter()
             .filter(|h| h.corner == edge.corner)
             .any(|h| {
-                // (A hider has a side: `corner_hiders` keeps no other.)
-                let hider = &objects[h.object as usize];
+                // (A hider has a side: `corner_hiders` keeps no other. Objects that hide or
+                // are hidden are never left out; with nothing left out, order is slot.)
+                let slot = match slots.get(h.object as usize) {
+                    Some(&slot) => slot as usize,
+                    None => h.object as usize,
+                };
+                let hider = &objects[slot];
                 // Along the sight line in units of the corner's distance (the corner at 1):
                 // entered strictly before the corner, from outside, and its side there spans
                 // the edge's tan-elevations (and so any cap of the hidden object, which meets
