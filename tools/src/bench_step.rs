@@ -134,8 +134,7 @@ fn swarms(args: Args, threads: usize) -> anyhow::Result<Outcome> {
             ),
         )?;
         let peak = crate::bench::peak_resident_bytes().unwrap_or(0);
-        let now = crate::bench::resident_bytes().unwrap_or(0);
-        println!("{peak} {} {now}", row.steps);
+        println!("{peak} {}", row.steps);
         return Ok(Outcome::Clean);
     }
     let budget = args.seconds.map_or(
@@ -250,6 +249,8 @@ fn world_configurations(args: Args) -> anyhow::Result<Outcome> {
             seed: simulation.seed,
             lenient: false,
             steps_requested: 0,
+            channels: regatta_runtime::log::Channels::ALL,
+            controllers: Vec::new(),
         };
         let mut sink = std::io::Cursor::new(Vec::new());
         let mut recorder = regatta_runtime::log::Recorder::new(&mut sink, &mut simulation, &run)?;

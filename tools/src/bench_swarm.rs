@@ -6,7 +6,8 @@
 //! √N. Robots stand on a jittered grid with seeded headings; buoys are scattered (seeded) where
 //! they touch nothing. Per N: steps/s, robot-steps/s, µs per robot-step, peak memory (a child
 //! process runs the same world), and the share of each phase of a step. A CSV and a log-log
-//! PNG of cost per step against N, with the exponent fitted from 100 to 1000 robots.
+//! chart (through `regatta-figures`) of cost per step against N, with the exponent fitted from
+//! 100 to 1000 robots.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -158,6 +159,7 @@ pub fn compile_text(name: &str, text: String) -> anyhow::Result<Compiled> {
         &regatta_schema::Options {
             strict: true,
             base_dir: None,
+            proto_path: Vec::new(),
         },
     );
     if checked.has_errors() {
@@ -355,82 +357,44 @@ pub fn csv(rows: &[Row], threads: usize, ir_only: bool) -> String {
     out
 }
 
-/// A log-log plot of the cost of a step against the number of robots, with the fitted
-/// exponent, as an RGB image (plotters draws, `image` encodes). Self-contained, so that it can
-/// join the project's shared figure code.
-pub fn plot_cost(
+/// A log-log chart of the cost of a step against the number of robots, with the fitted
+/// power law and its exponent in the legend.
+pub fn cost_chart(
     rows: &[Row],
     exponent: Option<(f64, usize, usize)>,
     title: &str,
-) -> anyhow::Result<image::RgbImage> {
-    use plotters::prelude::*;
-    crate::figures::register_fonts();
-    let (width, height) = (900u32, 600u32);
-    let mut pixels = vec![255u8; (width * height * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let xs: Vec<f64> = rows.iter().map(|r| r.robots as f64).collect();
-        let ys: Vec<f64> = rows.iter().map(|r| r.seconds_per_step()).collect();
-        let span = |values: &[f64]| {
-            let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            if lo.is_finite() && hi.is_finite() {
-                (lo / 2.0, hi * 2.0)
-            } else {
-                (1e-6, 1.0)
-            }
-        };
-        let (x0, x1) = span(&xs);
-        let (y0, y1) = span(&ys);
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 24))
-            .margin(20)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d((x0.max(0.5)..x1).log_scale(), (y0..y1).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc("robots N")
-            .y_desc("wall time per step (s)")
-            .x_label_formatter(&|x| format!("{x:.0}"))
-            .y_label_formatter(&|y| format!("{y:.0e}"))
-            .draw()?;
-        let points: Vec<(f64, f64)> = xs.iter().copied().zip(ys.iter().copied()).collect();
-        chart
-            .draw_series(LineSeries::new(points.clone(), BLUE.stroke_width(2)))?
-            .label("measured")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE.stroke_width(2)));
-        chart.draw_series(points.iter().map(|&p| Circle::new(p, 5, BLUE.filled())))?;
-        if let Some((slope, from, to)) = exponent {
-            // The fitted power law through the geometric mean of its two ends.
-            let (a, b) = (from as f64, to as f64);
-            let at = |n: f64| rows.iter().find(|r| r.robots as f64 == n);
-            if let (Some(ra), Some(rb)) = (at(a), at(b)) {
-                let middle = (
-                    (a * b).sqrt(),
-                    (ra.seconds_per_step() * rb.seconds_per_step()).sqrt(),
-                );
-                let line: Vec<(f64, f64)> = [a, b]
-                    .iter()
-                    .map(|&n| (n, middle.1 * (n / middle.0).powf(slope)))
-                    .collect();
-                chart
-                    .draw_series(LineSeries::new(line, RED.stroke_width(1)))?
-                    .label(format!("fit {from} to {to} robots: cost ~ N^{slope:.2}"))
-                    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
-            }
+) -> regatta_figures::Chart {
+    use regatta_figures::{Axis, Chart, Corner, Series};
+    let points: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|r| (r.robots as f64, r.seconds_per_step()))
+        .collect();
+    let mut chart = Chart::new(
+        title,
+        Axis::log("robots N"),
+        Axis::log("wall time per step (s)"),
+    )
+    .legend(Corner::UpperLeft)
+    .with(Series::line_markers("measured", points));
+    if let Some((slope, from, to)) = exponent {
+        // The fitted power law through the geometric mean of its two ends.
+        let at = |n: usize| rows.iter().find(|r| r.robots == n);
+        if let (Some(a), Some(b)) = (at(from), at(to)) {
+            let middle = (
+                (from as f64 * to as f64).sqrt(),
+                (a.seconds_per_step() * b.seconds_per_step()).sqrt(),
+            );
+            let line = [from as f64, to as f64]
+                .iter()
+                .map(|&n| (n, middle.1 * (n / middle.0).powf(slope)))
+                .collect();
+            chart = chart.with(Series::line(
+                format!("fit {from} to {to} robots: cost ~ N^{slope:.2}"),
+                line,
+            ));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 18))
-            .draw()?;
-        root.present()?;
     }
-    image::RgbImage::from_raw(width, height, pixels).context("plot buffer has the wrong size")
+    chart
 }
 
 /// Writes the CSV and PNG; returns their paths.
@@ -451,9 +415,11 @@ pub fn write_outputs(
         threads
     );
     let png_path = out.join(format!("{stem}.png"));
-    plot_cost(rows, fitted_exponent(rows), &title)?
-        .save(&png_path)
-        .with_context(|| format!("cannot write {}", png_path.display()))?;
+    regatta_figures::save(
+        &cost_chart(rows, fitted_exponent(rows), &title),
+        &png_path,
+        regatta_figures::Format::Png,
+    )?;
     Ok((csv_path, png_path))
 }
 
@@ -495,6 +461,8 @@ mod tests {
         let rows = [row(10, 1e-4), row(100, 1e-2), row(1000, 1.0)];
         let (slope, from, to) = fitted_exponent(&rows).unwrap();
         assert!((slope - 2.0).abs() < 1e-9 && from == 100 && to == 1000);
-        assert!(plot_cost(&rows, Some((slope, from, to)), "test").is_ok());
+        let chart = cost_chart(&rows, Some((slope, from, to)), "test");
+        assert_eq!(chart.series.len(), 2);
+        assert!(regatta_figures::render_png(&chart).is_ok());
     }
 }
