@@ -25,6 +25,8 @@ enum What {
     /// Simulation steps per second: the regatta world, IR only, 10 robots, parallel worlds,
     /// and the peak memory of a one-robot run.
     Step(crate::bench_step::Args),
+    /// Webots worlds: JavaScript templates against arithmetic ones, and the e-puck's camera.
+    Webots(crate::bench_webots::Args),
     /// glTF export time on a generated world of about a million triangles.
     Gltf {
         /// Points in the generated IndexedFaceSet (709² gives 1,002,528 triangles).
@@ -52,6 +54,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     match args.what {
         What::Retina(args) => crate::bench_retina::run(args),
         What::Step(args) => crate::bench_step::run(args),
+        What::Webots(args) => crate::bench_webots::run(args),
         What::Gltf { points, runs } => gltf(points, runs),
         What::Parse {
             points,

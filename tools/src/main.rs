@@ -6,6 +6,7 @@ mod bench;
 mod bench_retina;
 mod bench_step;
 mod bench_swarm;
+mod bench_webots;
 mod check;
 mod evolve;
 mod explain;
