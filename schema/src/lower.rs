@@ -1371,15 +1371,8 @@ impl<'c> Lowerer<'c> {
                 continue;
             };
             let value = match &declaration.default {
-                Some(default) => {
-                    let value = self.lower_field_value(
-                        default,
-                        ty,
-                        None,
-                        &mut default_scope,
-                        &declaration.name.text,
-                        declaration.name.span,
-                    );
+                Some(_) => {
+                    let value = self.lower_default(declaration, ty, &mut default_scope);
                     if let Some(value) = &value {
                         self.check_restriction(
                             declaration,
@@ -1465,6 +1458,25 @@ impl<'c> Lowerer<'c> {
             self.instance_authoring.insert(root.0, instantiating);
         }
         Some(root)
+    }
+
+    /// A PROTO field's default value, typed in the PROTO's own file (`None` when it has none
+    /// or it does not type, after reporting).
+    fn lower_default(
+        &mut self,
+        declaration: &syntax::Declaration,
+        ty: FieldType,
+        scope: &mut Scope,
+    ) -> Option<Value> {
+        let default = declaration.default.as_ref()?;
+        self.lower_field_value(
+            default,
+            ty,
+            None,
+            scope,
+            &declaration.name.text,
+            declaration.name.span,
+        )
     }
 
     /// Whether a PROTO's templates need the JavaScript engine: some template block of its
@@ -1563,17 +1575,9 @@ impl<'c> Lowerer<'c> {
             let Some((ty, value, origin)) = bindings.get(&declaration.name.text).cloned() else {
                 continue;
             };
-            let default = match (&origin, &declaration.default) {
-                (None, _) => value.clone(),
-                (Some(_), Some(default)) => self.lower_field_value(
-                    default,
-                    ty,
-                    None,
-                    &mut default_scope,
-                    &declaration.name.text,
-                    declaration.name.span,
-                ),
-                (Some(_), None) => None,
+            let default = match origin {
+                None => value.clone(),
+                Some(_) => self.lower_default(declaration, ty, &mut default_scope),
             };
             pairs.push((declaration.name.text.clone(), ty, value, default));
         }
