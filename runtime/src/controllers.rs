@@ -8,7 +8,10 @@
 //!   filter's output is scanned for light-intensity maxima (a negative lobe followed by a
 //!   positive one, both beyond `minContrast` LSB); the maximum nearest the centre of the retina
 //!   steers the robot by `lightGain` pulses/10 ms per pixel of distance from the centre, added
-//!   to the network's output.
+//!   to the network's output. A robot that stalls facing an obstacle (both commands within
+//!   ±`STALL_SPEED` while a front sensor reads more than `STALL_PROXIMITY`, for `STALL_STEPS`
+//!   steps: the Braitenberg network's deadlock in a corner) turns on the spot, away from the
+//!   nearer side, for `ESCAPE_STEPS` steps.
 
 use std::ops::ControlFlow;
 
@@ -138,6 +141,7 @@ pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, Control
             thresholds: None,
             enabled: false,
             odd: Vec::new(),
+            escape: StallEscape::default(),
         })),
         "neural" => Err(crate::neural::NetworkError::NoNetwork.into()),
         other => Err(ControllerError::Unknown(other.to_owned())),
@@ -312,6 +316,57 @@ fn partition_point_u16(holds: impl Fn(u32) -> bool) -> u32 {
     lo
 }
 
+/// Commands this close to zero count as stopped.
+pub const STALL_SPEED: i32 = 1;
+/// A front IR reading above this counts as facing an obstacle.
+pub const STALL_PROXIMITY: u16 = 300;
+/// Steps stalled before turning away (about a second at 32 ms).
+pub const STALL_STEPS: u32 = 32;
+/// Steps of turning on the spot (about 0.8 s at 32 ms: roughly a right angle at the bias
+/// speed).
+pub const ESCAPE_STEPS: u32 = 24;
+
+/// Turns a stalled robot away from what it faces.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct StallEscape {
+    stalled: u32,
+    /// Steps left to turn, and the direction (+1 turns right).
+    escaping: u32,
+    direction: i32,
+}
+
+impl StallEscape {
+    /// The commands to send instead of `(left, right)`, if the robot must turn away.
+    pub fn check(
+        &mut self,
+        proximity: &[u16; 8],
+        (left, right): (i32, i32),
+        bias: f64,
+    ) -> Option<(i32, i32)> {
+        let turn = to_command(bias).max(1);
+        if self.escaping > 0 {
+            self.escaping -= 1;
+            return Some((self.direction * turn, -self.direction * turn));
+        }
+        let front = proximity[1..5].iter().copied().max().unwrap_or(0);
+        if left.abs() <= STALL_SPEED && right.abs() <= STALL_SPEED && front > STALL_PROXIMITY {
+            self.stalled += 1;
+        } else {
+            self.stalled = 0;
+        }
+        if self.stalled < STALL_STEPS {
+            return None;
+        }
+        self.stalled = 0;
+        self.escaping = ESCAPE_STEPS - 1;
+        // Away from the side that reads more (left sensors 0…2, right 3…5); right on a tie.
+        let left_side: u32 = proximity[0..3].iter().map(|&v| v as u32).sum();
+        let right_side: u32 = proximity[3..6].iter().map(|&v| v as u32).sum();
+        self.direction = if right_side > left_side { -1 } else { 1 };
+        Some((self.direction * turn, -self.direction * turn))
+    }
+}
+
 /// The paper's regatta controller.
 pub struct Regatta {
     pub parameters: Parameters,
@@ -320,6 +375,7 @@ pub struct Regatta {
     enabled: bool,
     /// The odd filter's last reading, its buffer reused.
     odd: Vec<u16>,
+    escape: StallEscape,
 }
 
 impl Controller for Regatta {
@@ -353,7 +409,12 @@ impl Controller for Regatta {
             left += self.parameters.light_gain * offset;
             right -= self.parameters.light_gain * offset;
         }
-        robot.set_speed(to_command(left), to_command(right))
+        let command = (to_command(left), to_command(right));
+        let (left, right) = self
+            .escape
+            .check(&proximity, command, self.parameters.bias)
+            .unwrap_or(command);
+        robot.set_speed(left, right)
     }
 
     fn senses(&self) -> Senses {

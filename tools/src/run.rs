@@ -33,6 +33,16 @@ pub struct Args {
     /// What renders vision devices.
     #[arg(long, value_enum, default_value_t)]
     renderer: crate::vision::RendererKind,
+    /// Print the run as one JSON object (docs/run.schema.json) instead of text.
+    #[arg(long)]
+    json: bool,
+    /// The fitness the JSON's top-level `fitness` reports (NAME[:key=value,...]).
+    #[arg(long, default_value = "regatta", value_parser = parse_fitness)]
+    fitness: regatta_evolve::Fitness,
+}
+
+pub(crate) fn parse_fitness(text: &str) -> Result<regatta_evolve::Fitness, String> {
+    regatta_evolve::Fitness::parse(text).map_err(|e| e.to_string())
 }
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
@@ -70,6 +80,10 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         let interrupted = interrupted.clone();
         let _ = ctrlc::set_handler(move || interrupted.store(true, Ordering::SeqCst));
     }
+    let mut observer = args.json.then(|| {
+        regatta_evolve::experiment::sense_for_fitness(&mut simulation);
+        regatta_evolve::Observer::new(&simulation, &args.fitness)
+    });
     let progress = progress_bar(steps);
     let started = Instant::now();
     for step in 0..steps {
@@ -84,6 +98,9 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
             recorder
                 .record(&simulation)
                 .with_context(|| format!("while logging step {}", simulation.steps))?;
+        }
+        if let Some(observer) = &mut observer {
+            observer.after_step(&simulation);
         }
         if step % 1024 == 0 {
             if let Some(bar) = &progress {
@@ -113,6 +130,11 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 ""
             }
         );
+    }
+    if let Some(observer) = &observer {
+        let summary = observer.summary(&simulation, &args.world.display().to_string(), Some(wall));
+        println!("{}", serde_json::to_string_pretty(&summary)?);
+        return Ok(Outcome::Clean);
     }
     println!("world {}: seed {}", args.world.display(), simulation.seed);
     if let Some(vision) = vision {
