@@ -16,7 +16,10 @@ use crate::core::{Core, CoreError};
 use crate::errors::{to_py, value_error};
 
 /// The worlds the package carries (the Gymnasium environments' defaults).
-pub const EMBEDDED: &[(&str, &str)] = &[("regatta.wbt", include_str!("../../worlds/regatta.wbt"))];
+pub const EMBEDDED: &[(&str, &str)] = &[
+    ("regatta.wbt", include_str!("../../worlds/regatta.wbt")),
+    ("avoidance.wbt", include_str!("../../worlds/avoidance.wbt")),
+];
 
 /// The text of a world the package carries (`regatta.wbt`, `avoidance.wbt`).
 #[pyfunction]

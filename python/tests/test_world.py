@@ -190,7 +190,7 @@ def test_bad_arguments_raise_and_leave_the_world_usable():
         w.step("fast")
     with pytest.raises(ValueError, match="size must be"):
         w.render(size=1)
-    with pytest.raises(TypeError):
+    with pytest.raises(OverflowError):
         w.reset(seed=-1)
     w.step([np.nan, np.inf])
     assert w["khepera"].wheels == (0, 127)
