@@ -87,7 +87,10 @@ impl Observation {
                 speed_scale: t.output_scale,
             };
         }
-        let mut inputs: Vec<Input> = (0..8).map(Input::Ir).chain((0..8).map(Input::Ambient)).collect();
+        let mut inputs: Vec<Input> = (0..8)
+            .map(Input::Ir)
+            .chain((0..8).map(Input::Ambient))
+            .collect();
         if matches!(rig.turret, Some(TurretRig::Panoramic(_))) {
             inputs.push(Input::Retina);
         }
@@ -330,7 +333,8 @@ impl Core {
             (&self.controlled, &self.observations, &self.commands);
         let experiment = &self.experiment;
         let opened = self.running.with_dependent_mut(|_, simulation| {
-            for ((&robot, observation), command) in controlled.iter().zip(observations).zip(commands)
+            for ((&robot, observation), command) in
+                controlled.iter().zip(observations).zip(commands)
             {
                 for c in command.iter() {
                     c.store(0, Ordering::Relaxed);
@@ -350,12 +354,9 @@ impl Core {
                 }
             }
             let log = match log {
-                Some((path, steps_requested)) => Some(open_log(
-                    experiment,
-                    simulation,
-                    path,
-                    steps_requested,
-                )?),
+                Some((path, steps_requested)) => {
+                    Some(open_log(experiment, simulation, path, steps_requested)?)
+                }
                 None => None,
             };
             simulation.sense();
@@ -375,8 +376,14 @@ impl Core {
             .zip(&self.observations)
             .zip(actions.chunks_exact(2))
         {
-            command[0].store(to_command(pair[0] * observation.speed_scale), Ordering::Relaxed);
-            command[1].store(to_command(pair[1] * observation.speed_scale), Ordering::Relaxed);
+            command[0].store(
+                to_command(pair[0] * observation.speed_scale),
+                Ordering::Relaxed,
+            );
+            command[1].store(
+                to_command(pair[1] * observation.speed_scale),
+                Ordering::Relaxed,
+            );
         }
         let (observer, log) = (&mut self.observer, &mut self.log);
         self.running.with_dependent_mut(|_, simulation| {
@@ -430,9 +437,9 @@ impl Core {
 
     /// The run so far as `regatta run --json` prints it (without wall time).
     pub fn summary_json(&self) -> String {
-        let summary =
-            self.observer
-                .summary(self.simulation(), &self.experiment.name, None);
+        let summary = self
+            .observer
+            .summary(self.simulation(), &self.experiment.name, None);
         serde_json::to_string_pretty(&summary).unwrap_or_default()
     }
 
@@ -479,8 +486,8 @@ fn open_log(
         lenient: experiment.lenient,
         steps_requested,
     };
-    let recorder = Recorder::new(BufWriter::new(file), simulation, &run)
-        .map_err(|e| failed(e.to_string()))?;
+    let recorder =
+        Recorder::new(BufWriter::new(file), simulation, &run).map_err(|e| failed(e.to_string()))?;
     Ok(Log {
         recorder,
         path: shown,

@@ -86,9 +86,10 @@ fn summaries(
     let rows: Option<Vec<Vec<f64>>> = match weights {
         None => None,
         Some(weights) => {
-            let array: PyArrayLike2<'_, f64, AllowTypeChange> = weights.extract().map_err(|_| {
-                value_error("weights must be a 2-D array of numbers: one row per candidate")
-            })?;
+            let array: PyArrayLike2<'_, f64, AllowTypeChange> =
+                weights.extract().map_err(|_| {
+                    value_error("weights must be a 2-D array of numbers: one row per candidate")
+                })?;
             let expected = experiment.parameter_count().ok_or_else(|| {
                 value_error(format!(
                     "{} has no robot with controller \"neural\" whose weights could be set",
@@ -201,9 +202,7 @@ fn batch(
         text.as_deref(),
     )?;
     rows.iter()
-        .map(|row| {
-            serde_json::to_string(row).map_err(|e| errors::runtime_error(e.to_string()))
-        })
+        .map(|row| serde_json::to_string(row).map_err(|e| errors::runtime_error(e.to_string())))
         .collect()
 }
 

@@ -163,7 +163,12 @@ impl VectorWorld {
         let array = PyArray2::<f32>::zeros(py, [n, d], false);
         // SAFETY: the array was just made here and nothing else refers to it yet.
         if let Ok(out) = unsafe { array.as_slice_mut() } {
-            for (slot, row) in self.batch().slots.iter_mut().zip(out.chunks_exact_mut(d.max(1))) {
+            for (slot, row) in self
+                .batch()
+                .slots
+                .iter_mut()
+                .zip(out.chunks_exact_mut(d.max(1)))
+            {
                 slot.core.write_observation(row);
             }
         }
@@ -347,7 +352,9 @@ impl VectorWorld {
                 )
             };
             let (Ok(obs), Ok(rew), Ok(trunc), Ok(rest)) = (obs, rew, trunc, rest) else {
-                return Err(crate::errors::runtime_error("a fresh array is not contiguous"));
+                return Err(crate::errors::runtime_error(
+                    "a fresh array is not contiguous",
+                ));
             };
             let mut final_rows: Vec<Option<&mut [f32]>> = match &finals {
                 // SAFETY: as above.
@@ -374,7 +381,10 @@ impl VectorWorld {
                         .zip(rest.par_iter_mut())
                         .zip(final_rows.par_iter_mut())
                         .try_for_each(
-                            |((((((slot, action), observation), reward), truncated), restarted), last)| {
+                            |(
+                                (((((slot, action), observation), reward), truncated), restarted),
+                                last,
+                            )| {
                                 slot.step(
                                     action,
                                     mode,
@@ -392,7 +402,14 @@ impl VectorWorld {
             })
             .map_err(to_py)?;
         }
-        Ok((observations, rewards, terminated, truncated, restarted, finals))
+        Ok((
+            observations,
+            rewards,
+            terminated,
+            truncated,
+            restarted,
+            finals,
+        ))
     }
 
     /// The current observations (float32, num_envs × observation length).
@@ -459,7 +476,13 @@ impl VectorWorld {
         self.batch()
             .slots
             .iter()
-            .map(|s| (s.core.simulation().seed, s.core.simulation().steps, s.episode))
+            .map(|s| {
+                (
+                    s.core.simulation().seed,
+                    s.core.simulation().steps,
+                    s.episode,
+                )
+            })
             .collect()
     }
 

@@ -38,7 +38,11 @@ pub fn embedded_world(name: &str) -> PyResult<&'static str> {
 }
 
 /// Loads a world from its file, or from `text` (named `path`, reading no other file).
-pub fn load(path: &std::path::Path, text: Option<&str>, lenient: bool) -> PyResult<Arc<Experiment>> {
+pub fn load(
+    path: &std::path::Path,
+    text: Option<&str>,
+    lenient: bool,
+) -> PyResult<Arc<Experiment>> {
     let experiment = match text {
         Some(text) => Experiment::from_text(&path.display().to_string(), text, None, lenient, &[]),
         None => Experiment::load(path, lenient, &[]),
@@ -104,7 +108,9 @@ pub struct World {
 
 impl World {
     fn core(&self) -> MutexGuard<'_, Core> {
-        self.core.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+        self.core
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
     fn core_mut(&mut self) -> &mut Core {
@@ -155,7 +161,11 @@ impl World {
     /// Restarts the world under `seed` (the current seed when None) and returns the first
     /// observation. A log that was open is closed.
     #[pyo3(signature = (seed=None))]
-    fn reset<'py>(&mut self, py: Python<'py>, seed: Option<u64>) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    fn reset<'py>(
+        &mut self,
+        py: Python<'py>,
+        seed: Option<u64>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
         let seed = seed.unwrap_or(self.core_mut().simulation().seed);
         self.core_mut().reset(seed).map_err(to_py)?;
         Ok(self.observation(py))
@@ -181,7 +191,10 @@ impl World {
     /// Runs `steps` steps with the current actions (and the world's own controllers), without
     /// coming back to Python in between; returns the last observation.
     fn run<'py>(&mut self, py: Python<'py>, steps: u64) -> PyResult<Bound<'py, PyArray2<f32>>> {
-        let (core, actions) = (self.core.get_mut().unwrap_or_else(|p| p.into_inner()), &self.actions);
+        let (core, actions) = (
+            self.core.get_mut().unwrap_or_else(|p| p.into_inner()),
+            &self.actions,
+        );
         py.detach(|| {
             for _ in 0..steps {
                 core.step(actions)?;
@@ -195,7 +208,11 @@ impl World {
     /// The current observation: float32, shape (driven robots, observation length).
     #[getter]
     fn observation<'py>(&mut self, py: Python<'py>) -> Bound<'py, PyArray2<f32>> {
-        let array = PyArray2::<f32>::zeros(py, [self.controlled_names.len(), self.observation_len], false);
+        let array = PyArray2::<f32>::zeros(
+            py,
+            [self.controlled_names.len(), self.observation_len],
+            false,
+        );
         // SAFETY: the array was just made here and nothing else refers to it yet.
         if let Ok(out) = unsafe { array.as_slice_mut() } {
             self.core_mut().write_observation(out);
@@ -432,8 +449,11 @@ impl Robot {
     /// the turret's API reads it; `raw`, `lowpass`, `highpass`, `bandpass` or `odd`.
     #[pyo3(signature = (filter="odd"))]
     fn retina<'py>(&self, py: Python<'py>, filter: &str) -> PyResult<Bound<'py, PyArray1<u16>>> {
-        let kind = FilterKind::from_name(filter)
-            .ok_or_else(|| value_error(format!("unknown filter \"{filter}\"; filters: raw, lowpass, highpass, bandpass, odd")))?;
+        let kind = FilterKind::from_name(filter).ok_or_else(|| {
+            value_error(format!(
+                "unknown filter \"{filter}\"; filters: raw, lowpass, highpass, bandpass, odd"
+            ))
+        })?;
         let values = self.with(py, |r| match &r.panoramic {
             None => Err(value_error(format!("robot '{}' has no Panoramic turret", r.name))),
             Some(turret) => turret

@@ -572,7 +572,10 @@ mod tests {
                 Fitness::Phototaxis { .. } => rewards / 3.0,
                 Fitness::Regatta { .. } => rewards,
             };
-            assert!((expected - value).abs() < 1e-12, "{chosen:?}: {expected} {value}");
+            assert!(
+                (expected - value).abs() < 1e-12,
+                "{chosen:?}: {expected} {value}"
+            );
             assert!(value != 0.0, "{chosen:?}");
         }
     }
