@@ -198,16 +198,68 @@ struct Log {
     path: String,
 }
 
+/// The robots Python drives: by index, in the order actions and observations list them.
+struct Drive {
+    controlled: Vec<usize>,
+    observations: Vec<Observation>,
+    commands: Vec<Command>,
+}
+
+impl Drive {
+    /// A simulation of `experiment` under `seed` with these robots driven from outside, its
+    /// log opened when asked (before the first sensing, so that the log holds everything),
+    /// and its sensors read for the first observation.
+    fn launch(
+        &self,
+        experiment: &Arc<Experiment>,
+        seed: u64,
+        log: Option<(&Path, u64)>,
+    ) -> Result<(Running, Option<Log>), CoreError> {
+        let mut running = Running::try_new(experiment.clone(), |e| e.simulation(seed, None))?;
+        let opened = running.with_dependent_mut(|_, simulation| {
+            for ((&robot, observation), command) in self
+                .controlled
+                .iter()
+                .zip(&self.observations)
+                .zip(&self.commands)
+            {
+                for c in command.iter() {
+                    c.store(0, Ordering::Relaxed);
+                }
+                simulation.set_controller(
+                    robot,
+                    Box::new(External {
+                        command: command.clone(),
+                        senses: observation.senses(),
+                    }),
+                );
+                if observation.inputs.contains(&Input::Retina) {
+                    if let Some(turret) = simulation.khepera(robot).panoramic() {
+                        // Enabling a filter of a Panoramic turret cannot fail.
+                        let _ = turret.enable_filter(observation.filter);
+                    }
+                }
+            }
+            let log = match log {
+                Some((path, steps_requested)) => {
+                    Some(open_log(experiment, simulation, path, steps_requested)?)
+                }
+                None => None,
+            };
+            simulation.sense();
+            Ok::<_, CoreError>(log)
+        })?;
+        Ok((running, opened))
+    }
+}
+
 /// One world as an environment.
 pub struct Core {
     experiment: Arc<Experiment>,
     running: Running,
     observer: Observer,
     fitness: Fitness,
-    /// Robots Python drives, by index, in the order actions and observations list them.
-    controlled: Vec<usize>,
-    observations: Vec<Observation>,
-    commands: Vec<Command>,
+    drive: Drive,
     /// Steps after which an episode is truncated (0: never).
     episode_steps: u64,
     log: Option<Log>,
@@ -262,23 +314,24 @@ impl Core {
             .iter()
             .map(|_| Arc::new([AtomicI32::new(0), AtomicI32::new(0)]))
             .collect();
+        let drive = Drive {
+            controlled,
+            observations,
+            commands,
+        };
         let seed = seed.unwrap_or(experiment.compiled.settings.seed);
-        let running = Running::try_new(experiment.clone(), |e| e.simulation(seed, None))?;
+        let (running, log) = drive.launch(&experiment, seed, None)?;
         let observer = Observer::new(running.borrow_dependent(), &fitness);
-        let mut core = Core {
+        Ok(Core {
             experiment,
             running,
             observer,
             fitness,
-            controlled,
-            observations,
-            commands,
+            drive,
             episode_steps,
-            log: None,
+            log,
             scratch: Vec::new(),
-        };
-        core.start(seed, None)?;
-        Ok(core)
+        })
     }
 
     pub fn experiment(&self) -> &Arc<Experiment> {
@@ -290,11 +343,11 @@ impl Core {
     }
 
     pub fn controlled(&self) -> &[usize] {
-        &self.controlled
+        &self.drive.controlled
     }
 
     pub fn observations(&self) -> &[Observation] {
-        &self.observations
+        &self.drive.observations
     }
 
     pub fn episode_steps(&self) -> u64 {
@@ -303,7 +356,7 @@ impl Core {
 
     /// The total observation length (every controlled robot's, in order).
     pub fn observation_len(&self) -> usize {
-        self.observations.iter().map(Observation::len).sum()
+        self.drive.observations.iter().map(Observation::len).sum()
     }
 
     /// Starts the world afresh under `seed`, closing a log that was open.
@@ -327,42 +380,9 @@ impl Core {
     }
 
     fn start(&mut self, seed: u64, log: Option<(&Path, u64)>) -> Result<(), CoreError> {
-        let running = Running::try_new(self.experiment.clone(), |e| e.simulation(seed, None))?;
+        let (running, log) = self.drive.launch(&self.experiment, seed, log)?;
         self.running = running;
-        let (controlled, observations, commands) =
-            (&self.controlled, &self.observations, &self.commands);
-        let experiment = &self.experiment;
-        let opened = self.running.with_dependent_mut(|_, simulation| {
-            for ((&robot, observation), command) in
-                controlled.iter().zip(observations).zip(commands)
-            {
-                for c in command.iter() {
-                    c.store(0, Ordering::Relaxed);
-                }
-                simulation.set_controller(
-                    robot,
-                    Box::new(External {
-                        command: command.clone(),
-                        senses: observation.senses(),
-                    }),
-                );
-                if observation.inputs.contains(&Input::Retina) {
-                    if let Some(turret) = simulation.khepera(robot).panoramic() {
-                        // Enabling a filter of a Panoramic turret cannot fail.
-                        let _ = turret.enable_filter(observation.filter);
-                    }
-                }
-            }
-            let log = match log {
-                Some((path, steps_requested)) => {
-                    Some(open_log(experiment, simulation, path, steps_requested)?)
-                }
-                None => None,
-            };
-            simulation.sense();
-            Ok::<_, CoreError>(log)
-        })?;
-        self.log = opened;
+        self.log = log;
         self.observer = Observer::new(self.running.borrow_dependent(), &self.fitness);
         Ok(())
     }
@@ -371,9 +391,10 @@ impl Core {
     /// are applied, the world moves, the sensors are read for the next observation.
     pub fn step(&mut self, actions: &[f64]) -> Result<(), CoreError> {
         for ((command, observation), pair) in self
+            .drive
             .commands
             .iter()
-            .zip(&self.observations)
+            .zip(&self.drive.observations)
             .zip(actions.chunks_exact(2))
         {
             command[0].store(
@@ -411,7 +432,7 @@ impl Core {
     pub fn write_observation(&mut self, out: &mut [f32]) {
         let simulation = self.running.borrow_dependent();
         let mut offset = 0;
-        for (&robot, observation) in self.controlled.iter().zip(&self.observations) {
+        for (&robot, observation) in self.drive.controlled.iter().zip(&self.drive.observations) {
             let n = observation.len();
             observation.write(
                 &simulation.robots[robot],
@@ -425,7 +446,7 @@ impl Core {
     /// Each controlled robot's reward in the last step.
     pub fn write_rewards(&self, out: &mut [f64]) {
         let rewards = self.observer.rewards();
-        for (o, &robot) in out.iter_mut().zip(&self.controlled) {
+        for (o, &robot) in out.iter_mut().zip(&self.drive.controlled) {
             *o = rewards[robot];
         }
     }

@@ -356,13 +356,21 @@ impl VectorWorld {
                     "a fresh array is not contiguous",
                 ));
             };
+            // A robot that observes nothing still steps: one unused value per copy to zip.
+            let mut nothing = Vec::new();
+            let obs = if d == 0 {
+                nothing.resize(n, 0.0f32);
+                nothing.as_mut_slice()
+            } else {
+                obs
+            };
             let mut final_rows: Vec<Option<&mut [f32]>> = match &finals {
                 // SAFETY: as above.
-                Some(f) => match unsafe { f.as_slice_mut() } {
-                    Ok(slice) => slice.chunks_exact_mut(chunk).map(Some).collect(),
+                Some(f) if d > 0 => match unsafe { f.as_slice_mut() } {
+                    Ok(slice) => slice.chunks_exact_mut(d).map(Some).collect(),
                     Err(_) => (0..n).map(|_| None).collect(),
                 },
-                None => (0..n).map(|_| None).collect(),
+                _ => (0..n).map(|_| None).collect(),
             };
             let actions = &self.actions;
             let batch = self

@@ -193,3 +193,18 @@ def test_other_worlds_and_robots(tmp_path):
     for _ in range(30):
         env.step(np.array([0.0, 0.0]))
     assert env.unwrapped.world["red"].wheels != (0, 0)
+
+
+def test_a_robot_that_observes_nothing_still_steps(tmp_path):
+    blind = tmp_path / "blind.wbt"
+    blind.write_text(
+        '#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem "NUE" }\nArena { size 1 1 }\n'
+        'Khepera { network NeuralNetwork { inputs [ "bias" ] weights [ 0 0 ] } }\n'
+    )
+    for mode in ["next_step", "same_step"]:
+        v = regatta.VectorWorld(blind, 3, autoreset=mode, duration=0.32)
+        assert v.reset(seed=1).shape == (3, 0)
+        for _ in range(10):
+            obs, rewards, terminated, truncated, restarted, finals = v.step(np.ones((3, 2)))
+        assert obs.shape == (3, 0) and truncated.all()
+        assert [steps for _, steps, _ in v.episodes()] == [0 if mode == "same_step" else 10] * 3
