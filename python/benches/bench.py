@@ -25,6 +25,13 @@ import numpy as np
 
 import regatta
 
+try:
+    import gymnasium
+
+    import regatta.gym
+except ImportError:
+    gymnasium = None
+
 ROOT = Path(__file__).resolve().parents[2]
 REGATTA = str(ROOT / "worlds" / "regatta.wbt")
 NEURAL = str(ROOT / "worlds" / "regatta_neural.wbt")
@@ -93,10 +100,7 @@ def main() -> None:
     t = best_of(args.repeats, loop_worlds)
     print(f"Python loop over {e} World    {e * calls / t:12,.0f} world-steps/s")
 
-    try:
-        import gymnasium
-        import regatta.gym
-
+    if gymnasium is not None:
         sync = gymnasium.vector.SyncVectorEnv(
             [lambda: gymnasium.make("regatta/Regatta-v0") for _ in range(e)]
         )
@@ -119,15 +123,14 @@ def main() -> None:
 
         t = best_of(args.repeats, loop_rust_vec)
         print(f"RegattaVectorEnv {e} envs (make_vec) {e * calls / t:8,.0f} world-steps/s")
-    except ImportError:
+    else:
         print("gymnasium is not installed: no Gymnasium figures")
 
     # regatta.evaluate against regatta batch: the same runs.
     m = args.evaluations
     p = regatta.parameter_count(NEURAL)
-    weights = regatta.network_weights(NEURAL)[None, :]
     seeds = list(range(1, m + 1))
-    t_eval = best_of(args.repeats, lambda: regatta.evaluate(NEURAL, weights, seeds, duration=60.0, threads=args.threads))
+    t_eval = best_of(args.repeats, lambda: regatta.evaluate(NEURAL, None, seeds, duration=60.0, threads=args.threads))
     print(f"regatta.evaluate   {m} runs of 60 s  {m / t_eval:8.1f} evaluations/s  ({p} weights)")
     binary = Path(args.regatta)
     if binary.exists():
