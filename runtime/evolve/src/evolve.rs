@@ -60,7 +60,7 @@ pub struct Settings {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Optimiser {
-    Cmaes(Cmaes),
+    Cmaes(Box<Cmaes>),
     Ga(Genetic),
 }
 
@@ -142,9 +142,11 @@ impl Evolution {
             .map(|_| 2.0 * stream.uniform() - 1.0)
             .collect();
         let optimiser = match settings.method {
-            Method::Cmaes => {
-                Optimiser::Cmaes(Cmaes::new(start, settings.sigma, settings.population))
-            }
+            Method::Cmaes => Optimiser::Cmaes(Box::new(Cmaes::new(
+                start,
+                settings.sigma,
+                settings.population,
+            ))),
             Method::Ga => Optimiser::Ga(Genetic::new(
                 &vec![0.0; dimension],
                 1.0,

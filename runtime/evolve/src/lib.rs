@@ -9,6 +9,9 @@
 //! - [`world`]: `--set` overrides and weights written into a world.
 //! - [`cmaes`], [`ga`], [`evolve`]: the optimisers and the generation loop.
 
+// Vector formulas (`for i in 0..n`) read as the equations they implement.
+#![allow(clippy::needless_range_loop)]
+
 pub mod cmaes;
 pub mod evolve;
 pub mod experiment;

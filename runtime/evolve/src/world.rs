@@ -107,7 +107,7 @@ fn set_field(node: &Node, field: &str, value: &str, edits: &mut Vec<(usize, usiz
 }
 
 fn apply(text: &str, mut edits: Vec<(usize, usize, String)>) -> String {
-    edits.sort_by(|a, b| b.0.cmp(&a.0));
+    edits.sort_by_key(|e| std::cmp::Reverse(e.0));
     let mut out = text.to_owned();
     for (start, end, replacement) in edits {
         out.replace_range(start..end, &replacement);
