@@ -115,6 +115,7 @@ impl Experiment {
             &regatta_schema::Options {
                 strict: !lenient,
                 base_dir,
+                proto_path: Vec::new(),
             },
         );
         checked
