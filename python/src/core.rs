@@ -19,7 +19,7 @@ use regatta_evolve::{Experiment, Fitness, Observer};
 use regatta_runtime::compile::rig::{RobotRig, TurretRig};
 use regatta_runtime::controllers::to_command;
 use regatta_runtime::khepera::{Controller, Khepera, KheperaError, Senses};
-use regatta_runtime::log::{Recorder, RunInfo};
+use regatta_runtime::log::{Channels, Recorder, RunInfo};
 use regatta_runtime::neural::{pool_sectors, Input, Pooling};
 use regatta_runtime::retina::FilterKind;
 use regatta_runtime::sim::{RobotState, Simulation};
@@ -192,6 +192,15 @@ impl Controller for External {
     }
 }
 
+/// What `World.log` asks for.
+#[derive(Clone, Copy)]
+pub struct LogRequest<'a> {
+    pub path: &'a Path,
+    /// The run's length the log's metadata announces.
+    pub steps_requested: u64,
+    pub channels: Channels,
+}
+
 /// An open log and what it needs to close.
 struct Log {
     recorder: Recorder<BufWriter<File>>,
@@ -213,7 +222,7 @@ impl Drive {
         &self,
         experiment: &Arc<Experiment>,
         seed: u64,
-        log: Option<(&Path, u64)>,
+        log: Option<&LogRequest>,
     ) -> Result<(Running, Option<Log>), CoreError> {
         let mut running = Running::try_new(experiment.clone(), |e| e.simulation(seed, None))?;
         let opened = running.with_dependent_mut(|_, simulation| {
@@ -241,9 +250,7 @@ impl Drive {
                 }
             }
             let log = match log {
-                Some((path, steps_requested)) => {
-                    Some(open_log(experiment, simulation, path, steps_requested)?)
-                }
+                Some(request) => Some(open_log(experiment, simulation, &self.controlled, request)?),
                 None => None,
             };
             simulation.sense();
@@ -367,7 +374,7 @@ impl Core {
 
     /// Restarts the world under the same seed with a log recording it from step 0, as
     /// `regatta run --log` does; only at step 0 (a log holds a run from its start).
-    pub fn start_log(&mut self, path: &Path, steps_requested: u64) -> Result<(), CoreError> {
+    pub fn start_log(&mut self, request: &LogRequest) -> Result<(), CoreError> {
         let steps = self.simulation().steps;
         if steps != 0 {
             return Err(CoreError::Usage(format!(
@@ -376,10 +383,10 @@ impl Core {
         }
         self.close_log()?;
         let seed = self.simulation().seed;
-        self.start(seed, Some((path, steps_requested)))
+        self.start(seed, Some(request))
     }
 
-    fn start(&mut self, seed: u64, log: Option<(&Path, u64)>) -> Result<(), CoreError> {
+    fn start(&mut self, seed: u64, log: Option<&LogRequest>) -> Result<(), CoreError> {
         let (running, log) = self.drive.launch(&self.experiment, seed, log)?;
         self.running = running;
         self.log = log;
@@ -488,9 +495,14 @@ impl Drop for Core {
 fn open_log(
     experiment: &Experiment,
     simulation: &mut Simulation,
-    path: &Path,
-    steps_requested: u64,
+    controlled: &[usize],
+    request: &LogRequest,
 ) -> Result<Log, CoreError> {
+    let LogRequest {
+        path,
+        steps_requested,
+        channels,
+    } = *request;
     let shown = path.display().to_string();
     let failed = |message: String| CoreError::Log {
         path: shown.clone(),
@@ -506,6 +518,18 @@ fn open_log(
         seed: simulation.seed,
         lenient: experiment.lenient,
         steps_requested,
+        channels,
+        // The robots driven from Python: their commands came from outside the world.
+        controllers: controlled
+            .iter()
+            .map(|&r| {
+                (
+                    simulation.robots[r].name.clone(),
+                    "python".to_owned(),
+                    Vec::new(),
+                )
+            })
+            .collect(),
     };
     let recorder =
         Recorder::new(BufWriter::new(file), simulation, &run).map_err(|e| failed(e.to_string()))?;

@@ -12,8 +12,9 @@ use pyo3::types::PyDict;
 use regatta_evolve::{Experiment, Fitness};
 use regatta_runtime::retina::FilterKind;
 
-use crate::core::{Core, CoreError};
+use crate::core::{Core, CoreError, LogRequest};
 use crate::errors::{to_py, value_error};
+use regatta_runtime::log::Channels;
 
 /// The worlds the package carries (the Gymnasium environments' defaults).
 pub const EMBEDDED: &[(&str, &str)] = &[
@@ -338,10 +339,21 @@ impl World {
     /// Records the run to an MCAP log, as `regatta run --log` does (the same bytes for the
     /// same world, seed and steps). A log holds a run from its start: call it at step 0 (after
     /// construction or `reset`). `steps` is the length the log's metadata announces. The log
-    /// is closed by `close`, `reset`, or when the world is dropped.
-    #[pyo3(signature = (path, steps=0))]
-    fn log(&mut self, path: PathBuf, steps: u64) -> PyResult<()> {
-        self.core_mut().start_log(&path, steps).map_err(to_py)
+    /// is closed by `close`, `reset`, or when the world is dropped. `channels` as
+    /// `regatta run --channels`: `all`, `regatta` (the reproducible record), `foxglove`, or
+    /// channel names, comma-separated. Robots driven from Python are named in the log's
+    /// metadata with controller "python".
+    #[pyo3(signature = (path, steps=0, channels="all"))]
+    fn log(&mut self, path: PathBuf, steps: u64, channels: &str) -> PyResult<()> {
+        let channels: Channels = channels
+            .parse()
+            .map_err(|e: regatta_runtime::log::UnknownChannel| value_error(e.to_string()))?;
+        let request = LogRequest {
+            path: &path,
+            steps_requested: steps,
+            channels,
+        };
+        self.core_mut().start_log(&request).map_err(to_py)
     }
 
     /// Closes the log, if one is open.

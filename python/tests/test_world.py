@@ -139,10 +139,14 @@ def test_a_log_starts_at_step_zero(tmp_path):
     with pytest.raises(ValueError, match="step 1"):
         w.log(tmp_path / "late.mcap")
     w.reset()
-    w.log(tmp_path / "from_start.mcap")
+    with pytest.raises(ValueError, match="colour"):
+        w.log(tmp_path / "bad.mcap", channels="colour")
+    w.log(tmp_path / "from_start.mcap", channels="regatta")
     w.run(10)
     w.close()
     assert (tmp_path / "from_start.mcap").stat().st_size > 0
+    # A driven robot's log says where its commands came from.
+    assert b"controllers" in (tmp_path / "from_start.mcap").read_bytes()
 
 
 def test_robots_by_name():
