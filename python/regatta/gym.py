@@ -229,36 +229,29 @@ class RegattaVectorEnv(VectorEnv):
         return tuple(self._vector.render(i, self.render_size) for i in range(self.num_envs))
 
 
-def make_regatta(**kwargs) -> RegattaEnv:
-    """``regatta/Regatta-v0``'s entry point."""
-    kwargs.setdefault("default_world", DEFAULT_WORLDS["Regatta-v0"])
-    kwargs.setdefault("fitness", "regatta")
-    kwargs.setdefault("duration", DEFAULT_DURATION["Regatta-v0"])
-    return RegattaEnv(**kwargs)
+def _entry_points(name: str, fitness: str):
+    """The entry point and vector entry point of ``regatta/<name>``: the environment classes
+    with that environment's world, fitness and episode length as defaults."""
+
+    def defaults(kwargs: dict) -> dict:
+        kwargs.setdefault("default_world", DEFAULT_WORLDS[name])
+        kwargs.setdefault("fitness", fitness)
+        kwargs.setdefault("duration", DEFAULT_DURATION[name])
+        return kwargs
+
+    def entry(**kwargs) -> RegattaEnv:
+        return RegattaEnv(**defaults(kwargs))
+
+    def vector(num_envs: int = 1, **kwargs) -> RegattaVectorEnv:
+        return RegattaVectorEnv(num_envs, **defaults(kwargs))
+
+    entry.__doc__ = f"``regatta/{name}``'s entry point."
+    vector.__doc__ = f"``regatta/{name}``'s vector entry point."
+    return entry, vector
 
 
-def make_regatta_vector(num_envs: int = 1, **kwargs) -> RegattaVectorEnv:
-    """``regatta/Regatta-v0``'s vector entry point."""
-    kwargs.setdefault("default_world", DEFAULT_WORLDS["Regatta-v0"])
-    kwargs.setdefault("fitness", "regatta")
-    kwargs.setdefault("duration", DEFAULT_DURATION["Regatta-v0"])
-    return RegattaVectorEnv(num_envs, **kwargs)
-
-
-def make_avoidance(**kwargs) -> RegattaEnv:
-    """``regatta/Avoidance-v0``'s entry point."""
-    kwargs.setdefault("default_world", DEFAULT_WORLDS["Avoidance-v0"])
-    kwargs.setdefault("fitness", "avoidance")
-    kwargs.setdefault("duration", DEFAULT_DURATION["Avoidance-v0"])
-    return RegattaEnv(**kwargs)
-
-
-def make_avoidance_vector(num_envs: int = 1, **kwargs) -> RegattaVectorEnv:
-    """``regatta/Avoidance-v0``'s vector entry point."""
-    kwargs.setdefault("default_world", DEFAULT_WORLDS["Avoidance-v0"])
-    kwargs.setdefault("fitness", "avoidance")
-    kwargs.setdefault("duration", DEFAULT_DURATION["Avoidance-v0"])
-    return RegattaVectorEnv(num_envs, **kwargs)
+make_regatta, make_regatta_vector = _entry_points("Regatta-v0", "regatta")
+make_avoidance, make_avoidance_vector = _entry_points("Avoidance-v0", "avoidance")
 
 
 def register_environments() -> None:

@@ -361,6 +361,16 @@ impl Core {
         self.episode_steps
     }
 
+    /// The observation's column names (the first driven robot's; all have the same length in
+    /// a `World`, and there is one in a `VectorWorld`).
+    pub fn observation_names(&self) -> Vec<String> {
+        self.drive
+            .observations
+            .first()
+            .map(|o| o.elements().into_iter().map(|(name, _, _)| name).collect())
+            .unwrap_or_default()
+    }
+
     /// The total observation length (every controlled robot's, in order).
     pub fn observation_len(&self) -> usize {
         self.drive.observations.iter().map(Observation::len).sum()

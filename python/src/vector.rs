@@ -158,6 +158,14 @@ impl VectorWorld {
             .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
+    fn slot(&mut self, index: usize) -> PyResult<&Slot> {
+        let n = self.num_envs;
+        self.batch()
+            .slots
+            .get(index)
+            .ok_or_else(|| value_error(format!("index {index} is out of range (0..{n})")))
+    }
+
     fn observations<'py>(&mut self, py: Python<'py>) -> Bound<'py, PyArray2<f32>> {
         let (n, d) = (self.num_envs, self.observation_len);
         let array = PyArray2::<f32>::zeros(py, [n, d], false);
@@ -439,12 +447,7 @@ impl VectorWorld {
     /// The observation's column names (see `World.observation_names`).
     #[getter]
     fn observation_names(&mut self) -> Vec<String> {
-        self.batch().slots[0]
-            .core
-            .observations()
-            .first()
-            .map(|o| o.elements().into_iter().map(|(name, _, _)| name).collect())
-            .unwrap_or_default()
+        self.batch().slots[0].core.observation_names()
     }
 
     /// Lowest and highest value of each observation column.
@@ -496,13 +499,7 @@ impl VectorWorld {
 
     /// Copy `index`'s episode so far as `World.summary_json()` gives it.
     fn summary_json(&mut self, index: usize) -> PyResult<String> {
-        let n = self.num_envs;
-        let slot = self
-            .batch()
-            .slots
-            .get(index)
-            .ok_or_else(|| value_error(format!("index {index} is out of range (0..{n})")))?;
-        Ok(slot.core.summary_json())
+        Ok(self.slot(index)?.core.summary_json())
     }
 
     /// Copy `index` from above (see `World.render`).
@@ -513,12 +510,7 @@ impl VectorWorld {
         index: usize,
         size: usize,
     ) -> PyResult<Bound<'py, PyArray3<u8>>> {
-        let n = self.num_envs;
-        let slot = self
-            .batch()
-            .slots
-            .get(index)
-            .ok_or_else(|| value_error(format!("index {index} is out of range (0..{n})")))?;
+        let slot = self.slot(index)?;
         crate::render::top_view_array(py, slot.core.simulation(), size)
     }
 

@@ -232,11 +232,7 @@ impl World {
     /// The names of the observation's columns (`ir0`, …, `ambient7`, `retina0`, …).
     #[getter]
     fn observation_names(&self) -> Vec<String> {
-        self.core()
-            .observations()
-            .first()
-            .map(|o| o.elements().into_iter().map(|(name, _, _)| name).collect())
-            .unwrap_or_default()
+        self.core().observation_names()
     }
 
     /// Lowest and highest value of each observation column.
