@@ -46,6 +46,13 @@ def _world_source(world: Optional[Union[str, os.PathLike]], default: str):
     return default, embedded_world(default)
 
 
+def _check_arguments(render_mode: Optional[str], duration: float) -> None:
+    if render_mode is not None and render_mode != "rgb_array":
+        raise ValueError(f"render_mode must be None or 'rgb_array', found {render_mode!r}")
+    if not (duration > 0):
+        raise ValueError(f"duration must be a positive number of seconds, found {duration}")
+
+
 def _spaces(bounds):
     low, high = bounds
     observation = spaces.Box(low=low, high=high, dtype=np.float32)
@@ -81,10 +88,7 @@ class RegattaEnv(gymnasium.Env):
         lenient: bool = False,
         default_world: str = "regatta.wbt",
     ):
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be None or 'rgb_array', found {render_mode!r}")
-        if not (duration > 0):
-            raise ValueError(f"duration must be a positive number of seconds, found {duration}")
+        _check_arguments(render_mode, duration)
         path, text = _world_source(world, default_world)
         control = None if robot is None else [robot]
         self._world = World(path, text=text, lenient=lenient, control=control, fitness=fitness)
@@ -152,10 +156,7 @@ class RegattaVectorEnv(VectorEnv):
         lenient: bool = False,
         default_world: str = "regatta.wbt",
     ):
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be None or 'rgb_array', found {render_mode!r}")
-        if not (duration > 0):
-            raise ValueError(f"duration must be a positive number of seconds, found {duration}")
+        _check_arguments(render_mode, duration)
         self.autoreset_mode = (
             autoreset_mode
             if isinstance(autoreset_mode, AutoresetMode)
