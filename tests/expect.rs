@@ -41,6 +41,7 @@ fn typed_diagnostics_match_their_expectations() {
         let options = Options {
             strict: !lenient,
             base_dir: Some(input.parent().unwrap().to_owned()),
+            proto_path: Vec::new(),
         };
         let checked = check(source, &options);
         let mut actual = String::new();

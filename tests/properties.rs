@@ -169,7 +169,7 @@ proptest! {
         for diagnostic in &parsed.diagnostics {
             let _ = diagnostic.render("noise", &text, false);
         }
-        let _ = check(SourceText::from_bytes("noise".to_owned(), text.into_bytes()), &Options { strict: false, base_dir: None });
+        let _ = check(SourceText::from_bytes("noise".to_owned(), text.into_bytes()), &Options { strict: false, base_dir: None, proto_path: Vec::new() });
     }
 }
 

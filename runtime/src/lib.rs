@@ -8,6 +8,7 @@
 // Channel loops (`for k in 0..3`) read as the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+pub mod broad;
 pub mod compile;
 pub mod controllers;
 pub mod geometry;
@@ -19,5 +20,6 @@ pub mod render;
 pub mod retina;
 pub mod sim;
 pub mod vision;
+pub mod webots_controllers;
 
 pub use compile::{compile, Compiled};

@@ -7,15 +7,18 @@
 
 pub mod catalogue;
 mod lower;
+pub mod proto_path;
 mod protos;
 pub mod scene;
 pub mod template;
 pub mod value;
+pub mod webots;
 
 pub use catalogue::{Catalogue, FieldSpec, NodeSpec};
 pub use lower::{
-    check, check_file, Checked, FileDiagnostic, Options, Source, MAX_INSTANCE_DEPTH, MAX_NODES,
+    check, check_file, check_file_with_proto_path, Checked, FileDiagnostic, Options, Source,
+    Substitution, UnbuiltRobot, MAX_INSTANCE_DEPTH, MAX_NODES,
 };
-pub use protos::BUILTIN_PROTOS;
+pub use protos::{BUILTIN_PROTOS, WEBOTS_STANDINS};
 pub use scene::{FileId, NodeId, Scene, SceneNode, UpAxis};
 pub use value::{BaseType, FieldType, Value};

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use regatta_parser::SourceText;
-use regatta_schema::{check, check_file, Options};
+use regatta_schema::{check, check_file_with_proto_path, Options};
 
 use crate::Outcome;
 
@@ -39,13 +39,14 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
             let options = Options {
                 strict: !args.lenient,
                 base_dir: None,
+                proto_path: crate::world::proto_path(),
             };
             check(
                 SourceText::from_bytes("<stdin>".to_owned(), bytes),
                 &options,
             )
         } else {
-            match check_file(path, !args.lenient) {
+            match check_file_with_proto_path(path, !args.lenient, crate::world::proto_path()) {
                 Ok(checked) => checked,
                 Err(error) => {
                     eprintln!("error: {error}");
@@ -65,6 +66,9 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
             }
         }
         any_error |= checked.has_errors();
+        if !args.quiet {
+            crate::world::print_substitutions(&checked);
+        }
         let shown: Vec<_> = checked
             .diagnostics
             .iter()

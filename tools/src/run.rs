@@ -30,9 +30,19 @@ pub struct Args {
     /// Record every sensor and actuator to this MCAP file.
     #[arg(long, value_name = "FILE.mcap")]
     log: Option<PathBuf>,
+    /// The log's channels, comma-separated: `all`, `regatta` (the reproducible record),
+    /// `foxglove` (scene, tf, world_pose, images, events), or single channels.
+    #[arg(long, value_name = "LIST", default_value = "all", requires = "log")]
+    channels: regatta_runtime::log::Channels,
     /// What renders vision devices.
     #[arg(long, value_enum, default_value_t)]
     renderer: crate::vision::RendererKind,
+    /// Threads that sense and control the robots (default: every core). The log is the
+    /// same for any number.
+    #[arg(long)]
+    threads: Option<usize>,
+    #[command(flatten)]
+    controllers: crate::webots::ControllerOverride,
     /// Print the run as one JSON object (docs/run.schema.json) instead of text.
     #[arg(long)]
     json: bool,
@@ -46,7 +56,26 @@ pub(crate) fn parse_fitness(text: &str) -> Result<regatta_evolve::Fitness, Strin
 }
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
-    let loaded = crate::world::load(&args.world, args.lenient, color)?;
+    match args.threads {
+        Some(0) => anyhow::bail!("--threads must be at least 1"),
+        Some(threads) => rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .context("cannot start the thread pool")?
+            .install(|| run_here(args, color)),
+        None => run_here(args, color),
+    }
+}
+
+fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
+    let mut loaded = crate::world::load(&args.world, args.lenient, color)?;
+    crate::webots::refuse_unbuilt_robots(&loaded)?;
+    crate::webots::resolve_controllers(
+        &mut loaded.compiled,
+        &args.controllers,
+        args.lenient,
+        None,
+    )?;
     let compiled = &loaded.compiled;
     let mut simulation = Simulation::new(compiled, args.seed)
         .with_context(|| format!("cannot run {}", args.world.display()))?;
@@ -71,6 +100,7 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 &mut simulation,
                 args.lenient,
                 steps,
+                args.channels,
             )
         })
         .transpose()?;
@@ -172,6 +202,12 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 .map(|&k| (k + 1).to_string())
                 .collect();
             print!("; buoy visits {}: {}", sequence.len(), sequence.join(" "));
+        }
+        if let Some(fall) = &robot.fell {
+            print!(
+                "; fell off the floor at t {:.3} s, x {:.3} z {:.3}",
+                fall.time, fall.pose.x, fall.pose.z
+            );
         }
         if robot.controller_errors > 0 {
             print!(

@@ -46,13 +46,33 @@ pub struct ServeArgs {
     /// Record every sensor and actuator to this MCAP file, as `regatta run --log` does.
     #[arg(long, value_name = "FILE.mcap")]
     log: Option<PathBuf>,
+    /// The log's channels, as for `regatta run`.
+    #[arg(long, value_name = "LIST", default_value = "all", requires = "log")]
+    channels: regatta_runtime::log::Channels,
     /// Read a foreign file leniently.
     #[arg(long)]
     lenient: bool,
+    #[command(flatten)]
+    controllers: crate::webots::ControllerOverride,
 }
 
 pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
-    let loaded = crate::world::load(&args.world, args.lenient, color)?;
+    let mut loaded = crate::world::load(&args.world, args.lenient, color)?;
+    crate::webots::refuse_unbuilt_robots(&loaded)?;
+    let served = match &args.robot {
+        Some(name) => Some(crate::world::robot_named(
+            &loaded.compiled,
+            &args.world,
+            name,
+        )?),
+        None => (!loaded.compiled.rig.robots.is_empty()).then_some(0),
+    };
+    crate::webots::resolve_controllers(
+        &mut loaded.compiled,
+        &args.controllers,
+        args.lenient,
+        served,
+    )?;
     let compiled = &loaded.compiled;
     let robot = match &args.robot {
         Some(name) => crate::world::robot_named(compiled, &args.world, name)?,
@@ -79,6 +99,7 @@ pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
                 &mut simulation,
                 args.lenient,
                 max_steps.unwrap_or(0),
+                args.channels,
             )
         })
         .transpose()?;

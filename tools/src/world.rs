@@ -6,7 +6,30 @@ use std::path::Path;
 use anyhow::{bail, Context};
 use regatta_runtime::log::{Recorder, RunInfo};
 use regatta_runtime::{compile, Compiled};
-use regatta_schema::{check_file, Checked};
+use regatta_schema::{check_file_with_proto_path, Checked};
+
+static PROTO_PATH: std::sync::OnceLock<Vec<std::path::PathBuf>> = std::sync::OnceLock::new();
+
+/// Sets the folders where `webots://` PROTOs are looked for (`--proto-path`, then
+/// `REGATTA_PROTO_PATH`), once, before any world is read.
+pub fn set_proto_path(dirs: Vec<std::path::PathBuf>) {
+    let _ = PROTO_PATH.set(dirs);
+}
+
+/// The folders where `webots://` PROTOs are looked for.
+pub fn proto_path() -> Vec<std::path::PathBuf> {
+    PROTO_PATH.get().cloned().unwrap_or_default()
+}
+
+/// Prints which Webots PROTOs regatta's stand-ins replaced (`note:` lines on stderr).
+pub fn print_substitutions(checked: &Checked) {
+    for substitution in &checked.substitutions {
+        eprintln!(
+            "note: '{}' is regatta's built-in stand-in for {}",
+            substitution.name, substitution.url
+        );
+    }
+}
 
 /// A checked and compiled world.
 pub struct Loaded {
@@ -29,7 +52,8 @@ pub fn check_runtime(checked: &mut Checked) {
 
 /// Checks `path` (printing warnings and errors to stderr) and compiles it; fails on errors.
 pub fn load(path: &Path, lenient: bool, color: bool) -> anyhow::Result<Loaded> {
-    let mut checked = check_file(path, !lenient)?;
+    let mut checked = check_file_with_proto_path(path, !lenient, proto_path())?;
+    print_substitutions(&checked);
     check_runtime(&mut checked);
     let shown: Vec<_> = checked
         .diagnostics
@@ -96,6 +120,7 @@ pub fn create_recorder(
     simulation: &mut regatta_runtime::sim::Simulation,
     lenient: bool,
     steps_requested: u64,
+    channels: regatta_runtime::log::Channels,
 ) -> anyhow::Result<Recorder<std::io::BufWriter<std::fs::File>>> {
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent)
@@ -109,10 +134,34 @@ pub fn create_recorder(
         seed: simulation.seed,
         lenient,
         steps_requested,
+        channels,
+        controllers: changed_controllers(loaded),
     };
     Ok(Recorder::new(
         std::io::BufWriter::new(file),
         simulation,
         &run,
     )?)
+}
+
+/// Robots whose controller (or its arguments) is not what their world gives, for the log.
+fn changed_controllers(loaded: &Loaded) -> Vec<(String, String, Vec<String>)> {
+    let scene = &loaded.checked.scene;
+    loaded
+        .compiled
+        .rig
+        .robots
+        .iter()
+        .filter(|robot| {
+            scene.string(robot.node, "controller") != robot.controller
+                || scene.strings(robot.node, "controllerArgs") != robot.controller_args
+        })
+        .map(|robot| {
+            (
+                robot.name.clone(),
+                robot.controller.clone(),
+                robot.controller_args.clone(),
+            )
+        })
+        .collect()
 }
