@@ -12,6 +12,18 @@
 //!   ±`STALL_SPEED` while a front sensor reads more than `STALL_PROXIMITY`, for `STALL_STEPS`
 //!   steps: the Braitenberg network's deadlock in a corner) turns on the spot, away from the
 //!   nearer side, for `ESCAPE_STEPS` steps.
+//!
+//!   Habituation: a robot that has seen two lights at once (it knows there is more than one
+//!   buoy) and has kept the light it follows abeam (more than `ABEAM_PIXELS` from the
+//!   retina's centre: rounding it, not sailing to it) for `habituation` control steps loses
+//!   interest in it: the light is ignored until it leaves the view, and the robot sails on
+//!   to the light farthest to the other side (the first one the rounding turned its bow
+//!   to), as a sailor rounds a mark and leaves it. Near a buoy the retina's normalisation
+//!   (by the mean photocurrent) can dim the far ones below the lobe contrast, so that
+//!   without habituation the robot circles the near one for ever (worlds/regatta_wide.wbt).
+//!   In the paper's arena the next light takes over before habituation would; a robot that
+//!   has only ever seen one light keeps circling it, as the paper's did. `habituation=0`
+//!   turns it off.
 
 use std::ops::ControlFlow;
 
@@ -39,6 +51,8 @@ pub enum ControllerError {
     },
     #[error("controller argument {key}={value} is not a finite number")]
     NotANumber { key: String, value: String },
+    #[error("controller argument {key}={value} is a number of steps: it cannot be negative")]
+    Negative { key: String, value: String },
 }
 
 /// Parameters of the built-in controllers, with their defaults.
@@ -52,6 +66,9 @@ pub struct Parameters {
     pub light_gain: f64,
     /// Least odd-filter lobe, in LSB, that counts as a light edge.
     pub min_contrast: f64,
+    /// Control steps with the followed light abeam before the robot loses interest in it
+    /// (0: never).
+    pub habituation: f64,
 }
 
 impl Default for Parameters {
@@ -61,11 +78,15 @@ impl Default for Parameters {
             bias: 10.0,
             light_gain: 0.1,
             min_contrast: 1.5,
+            // 2.4 s at the 32 ms control cycle, about 160° of a tight orbit: in the paper's
+            // arena the next light takes over sooner; later, the next mark has turned past
+            // the bow and the rounding would change sense.
+            habituation: 75.0,
         }
     }
 }
 
-const KEYS: &[&str] = &["irGain", "bias", "lightGain", "minContrast"];
+const KEYS: &[&str] = &["irGain", "bias", "lightGain", "minContrast", "habituation"];
 
 impl Parameters {
     /// Reads `key=value` strings (each string may hold several, separated by spaces or commas).
@@ -93,6 +114,13 @@ impl Parameters {
                 "bias" => parameters.bias = number,
                 "lightGain" => parameters.light_gain = number,
                 "minContrast" => parameters.min_contrast = number,
+                "habituation" if number < 0.0 => {
+                    return Err(ControllerError::Negative {
+                        key: key.to_owned(),
+                        value: value.to_owned(),
+                    });
+                }
+                "habituation" => parameters.habituation = number,
                 other => {
                     return Err(ControllerError::UnknownKey {
                         controller: controller.to_owned(),
@@ -141,7 +169,9 @@ pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, Control
             thresholds: None,
             enabled: false,
             odd: Vec::new(),
+            maxima: Vec::new(),
             escape: StallEscape::default(),
+            habituation: Habituation::default(),
         })),
         "neural" => Err(crate::neural::NetworkError::NoNetwork.into()),
         other => Err(ControllerError::Unknown(other.to_owned())),
@@ -375,15 +405,107 @@ impl StallEscape {
     }
 }
 
+/// A light moves less than this many pixels from one step to the next while the robot
+/// turns at its speeds (an orbit turns it by about 1.4 pixels per 32 ms step): the maximum
+/// nearest a light's last position, within it, is the same light.
+pub const TRACK_PIXELS: f64 = 8.0;
+
+/// A followed light this many pixels or more from the retina's centre (80°) is abeam.
+pub const ABEAM_PIXELS: f64 = 50.0;
+
+/// Departing ends once the next mark is this close to the retina's centre (pixels).
+pub const DEPARTED_PIXELS: f64 = 10.0;
+
+/// The regatta controller's habituation to the light it follows (see the module's
+/// documentation). Lights have no names: a light is followed from step to step by its
+/// position on the retina.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Habituation {
+    /// Whether two lights were ever seen at once.
+    several: bool,
+    /// The light followed (its position, in pixels from the region's first) and the steps
+    /// it has been abeam.
+    followed: Option<(f64, u32)>,
+    /// The light the robot lost interest in, followed until it leaves the view.
+    ignored: Option<f64>,
+    /// Set on losing interest in a light: the side it was on (−1 left, +1 right).
+    departing: Option<f64>,
+}
+
+/// The maximum in `maxima` nearest `position`, within [`TRACK_PIXELS`].
+fn track(maxima: &[f64], position: f64) -> Option<f64> {
+    maxima
+        .iter()
+        .copied()
+        .filter(|m| (m - position).abs() <= TRACK_PIXELS)
+        .min_by(|a, b| (a - position).abs().total_cmp(&(b - position).abs()))
+}
+
+/// The maximum nearest `centre` (the first of equals, as [`nearest_light_maximum`]) other
+/// than `except`.
+fn nearest_to(maxima: &[f64], centre: f64, except: Option<f64>) -> Option<f64> {
+    let mut nearest: Option<f64> = None;
+    for &m in maxima {
+        if Some(m) != except && nearest.is_none_or(|n| (m - centre).abs() < (n - centre).abs()) {
+            nearest = Some(m);
+        }
+    }
+    nearest
+}
+
+impl Habituation {
+    /// The light to steer to among this step's `maxima` (in pixel order, `centre` the
+    /// retina's centre in the same units), if any. `habituation` is the parameter.
+    pub fn choose(&mut self, maxima: &[f64], centre: f64, habituation: f64) -> Option<f64> {
+        self.ignored = self.ignored.and_then(|p| track(maxima, p));
+        let followed = self
+            .followed
+            .and_then(|(p, steps)| track(maxima, p).map(|m| (m, steps)));
+        self.several |= maxima.len() >= 2;
+        let target = match self.departing {
+            // Leaving a light behind on one side: the next mark is the light farthest to
+            // the other side (the first the rounding turned the bow to).
+            Some(side) => maxima
+                .iter()
+                .copied()
+                .filter(|&m| Some(m) != self.ignored)
+                .max_by(|a, b| (side * (centre - a)).total_cmp(&(side * (centre - b)))),
+            None => nearest_to(maxima, centre, self.ignored),
+        };
+        let Some(target) = target else {
+            self.followed = None;
+            return None;
+        };
+        if (target - centre).abs() <= DEPARTED_PIXELS {
+            self.departing = None;
+        }
+        let abeam = u32::from((target - centre).abs() >= ABEAM_PIXELS);
+        let steps = match followed {
+            Some((p, steps)) if p == target => steps.saturating_add(abeam),
+            _ => abeam,
+        };
+        if self.several && habituation > 0.0 && steps as f64 > habituation {
+            self.ignored = Some(target);
+            self.departing = Some((target - centre).signum());
+            self.followed = None;
+            return None;
+        }
+        self.followed = Some((target, steps));
+        Some(target)
+    }
+}
+
 /// The paper's regatta controller.
 pub struct Regatta {
     pub parameters: Parameters,
     /// The lobe thresholds, with the resolution and contrast they were found for.
     thresholds: Option<(u32, u64, LobeThresholds)>,
     enabled: bool,
-    /// The odd filter's last reading, its buffer reused.
+    /// The odd filter's last reading and its maxima, their buffers reused.
     odd: Vec<u16>,
+    maxima: Vec<f64>,
     escape: StallEscape,
+    habituation: Habituation,
 }
 
 impl Controller for Regatta {
@@ -410,8 +532,17 @@ impl Controller for Regatta {
                 thresholds
             }
         };
-        let nearest = thresholds.nearest_maximum(&self.odd, centre - first as f64);
-        if let Some(maximum) = nearest {
+        self.maxima.clear();
+        thresholds.for_each_maximum(&self.odd, |p| {
+            self.maxima.push(p);
+            ControlFlow::Continue(())
+        });
+        let chosen = self.habituation.choose(
+            &self.maxima,
+            centre - first as f64,
+            self.parameters.habituation,
+        );
+        if let Some(maximum) = chosen {
             let offset = maximum + first as f64 - centre;
             // Right of centre (positive) turns right: left wheel faster.
             left += self.parameters.light_gain * offset;
@@ -462,6 +593,61 @@ mod tests {
             build("wander", &[]),
             Err(ControllerError::Unknown(_))
         ));
+    }
+
+    #[test]
+    fn habituation_is_a_number_of_steps() {
+        let p = Parameters::parse("regatta", &["habituation=0".to_owned()]).unwrap();
+        assert_eq!(p.habituation, 0.0);
+        assert!(matches!(
+            Parameters::parse("regatta", &["habituation=-3".to_owned()]),
+            Err(ControllerError::Negative { .. })
+        ));
+    }
+
+    #[test]
+    fn a_light_kept_abeam_too_long_is_left_for_the_farthest_on_the_other_side() {
+        let centre = 75.0;
+        let limit = 3.0;
+        // One light only, abeam on the left: the robot has never seen two, so it keeps it.
+        let mut lone = Habituation::default();
+        for _ in 0..10 {
+            assert_eq!(lone.choose(&[20.0], centre, limit), Some(20.0));
+        }
+        // Two lights seen at once, then one abeam: kept for `limit` steps abeam, then left.
+        let mut h = Habituation::default();
+        assert_eq!(h.choose(&[20.0, 140.0], centre, limit), Some(20.0));
+        // Sailing to a light near the centre never counts.
+        for _ in 0..10 {
+            assert_eq!(h.choose(&[70.0], centre, limit), Some(70.0));
+        }
+        // It drifts abeam (moving a pixel a step: the same light).
+        let mut position = 24.0;
+        let mut chosen = Vec::new();
+        for _ in 0..5 {
+            position -= 1.0;
+            chosen.push(h.choose(&[position], centre, limit));
+        }
+        assert_eq!(
+            chosen,
+            [Some(23.0), Some(22.0), Some(21.0), None, None],
+            "left after {limit} steps abeam, then ignored while in view"
+        );
+        // Other lights appear: the one farthest right (the light left was on the left) is
+        // the next mark, even if another is nearer the centre.
+        assert_eq!(h.choose(&[18.0, 60.0, 100.0], centre, limit), Some(100.0));
+        // Once it is ahead, the usual rule again: the light nearest the centre.
+        assert_eq!(h.choose(&[18.0, 72.0, 80.0], centre, limit), Some(80.0));
+        assert_eq!(h.choose(&[18.0, 74.0, 80.0], centre, limit), Some(74.0));
+        // The ignored light, lost from view, may be followed again.
+        assert_eq!(h.choose(&[], centre, limit), None);
+        assert_eq!(h.choose(&[18.0], centre, limit), Some(18.0));
+        // habituation=0: never left.
+        let mut off = Habituation::default();
+        assert_eq!(off.choose(&[20.0, 140.0], centre, 0.0), Some(20.0));
+        for _ in 0..100 {
+            assert_eq!(off.choose(&[20.0], centre, 0.0), Some(20.0));
+        }
     }
 
     #[test]

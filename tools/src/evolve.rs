@@ -20,7 +20,8 @@ pub struct Args {
     /// The world whose NeuralNetwork is evolved (and the world best.wbt is written from).
     world: PathBuf,
     /// More worlds every candidate is evaluated in (repeatable); their networks must take
-    /// as many weights.
+    /// as many weights. A world with no network takes the first world's robot: its
+    /// controller, network and turret (the arenas as they are, one controller).
     #[arg(long = "world", value_name = "WORLD")]
     more_worlds: Vec<PathBuf>,
     /// NAME[:key=value,...]: avoidance, regatta, phototaxis.
@@ -93,13 +94,31 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let fitness = Fitness::parse(&args.fitness)?;
     let mut paths = vec![args.world.clone()];
     paths.extend(args.more_worlds.iter().cloned());
-    let experiments: Vec<Experiment> = paths
+    let mut experiments: Vec<Experiment> = paths
         .iter()
         .map(|path| {
             Experiment::load(path, args.lenient, &args.overrides)
                 .with_context(|| format!("cannot load {}", path.display()))
         })
         .collect::<anyhow::Result<_>>()?;
+    // A world whose robots have no network takes the first world's robot (controller,
+    // network, turret): the same controller sails every arena.
+    for index in 1..experiments.len() {
+        if experiments[index].network.is_some() || experiments[0].network.is_none() {
+            continue;
+        }
+        let mut overrides = regatta_evolve::world::network_overrides(&experiments[0].text)
+            .with_context(|| format!("cannot take the network of {}", experiments[0].name))?;
+        overrides.extend(args.overrides.iter().cloned());
+        let path = &paths[index];
+        experiments[index] = Experiment::load(path, args.lenient, &overrides)
+            .with_context(|| format!("cannot load {}", path.display()))?;
+        eprintln!(
+            "{}: its robots take {}'s network and turret",
+            path.display(),
+            experiments[0].name
+        );
+    }
     let dimension = experiments[0].parameter_count().with_context(|| {
         format!(
             "{} has no robot with controller \"neural\" and a NeuralNetwork to evolve",

@@ -346,6 +346,8 @@ pub struct Observer {
     meters: Vec<Meters>,
     distance: Vec<f64>,
     last: Vec<DVec2>,
+    /// Each robot's reward in the last step: its contribution to the chosen fitness.
+    rewards: Vec<f64>,
 }
 
 impl Observer {
@@ -360,6 +362,7 @@ impl Observer {
                 .map(|_| Meters::new(fitness, landmarks))
                 .collect(),
             distance: vec![0.0; simulation.robots.len()],
+            rewards: vec![0.0; simulation.robots.len()],
             last: simulation
                 .robots
                 .iter()
@@ -371,12 +374,19 @@ impl Observer {
     /// Takes in the step just done.
     pub fn after_step(&mut self, simulation: &Simulation) {
         let (meters, distance, last) = (&mut self.meters, &mut self.distance, &mut self.last);
+        let (rewards, fitness) = (&mut self.rewards, &self.fitness);
         self.records.after_step(simulation, |robot, record| {
-            meters[robot].add(record);
+            rewards[robot] = meters[robot].add_rewarded(record, fitness);
             let here = DVec2::new(record.pose.x, record.pose.z);
             distance[robot] += (here - last[robot]).length();
             last[robot] = here;
         });
+    }
+
+    /// Each robot's reward in the last step (the chosen fitness's step contribution, see
+    /// [`crate::fitness::Meters::add_rewarded`]), robots in file order.
+    pub fn rewards(&self) -> &[f64] {
+        &self.rewards
     }
 
     /// The run so far as data; `wall_s` only where timing belongs (a single `run`).
