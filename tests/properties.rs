@@ -169,7 +169,7 @@ proptest! {
         for diagnostic in &parsed.diagnostics {
             let _ = diagnostic.render("noise", &text, false);
         }
-        let _ = check(SourceText::from_bytes("noise".to_owned(), text.into_bytes()), &Options { strict: false, base_dir: None });
+        let _ = check(SourceText::from_bytes("noise".to_owned(), text.into_bytes()), &Options { strict: false, ..Options::default() });
     }
 }
 
@@ -219,11 +219,23 @@ fn exponential_proto_expansion_is_bounded() {
         SourceText::from_bytes("bomb.wbt".to_owned(), text.into_bytes()),
         &Options::default(),
     );
-    assert!(checked
+    let limits: Vec<&str> = checked
         .diagnostics
         .iter()
-        .any(|d| d.diagnostic.code == "too-large" || d.diagnostic.code == "depth"));
-    assert!(checked.scene.nodes.len() <= regatta_schema::MAX_NODES);
+        .filter(|d| d.diagnostic.code == "limit")
+        .map(|d| d.diagnostic.message.as_str())
+        .collect();
+    assert_eq!(limits.len(), 1, "{:?}", checked.short());
+    assert!(
+        limits[0].contains("more than the limit of 1000000"),
+        "{limits:?}"
+    );
+    // Refused before anything was built.
+    assert!(
+        checked.scene.nodes.len() < 10,
+        "{}",
+        checked.scene.nodes.len()
+    );
 }
 
 mod worlds_that_check {

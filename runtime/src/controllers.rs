@@ -1,6 +1,12 @@
 //! The built-in controllers, chosen by a world's `controller` field and tuned by
 //! `controllerArgs` (`"key=value"` strings).
 //!
+//! [`CONTROLLERS`] is the registry: each entry names a controller, documents it, lists its
+//! parameters with their kinds and defaults, and builds it. `regatta check` validates a
+//! world's controllers against it ([`check_scene`]: unknown names and keys, ill-typed values,
+//! with "did you mean"), and a run builds them from it ([`build`]), so both agree by
+//! construction. Adding a controller is one entry here.
+//!
 //! - `none`: does nothing.
 //! - `braitenberg`: Mondada's obstacle avoider, the feed-forward network of the Khepera BIOS:
 //!   `speed = bias + irGain · Σ proximity[i]·w[i] / 400` per wheel, K-Team's weights.
@@ -12,6 +18,10 @@
 
 use std::ops::ControlFlow;
 
+use regatta_parser::{Diagnostic, Severity};
+use regatta_schema::catalogue::did_you_mean as did_you_mean_in;
+use regatta_schema::{Checked, FileDiagnostic, Value};
+
 use crate::khepera::{Controller, Khepera, KheperaError, Senses};
 use crate::retina::FilterKind;
 
@@ -22,18 +32,338 @@ pub const RIGHT_WEIGHTS: [f64; 8] = [-5.0, -15.0, -18.0, 6.0, 4.0, 4.0, 3.0, 5.0
 /// Why a controller could not be built from a world's fields.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ControllerError {
-    #[error("unknown controller \"{0}\"; built in: none, braitenberg, regatta")]
-    Unknown(String),
+    #[error("unknown controller \"{name}\"; built in: {known}{hint}")]
+    Unknown {
+        name: String,
+        known: String,
+        /// ", did you mean …?" or nothing.
+        hint: String,
+    },
     #[error("controller argument \"{0}\" is not key=value")]
     Malformed(String),
-    #[error("controller {controller} has no parameter \"{key}\"; it takes {known}")]
+    #[error("controller {controller} has no parameter \"{key}\"; it takes {known}{hint}")]
     UnknownKey {
         controller: String,
         key: String,
         known: String,
+        /// "; did you mean …?" or nothing.
+        hint: String,
     },
-    #[error("controller argument {key}={value} is not a finite number")]
-    NotANumber { key: String, value: String },
+    #[error("controller argument {key}={value} is not {expected}")]
+    NotANumber {
+        key: String,
+        value: String,
+        /// "a finite number", "a whole number"…
+        expected: String,
+    },
+}
+
+/// The kind of a parameter's value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ParameterKind {
+    /// A finite number.
+    Number,
+    /// A whole number.
+    Integer,
+}
+
+impl ParameterKind {
+    fn noun(self) -> &'static str {
+        match self {
+            ParameterKind::Number => "a finite number",
+            ParameterKind::Integer => "a whole number",
+        }
+    }
+}
+
+/// One `controllerArgs` key of a controller.
+#[derive(Clone, Copy, Debug)]
+pub struct ParameterSpec {
+    pub key: &'static str,
+    pub kind: ParameterKind,
+    pub default: f64,
+    pub doc: &'static str,
+}
+
+/// A built-in controller: what a world names and what it may pass.
+pub struct ControllerSpec {
+    pub name: &'static str,
+    /// Other names that mean the same controller.
+    pub aliases: &'static [&'static str],
+    pub doc: &'static str,
+    pub parameters: &'static [ParameterSpec],
+    /// Builds the controller from arguments already checked against `parameters`.
+    pub build: fn(&Arguments) -> Box<dyn Controller>,
+}
+
+/// Checked `controllerArgs`: each known key with its value.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Arguments {
+    values: Vec<(&'static str, f64)>,
+}
+
+impl Arguments {
+    /// The value of `key`, or `default` when the world did not give it.
+    pub fn get(&self, key: &str, default: f64) -> f64 {
+        self.values
+            .iter()
+            .rev()
+            .find(|(k, _)| *k == key)
+            .map_or(default, |(_, v)| *v)
+    }
+}
+
+const BRAITENBERG_PARAMETERS: &[ParameterSpec] = &[
+    ParameterSpec {
+        key: "irGain",
+        kind: ParameterKind::Number,
+        default: 1.0,
+        doc: "Multiplies the IR network (the paper doubled it in simulation).",
+    },
+    ParameterSpec {
+        key: "bias",
+        kind: ParameterKind::Number,
+        default: 10.0,
+        doc: "The bias neurons' forward speed (pulses per 10 ms).",
+    },
+];
+
+const REGATTA_PARAMETERS: &[ParameterSpec] = &[
+    BRAITENBERG_PARAMETERS[0],
+    BRAITENBERG_PARAMETERS[1],
+    ParameterSpec {
+        key: "lightGain",
+        kind: ParameterKind::Number,
+        default: 0.1,
+        doc: "Steering per pixel of light offset (pulses per 10 ms per pixel).",
+    },
+    ParameterSpec {
+        key: "minContrast",
+        kind: ParameterKind::Number,
+        default: 1.5,
+        doc: "Least odd-filter lobe, in LSB, that counts as a light edge.",
+    },
+];
+
+/// Every built-in controller.
+pub static CONTROLLERS: &[ControllerSpec] = &[
+    ControllerSpec {
+        name: "none",
+        aliases: &["", "<none>"],
+        doc: "Does nothing: the robot stands still (its sensors still read).",
+        parameters: &[],
+        build: |_| Box::new(Idle),
+    },
+    ControllerSpec {
+        name: "braitenberg",
+        aliases: &[],
+        doc: "Mondada's obstacle avoider: the Khepera BIOS's feed-forward IR network.",
+        parameters: BRAITENBERG_PARAMETERS,
+        build: |args| {
+            Box::new(Braitenberg {
+                parameters: Parameters::from_arguments(args),
+            })
+        },
+    },
+    ControllerSpec {
+        name: "regatta",
+        aliases: &[],
+        doc: "The paper's controller: the Braitenberg network plus light seeking with the Panoramic turret's odd filter.",
+        parameters: REGATTA_PARAMETERS,
+        build: |args| {
+            Box::new(Regatta {
+                parameters: Parameters::from_arguments(args),
+                thresholds: None,
+                enabled: false,
+                odd: Vec::new(),
+            })
+        },
+    },
+];
+
+/// The registry entry called `name` (or one of its aliases).
+pub fn find(name: &str) -> Option<&'static ControllerSpec> {
+    CONTROLLERS
+        .iter()
+        .find(|c| c.name == name || c.aliases.contains(&name))
+}
+
+/// The names a world may give, for messages.
+fn known_names() -> String {
+    CONTROLLERS
+        .iter()
+        .map(|c| c.name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The controller called `name`, or why not.
+pub fn spec_of(name: &str) -> Result<&'static ControllerSpec, ControllerError> {
+    find(name).ok_or_else(|| ControllerError::Unknown {
+        name: name.to_owned(),
+        known: known_names(),
+        hint: did_you_mean_in(name, CONTROLLERS.iter().map(|c| c.name))
+            .map(|close| format!("; did you mean \"{close}\"?"))
+            .unwrap_or_default(),
+    })
+}
+
+/// The `key=value` items of `controllerArgs` strings (each string may hold several,
+/// separated by spaces, commas or semicolons).
+fn items(args: &[String]) -> impl Iterator<Item = &str> {
+    args.iter()
+        .flat_map(|a| a.split([' ', ',', ';']))
+        .filter(|a| !a.is_empty())
+}
+
+/// Checks one `key=value` item against a controller's parameters.
+fn argument(spec: &ControllerSpec, item: &str) -> Result<(&'static str, f64), ControllerError> {
+    let (key, value) = item
+        .split_once('=')
+        .ok_or_else(|| ControllerError::Malformed(item.to_owned()))?;
+    let key = key.trim();
+    let Some(parameter) = spec.parameters.iter().find(|p| p.key == key) else {
+        let known = if spec.parameters.is_empty() {
+            "no parameters".to_owned()
+        } else {
+            spec.parameters
+                .iter()
+                .map(|p| p.key)
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        return Err(ControllerError::UnknownKey {
+            controller: spec.name.to_owned(),
+            key: key.to_owned(),
+            known,
+            hint: did_you_mean_in(key, spec.parameters.iter().map(|p| p.key))
+                .map(|close| format!("; did you mean \"{close}\"?"))
+                .unwrap_or_default(),
+        });
+    };
+    let number = value
+        .trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .filter(|v| parameter.kind != ParameterKind::Integer || v.fract() == 0.0)
+        .ok_or_else(|| ControllerError::NotANumber {
+            key: key.to_owned(),
+            value: value.to_owned(),
+            expected: parameter.kind.noun().to_owned(),
+        })?;
+    Ok((parameter.key, number))
+}
+
+/// Checks `controllerArgs` against the controller called `name`.
+pub fn arguments(name: &str, args: &[String]) -> Result<Arguments, ControllerError> {
+    let spec = spec_of(name)?;
+    let mut values = Vec::new();
+    for item in items(args) {
+        values.push(argument(spec, item)?);
+    }
+    Ok(Arguments { values })
+}
+
+/// Builds a built-in controller.
+pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, ControllerError> {
+    let spec = spec_of(name)?;
+    Ok((spec.build)(&arguments(name, args)?))
+}
+
+/// Checks every robot's `controller` and `controllerArgs` against the registry, adding a
+/// diagnostic per problem at the line that wrote the value (the user's line, through PROTOs).
+/// An unknown controller or argument is an error; in a check whose scene was read leniently
+/// (every error a warning), it is a warning and the robot runs `none`, or without that
+/// argument.
+pub fn check_scene(checked: &mut Checked) {
+    let lenient = !checked.strict;
+    let catalogue = regatta_schema::Catalogue::get();
+    let mut found = Vec::new();
+    for id in checked.scene.walk() {
+        let node = checked.scene.node(id);
+        let spec = catalogue.spec(node.spec);
+        let (Some(controller), Some(args)) = (
+            spec.field_index("controller"),
+            spec.field_index("controllerArgs"),
+        ) else {
+            continue;
+        };
+        found.push((id, controller, args));
+    }
+    for (id, controller_index, args_index) in found {
+        let node = &checked.scene.nodes[id.index()];
+        let name = node.fields[controller_index]
+            .strings()
+            .first()
+            .cloned()
+            .unwrap_or_default();
+        let args = node.fields[args_index].strings().to_vec();
+        let at = |index: usize| node.written_at(index).unwrap_or(node.origin);
+        let (name_at, args_at) = (at(controller_index), at(args_index));
+        let mut problems: Vec<(regatta_schema::scene::Origin, Diagnostic)> = Vec::new();
+        let mut kept_args = Vec::new();
+        match spec_of(&name) {
+            Err(error) => {
+                let mut diagnostic =
+                    Diagnostic::error(name_at.span, format!("unknown controller \"{name}\""))
+                        .with_label("no built-in controller has this name")
+                        .with_note(format!("built in: {}", known_names()))
+                        .with_code("unknown-controller");
+                if let ControllerError::Unknown { hint, .. } = &error {
+                    if !hint.is_empty() {
+                        diagnostic = diagnostic.with_note(hint.trim_start_matches("; ").to_owned());
+                    }
+                }
+                if lenient {
+                    diagnostic = diagnostic.with_note("the robot runs no controller");
+                }
+                problems.push((name_at, diagnostic));
+            }
+            Ok(spec) => {
+                for item in items(&args) {
+                    match argument(spec, item) {
+                        Ok(_) => kept_args.push(item.to_owned()),
+                        Err(error) => {
+                            let mut diagnostic = Diagnostic::error(
+                                args_at.span,
+                                format!("controllerArgs of \"{}\": {error}", spec.name),
+                            )
+                            .with_label("in these arguments")
+                            .with_code("controller-args");
+                            if lenient {
+                                diagnostic = diagnostic.with_note(format!("\"{item}\" is ignored"));
+                            }
+                            problems.push((args_at, diagnostic));
+                        }
+                    }
+                }
+            }
+        }
+        if problems.is_empty() {
+            continue;
+        }
+        let unknown = problems.iter().any(|(_, d)| d.code == "unknown-controller");
+        for (origin, mut diagnostic) in problems {
+            if lenient {
+                diagnostic.severity = Severity::Warning;
+            }
+            checked.diagnostics.push(FileDiagnostic {
+                file: origin.file,
+                diagnostic,
+            });
+        }
+        if lenient {
+            let node = &mut checked.scene.nodes[id.index()];
+            if unknown {
+                node.fields[controller_index] = Value::String("none".to_owned());
+                node.fields[args_index] = Value::Strings(Vec::new());
+            } else {
+                node.fields[args_index] = Value::Strings(kept_args);
+            }
+        }
+    }
+    checked.sort_diagnostics();
 }
 
 /// Parameters of the built-in controllers, with their defaults.
@@ -51,70 +381,31 @@ pub struct Parameters {
 
 impl Default for Parameters {
     fn default() -> Parameters {
-        Parameters {
-            ir_gain: 1.0,
-            bias: 10.0,
-            light_gain: 0.1,
-            min_contrast: 1.5,
-        }
+        Parameters::from_arguments(&Arguments::default())
     }
 }
-
-const KEYS: &[&str] = &["irGain", "bias", "lightGain", "minContrast"];
 
 impl Parameters {
-    /// Reads `key=value` strings (each string may hold several, separated by spaces or commas).
-    pub fn parse(controller: &str, args: &[String]) -> Result<Parameters, ControllerError> {
-        let mut parameters = Parameters::default();
-        for arg in args
-            .iter()
-            .flat_map(|a| a.split([' ', ',', ';']))
-            .filter(|a| !a.is_empty())
-        {
-            let (key, value) = arg
-                .split_once('=')
-                .ok_or_else(|| ControllerError::Malformed(arg.to_owned()))?;
-            let number: f64 = value
-                .trim()
-                .parse()
-                .ok()
-                .filter(|v: &f64| v.is_finite())
-                .ok_or_else(|| ControllerError::NotANumber {
-                    key: key.to_owned(),
-                    value: value.to_owned(),
-                })?;
-            match key.trim() {
-                "irGain" => parameters.ir_gain = number,
-                "bias" => parameters.bias = number,
-                "lightGain" => parameters.light_gain = number,
-                "minContrast" => parameters.min_contrast = number,
-                other => {
-                    return Err(ControllerError::UnknownKey {
-                        controller: controller.to_owned(),
-                        key: other.to_owned(),
-                        known: KEYS.join(", "),
-                    });
-                }
-            }
+    /// The parameters of checked arguments, defaults filled in from the registry.
+    pub fn from_arguments(args: &Arguments) -> Parameters {
+        let value = |key: &str| {
+            let default = REGATTA_PARAMETERS
+                .iter()
+                .find(|p| p.key == key)
+                .map_or(0.0, |p| p.default);
+            args.get(key, default)
+        };
+        Parameters {
+            ir_gain: value("irGain"),
+            bias: value("bias"),
+            light_gain: value("lightGain"),
+            min_contrast: value("minContrast"),
         }
-        Ok(parameters)
     }
-}
 
-/// Builds a built-in controller.
-pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, ControllerError> {
-    match name {
-        "none" | "" | "<none>" => Ok(Box::new(Idle)),
-        "braitenberg" => Ok(Box::new(Braitenberg {
-            parameters: Parameters::parse(name, args)?,
-        })),
-        "regatta" => Ok(Box::new(Regatta {
-            parameters: Parameters::parse(name, args)?,
-            thresholds: None,
-            enabled: false,
-            odd: Vec::new(),
-        })),
-        other => Err(ControllerError::Unknown(other.to_owned())),
+    /// Reads `key=value` strings for the controller called `controller`.
+    pub fn parse(controller: &str, args: &[String]) -> Result<Parameters, ControllerError> {
+        Ok(Parameters::from_arguments(&arguments(controller, args)?))
     }
 }
 
@@ -363,7 +654,11 @@ mod tests {
         ));
         assert!(matches!(
             build("wander", &[]),
-            Err(ControllerError::Unknown(_))
+            Err(ControllerError::Unknown { .. })
+        ));
+        assert!(matches!(
+            Parameters::parse("braitenberg", &["lightGain=1".to_owned()]),
+            Err(ControllerError::UnknownKey { .. })
         ));
     }
 

@@ -499,6 +499,8 @@ impl<W: Write + Seek> Recorder<W> {
 /// A log read back.
 pub struct LogContents {
     pub run: RunInfo,
+    /// The run's basic time step (s), when the log says it.
+    pub time_step: Option<f64>,
     /// The end record's entries, if the run finished writing it.
     pub end: Option<BTreeMap<String, String>>,
     /// (topic, log time ns, CDR bytes), in file order.
@@ -511,6 +513,7 @@ pub struct LogContents {
 /// Reads a log; a file cut short yields what its complete chunks hold, and says so.
 pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
     let mut run = None;
+    let mut time_step = None;
     let mut end = None;
     let mut truncated = None;
     let reader = mcap::read::LinearReader::new_with_options(
@@ -521,6 +524,11 @@ pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
     for record in reader {
         match record {
             Ok(mcap::records::Record::Metadata(metadata)) if metadata.name == "regatta" => {
+                time_step = metadata
+                    .metadata
+                    .get("time_step")
+                    .and_then(|t| t.parse::<f64>().ok())
+                    .filter(|t| *t > 0.0 && t.is_finite());
                 run = Some(RunInfo::from_metadata(&metadata.metadata)?)
             }
             Ok(mcap::records::Record::Metadata(metadata)) if metadata.name == "regatta.end" => {
@@ -556,6 +564,7 @@ pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
     }
     Ok(LogContents {
         run,
+        time_step,
         end,
         messages,
         truncated,

@@ -5,6 +5,7 @@
 //! PROTOs (the standard ones in `worlds/protos/` are built in) and resolves DEF/USE, returning
 //! the scene and every diagnostic. It never fails on user input.
 
+pub mod access;
 pub mod catalogue;
 mod lower;
 mod protos;
@@ -12,9 +13,11 @@ pub mod scene;
 pub mod template;
 pub mod value;
 
+pub use access::{FileAccess, Limits, Refusal};
 pub use catalogue::{Catalogue, FieldSpec, NodeSpec};
 pub use lower::{
-    check, check_file, Checked, FileDiagnostic, Options, Source, MAX_INSTANCE_DEPTH, MAX_NODES,
+    check, check_file, check_path, Binding, Bindings, Checked, FileDiagnostic, Options, Source,
+    MAX_DIAGNOSTICS, MAX_INSTANCE_DEPTH, MAX_NODES,
 };
 pub use protos::BUILTIN_PROTOS;
 pub use scene::{FileId, NodeId, Scene, SceneNode, UpAxis};

@@ -41,7 +41,22 @@ pub struct SceneNode {
     pub def_name: Option<String>,
     /// The PROTO whose instance this node is the root of (innermost first when nested).
     pub proto_names: Vec<String>,
+    /// Where the node was written: for a PROTO's root, the user's instance.
     pub origin: Origin,
+    /// Where each written field's value was written (field index, place), for messages
+    /// about values that only later stages understand (a controller's name and arguments).
+    /// A value passed into a PROTO points at the instance's line, not the PROTO's.
+    pub written_at: Vec<(u16, Origin)>,
+}
+
+impl SceneNode {
+    /// Where field `index`'s value was written, if it was.
+    pub fn written_at(&self, index: usize) -> Option<Origin> {
+        self.written_at
+            .iter()
+            .find(|(i, _)| *i as usize == index)
+            .map(|(_, origin)| *origin)
+    }
 }
 
 /// The axis convention of the file the scene was read from.

@@ -299,11 +299,31 @@ fn exported_csv_has_a_header_and_a_row_per_pose() {
     );
     let pose = std::fs::read_to_string(out.join("pose.csv")).unwrap();
     let mut lines = pose.lines();
-    assert_eq!(lines.next(), Some("t,robot,x,z,heading"));
-    assert_eq!(lines.count(), 100);
-    for name in ["wheels.csv", "proximity.csv", "ambient.csv", "retina.csv"] {
+    assert_eq!(lines.next(), Some("step,t_ns,t,robot,x,z,heading"));
+    // Integer steps and nanoseconds, and seconds written exactly: step 1 ends at 32 ms.
+    assert!(
+        lines
+            .next()
+            .unwrap()
+            .starts_with("1,32000000,0.032000000,khepera,"),
+        "{pose}"
+    );
+    assert_eq!(lines.count(), 99);
+    assert!(
+        pose.contains("\n100,3200000000,3.200000000,khepera,"),
+        "{pose}"
+    );
+    for name in [
+        "wheels.csv",
+        "proximity.csv",
+        "ambient.csv",
+        "retina.csv",
+        "units.csv",
+    ] {
         assert!(out.join(name).exists(), "{name}");
     }
+    let units = std::fs::read_to_string(out.join("units.csv")).unwrap();
+    assert!(units.contains("pose,heading,rad,"), "{units}");
     std::fs::remove_dir_all(dir).ok();
 }
 
@@ -383,9 +403,10 @@ fn plot_draws_the_top_view_and_a_kymograph() {
 }
 
 #[cfg(unix)]
-#[test]
-fn ctrl_c_ends_a_run_with_a_complete_log_marked_interrupted() {
-    let dir = temp_dir("interrupt");
+/// Runs a long logged run, sends it `signal` once it has started, and checks that it ends
+/// with 128 + signal and a complete log marked interrupted, which replays.
+fn a_signal_ends_a_run_with_a_complete_log(signal: i32, name: &str) {
+    let dir = temp_dir(&format!("interrupt-{signal}"));
     let log = dir.join("run.mcap");
     let child = regatta()
         .args(["run", "--steps", "100000000", "--log"])
@@ -395,19 +416,26 @@ fn ctrl_c_ends_a_run_with_a_complete_log_marked_interrupted() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(800));
+    // The log exists once the world is loaded and the handlers are installed.
+    let started = std::time::Instant::now();
+    while std::fs::metadata(&log).map_or(true, |m| m.len() == 0) && started.elapsed().as_secs() < 30
+    {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
     // SAFETY: sending a signal to our own child process.
     unsafe {
-        libc::kill(child.id() as i32, libc::SIGINT);
+        libc::kill(child.id() as i32, signal);
     }
     let output = child.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert_eq!(output.status.code(), Some(128 + signal), "{stderr}");
     assert!(
-        stderr.contains("interrupted after") && stderr.contains("marked interrupted"),
+        stderr.contains(&format!("interrupted by {name} after"))
+            && stderr.contains("marked interrupted"),
         "{stderr}"
     );
-    // Complete: no warning on reading; and it replays.
+    // Complete: no warning on reading (summary and footer written); and it replays.
     let export = regatta()
         .args(["log", "export"])
         .arg(&log)
@@ -416,7 +444,7 @@ fn ctrl_c_ends_a_run_with_a_complete_log_marked_interrupted() {
         .output()
         .unwrap();
     assert!(
-        !String::from_utf8_lossy(&export.stderr).contains("warning"),
+        export.status.success() && !String::from_utf8_lossy(&export.stderr).contains("warning"),
         "{}",
         String::from_utf8_lossy(&export.stderr)
     );
@@ -431,6 +459,16 @@ fn ctrl_c_ends_a_run_with_a_complete_log_marked_interrupted() {
         String::from_utf8_lossy(&replay.stdout)
     );
     std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn ctrl_c_ends_a_run_with_exit_130_and_a_complete_log() {
+    a_signal_ends_a_run_with_a_complete_log(libc::SIGINT, "SIGINT");
+}
+
+#[test]
+fn sigterm_ends_a_run_with_exit_143_and_a_complete_log() {
+    a_signal_ends_a_run_with_a_complete_log(libc::SIGTERM, "SIGTERM");
 }
 
 #[cfg(target_os = "linux")]
