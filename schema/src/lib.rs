@@ -19,6 +19,6 @@ pub use lower::{
     check, check_file, check_path, Binding, Bindings, Checked, FileDiagnostic, Options, Source,
     MAX_DIAGNOSTICS, MAX_INSTANCE_DEPTH, MAX_NODES,
 };
-pub use protos::BUILTIN_PROTOS;
+pub use protos::{standard_proto, standard_protos, ProtoField, ProtoSpec, BUILTIN_PROTOS};
 pub use scene::{FileId, NodeId, Scene, SceneNode, UpAxis};
 pub use value::{BaseType, FieldType, Value};

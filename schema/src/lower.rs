@@ -407,6 +407,8 @@ struct Lowerer<'c> {
     node_depth: usize,
     /// The user's line a value inside a PROTO body came from, while it is being typed.
     blame: Option<(FileId, Span)>,
+    /// Places problems in PROTO bodies were moved to (each gets one message).
+    relocated: BTreeSet<(u32, u32)>,
     /// PROTOs whose interface was already checked for unused fields.
     checked_protos: BTreeSet<(u32, u32)>,
     /// Nodes a PROTO expands to at most, by definition (file, offset).
@@ -444,6 +446,7 @@ impl<'c> Lowerer<'c> {
             includes: Vec::new(),
             node_depth: 0,
             blame: None,
+            relocated: BTreeSet::new(),
             checked_protos: BTreeSet::new(),
             estimates: HashMap::new(),
             loaded: HashMap::new(),
@@ -505,12 +508,28 @@ impl<'c> Lowerer<'c> {
     }
 
     fn error(&mut self, file: FileId, diagnostic: Diagnostic) {
+        let original = file;
         let (file, diagnostic) = self.relocate(file, diagnostic);
+        // One mistake, one message: a user's value that breaks several parts of a PROTO's
+        // body is reported once, at the value.
+        if file != original && !self.relocated.insert((file.0, diagnostic.span.start)) {
+            return;
+        }
         if self.diagnostics.len() >= MAX_DIAGNOSTICS {
             self.dropped += 1;
             return;
         }
         self.diagnostics.push(FileDiagnostic { file, diagnostic });
+    }
+
+    /// The innermost PROTO instance being expanded that the user wrote (not a built-in
+    /// PROTO's body).
+    fn user_instance(&self) -> Option<(FileId, Span)> {
+        self.frames
+            .iter()
+            .rev()
+            .find(|f| !self.is_builtin(f.instance.0))
+            .map(|f| f.instance)
     }
 
     /// Inside a PROTO's expansion, a problem the instance caused is shown at the instance's
@@ -520,12 +539,7 @@ impl<'c> Lowerer<'c> {
     fn relocate(&self, file: FileId, mut diagnostic: Diagnostic) -> (FileId, Diagnostic) {
         let target = match self.blame {
             Some((blamed, span)) if blamed != file => Some((blamed, span)),
-            _ if self.is_builtin(file) => self
-                .frames
-                .iter()
-                .rev()
-                .find(|f| !self.is_builtin(f.instance.0))
-                .map(|f| f.instance),
+            _ if self.is_builtin(file) => self.user_instance(),
             _ => None,
         };
         let Some((user_file, user_span)) = target else {
@@ -552,7 +566,7 @@ impl<'c> Lowerer<'c> {
                 message: if label.is_empty() {
                     proto
                 } else {
-                    format!("{label} ({proto})")
+                    format!("{proto}: {label}")
                 },
                 file: Some(file.0 as usize),
             },
@@ -1363,6 +1377,13 @@ impl<'c> Lowerer<'c> {
             if let Some(binding) = interface.get(&target.text) {
                 if let Some(site) = &binding.site {
                     return site.clone();
+                }
+            }
+            // A default: the user's instance is where it came from, unless this PROTO is
+            // the user's own (then its line is).
+            if self.is_builtin(scope.file) {
+                if let Some((file, span)) = self.user_instance() {
+                    return (file, Vec::new(), span);
                 }
             }
             return (scope.file, Vec::new(), field.span);
@@ -2854,17 +2875,19 @@ impl Lowerer<'_> {
                     "first named here",
                 );
             }
-            if self.options.strict {
-                self.error(
-                    at.file,
-                    diagnostic.with_note("logs, CSV and plots tell robots apart by name"),
-                );
-                continue;
-            }
             let new_name = (2..)
                 .map(|k| format!("{name}_{k}"))
                 .find(|candidate| !taken.contains_key(candidate))
                 .unwrap_or_default();
+            if self.options.strict {
+                self.error(
+                    at.file,
+                    diagnostic
+                        .with_note("logs, CSV and plots tell robots apart by name")
+                        .with_note(format!("give it a name of its own: name \"{new_name}\"")),
+                );
+                continue;
+            }
             taken.insert(new_name.clone(), id);
             diagnostic.severity = regatta_parser::Severity::Warning;
             self.error(
