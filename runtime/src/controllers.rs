@@ -363,7 +363,6 @@ pub fn check_scene(checked: &mut Checked) {
             }
         }
     }
-    checked.sort_diagnostics();
 }
 
 /// Parameters of the built-in controllers, with their defaults.

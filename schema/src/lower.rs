@@ -2639,11 +2639,29 @@ impl<'c> Lowerer<'c> {
             if r[3] == 0.0 {
                 return Some([0.0, 0.0, 1.0, 0.0]);
             }
-            self.error(
-                file,
-                Diagnostic::error(span, "a rotation needs a non-zero axis").with_code("range"),
-            );
-            return None;
+            let diagnostic = Diagnostic::error(
+                span,
+                format!(
+                    "a rotation of {} about the axis 0 0 0 has no direction",
+                    r[3]
+                ),
+            )
+            .with_label("the axis is zero")
+            .with_code("zero-axis");
+            if self.options.strict {
+                self.error(
+                    file,
+                    diagnostic.with_note(
+                        "write an axis (0 1 0 for a heading), or 0 1 0 0 for no rotation",
+                    ),
+                );
+                return None;
+            }
+            // Lenient: what viewers do with such files.
+            let mut diagnostic = diagnostic.with_note("read as no rotation");
+            diagnostic.severity = regatta_parser::Severity::Warning;
+            self.error(file, diagnostic);
+            return Some([0.0, 0.0, 1.0, 0.0]);
         }
         Some([r[0] / length, r[1] / length, r[2] / length, r[3]])
     }

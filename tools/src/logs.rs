@@ -56,7 +56,7 @@ fn compile_embedded(
     }
     options.base_dir = recorded_folder;
     let mut checked = regatta_schema::check(source, &options);
-    regatta_runtime::controllers::check_scene(&mut checked);
+    regatta_runtime::check::check_scene(&mut checked);
     if checked.has_errors() {
         eprint!("{}", checked.render(false));
         bail!("the world embedded in the log no longer checks with this regatta");

@@ -112,7 +112,7 @@ pub struct Loaded {
 /// it; fails on errors.
 pub fn load(path: &Path, world: &WorldOptions, color: bool) -> anyhow::Result<Loaded> {
     let mut checked = check_world(path, world)?;
-    regatta_runtime::controllers::check_scene(&mut checked);
+    regatta_runtime::check::check_scene(&mut checked);
     eprint!(
         "{}",
         checked.render_where(|d| d.diagnostic.is_error() || world.lenient, color)
