@@ -12,13 +12,13 @@ use crate::syntax::Span;
 /// Why a file could not be read at all.
 #[derive(Debug, thiserror::Error)]
 pub enum SourceError {
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}")]
     Io {
         path: PathBuf,
         #[source]
         source: std::io::Error,
     },
-    #[error("{path} looks gzip-compressed but does not inflate: {source}")]
+    #[error("{path} looks gzip-compressed but does not inflate")]
     Gzip {
         path: PathBuf,
         #[source]

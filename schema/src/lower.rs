@@ -538,7 +538,9 @@ impl<'c> Lowerer<'c> {
     /// edit.
     fn relocate(&self, file: FileId, mut diagnostic: Diagnostic) -> (FileId, Diagnostic) {
         let target = match self.blame {
-            Some((blamed, span)) if blamed != file => Some((blamed, span)),
+            Some((blamed, span)) if blamed != file || span != diagnostic.span => {
+                Some((blamed, span))
+            }
             _ if self.is_builtin(file) => self.user_instance(),
             _ => None,
         };
@@ -1833,7 +1835,7 @@ impl<'c> Lowerer<'c> {
                 scope.file,
                 Diagnostic::error(
                     field.span,
-                    format!("'{name}' of '{}' is an {access}: it cannot {role} events", node.text),
+                    format!("'{name}' of '{}' is {}: it cannot {role} events", node.text, with_article(&access)),
                 )
                 .with_label(if source {
                     "a ROUTE starts at an eventOut or exposedField"
@@ -2163,8 +2165,8 @@ impl<'c> Lowerer<'c> {
                     if !is_compatible(&binding.keyword, access) {
                         self.strict_or_warn(
                             file,
-                            Diagnostic::error(target.span, format!("an {} cannot be IS'd to '{field_name}', which is a {access}", binding.keyword))
-                                .with_label(format!("'{}' is an {}", target.text, binding.keyword))
+                            Diagnostic::error(target.span, format!("{} cannot be IS'd to '{field_name}', which is {}", with_article(&binding.keyword), with_article(access)))
+                                .with_label(format!("'{}' is {}", target.text, with_article(&binding.keyword)))
                                 .with_note("VRML97 4.8.3: a field may be IS'd to a field or exposedField, an eventIn to an eventIn or exposedField, an eventOut to an eventOut or exposedField; an exposedField only to an exposedField")
                                 .with_code("is-access-mismatch"),
                         );
@@ -2943,6 +2945,16 @@ fn shorten(text: &str) -> String {
         shown.push('…');
     }
     shown
+}
+
+/// "a field", "an exposedField".
+fn with_article(word: &str) -> String {
+    let article = if word.starts_with(['a', 'e', 'i', 'o', 'u']) {
+        "an"
+    } else {
+        "a"
+    };
+    format!("{article} {word}")
 }
 
 /// Whether an interface field declared with `interface` (a PROTO keyword) may be IS'd to a

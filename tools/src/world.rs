@@ -23,8 +23,14 @@ pub struct WorldOptions {
     pub allow_paths: Vec<PathBuf>,
     /// Raise a limit (repeatable): nesting (64), include-depth (16), proto-depth (32),
     /// nodes (1000000), file-size (256M).
-    #[arg(long = "limit", value_name = "KEY=N")]
+    #[arg(long = "limit", value_name = "KEY=N", value_parser = parse_limit)]
     pub limits: Vec<String>,
+}
+
+/// Checks `--limit KEY=N` when the command line is read (a bad one is a usage error).
+fn parse_limit(assignment: &str) -> Result<String, String> {
+    Limits::default().set(assignment)?;
+    Ok(assignment.to_owned())
 }
 
 /// What the world embedded in a log may read (its mode comes from the log).
@@ -35,7 +41,7 @@ pub struct LogWorldOptions {
     #[arg(long = "allow-path", value_name = "DIR")]
     pub allow_paths: Vec<PathBuf>,
     /// Raise a limit (repeatable): nesting, include-depth, proto-depth, nodes, file-size.
-    #[arg(long = "limit", value_name = "KEY=N")]
+    #[arg(long = "limit", value_name = "KEY=N", value_parser = parse_limit)]
     pub limits: Vec<String>,
 }
 
