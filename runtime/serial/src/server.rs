@@ -413,10 +413,14 @@ pub fn serve_real_time(
                 });
             }
         }
-        while server.simulation.steps - first_step < due {
+        // A world that cannot keep up still answers its client: at most a few steps between
+        // two reads of the link.
+        let mut caught_up = 0;
+        while server.simulation.steps - first_step < due && caught_up < LAG_WARNING_STEPS {
             if server.advance() == Flow::Done {
                 return Ok(Ended::Done);
             }
+            caught_up += 1;
         }
         let n = match link.read(&mut buffer) {
             Ok(0) => return Ok(Ended::Closed),
