@@ -186,7 +186,10 @@ fn check_within_a_minute(text: String, options: Options) -> Result<usize, String
     std::thread::Builder::new()
         .stack_size(2 << 20)
         .spawn(move || {
-            let checked = check(SourceText::from_bytes("system.wbt".to_owned(), text.into_bytes()), &options);
+            let checked = check(
+                SourceText::from_bytes("system.wbt".to_owned(), text.into_bytes()),
+                &options,
+            );
             let _ = send.send(checked.scene.nodes.len());
         })
         .map_err(|e| e.to_string())?;

@@ -510,12 +510,61 @@ pub struct LogContents {
     pub truncated: Option<String>,
 }
 
+/// Largest uncompressed chunk a log may claim: regatta writes chunks of about 4 MB, and a
+/// damaged or hostile header must not make the reader allocate what it says.
+const MAX_CHUNK: u64 = 256 << 20;
+
+/// The longest prefix of `bytes` whose records are framed soundly (lengths within the file,
+/// chunks of sane sizes), and why it ends early, if it does. MCAP frames every record as an
+/// opcode byte and a little-endian u64 length; a chunk (opcode 6) gives its uncompressed size
+/// at bytes 16..24 of its body.
+fn sound_prefix(bytes: &[u8]) -> (&[u8], Option<String>) {
+    const MAGIC: usize = 8;
+    let mut at = MAGIC.min(bytes.len());
+    while at < bytes.len() {
+        let Some(header) = bytes.get(at..at + 9) else {
+            return (&bytes[..at], None);
+        };
+        let length = u64::from_le_bytes(header[1..9].try_into().unwrap_or_default());
+        let body_start = at + 9;
+        let end = match usize::try_from(length)
+            .ok()
+            .and_then(|l| body_start.checked_add(l))
+        {
+            Some(end) if end <= bytes.len() => end,
+            // Cut short: the reader says so itself.
+            _ => return (&bytes[..at], None),
+        };
+        if header[0] == 0x06 {
+            let claimed = bytes
+                .get(body_start + 16..body_start + 24)
+                .map(|b| u64::from_le_bytes(b.try_into().unwrap_or_default()))
+                .unwrap_or(u64::MAX);
+            if claimed > MAX_CHUNK {
+                return (
+                    &bytes[..at],
+                    Some(format!(
+                        "a chunk at byte {at} claims {claimed} bytes uncompressed: the log is damaged there"
+                    )),
+                );
+            }
+        }
+        if header[0] == 0x02 {
+            // The footer: the file ends here.
+            return (&bytes[..end], None);
+        }
+        at = end;
+    }
+    (bytes, None)
+}
+
 /// Reads a log; a file cut short yields what its complete chunks hold, and says so.
 pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
+    let (bytes, damaged) = sound_prefix(bytes);
     let mut run = None;
     let mut time_step = None;
     let mut end = None;
-    let mut truncated = None;
+    let mut truncated = damaged;
     let reader = mcap::read::LinearReader::new_with_options(
         bytes,
         mcap::read::Options::IgnoreEndMagic.into(),
@@ -536,16 +585,20 @@ pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
             }
             Ok(_) => {}
             Err(error) => {
-                truncated = Some(error.to_string());
+                truncated.get_or_insert(error.to_string());
                 break;
             }
         }
     }
     let run = run.ok_or(LogError::NoMetadata)?;
     let mut messages = Vec::new();
-    let stream =
-        mcap::MessageStream::new_with_options(bytes, mcap::read::Options::IgnoreEndMagic.into())
-            .map_err(LogError::Read)?;
+    // Every length bounded (a damaged length inside a chunk must not make the reader allocate
+    // what it says) and every chunk's CRC checked before its records are read.
+    let options = mcap::sans_io::LinearReaderOptions::default()
+        .with_skip_end_magic(true)
+        .with_record_length_limit(MAX_CHUNK as usize)
+        .with_prevalidate_chunk_crcs(true);
+    let stream = mcap::io::MessageReader::new_with_options(bytes, options);
     for message in stream {
         match message {
             Ok(message) => messages.push((

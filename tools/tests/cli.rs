@@ -901,7 +901,11 @@ fn every_world_and_proto_in_the_repository_is_canonical() {
     }
     assert!(files.len() >= 6, "{files:?}");
     for file in files {
-        let output = regatta().args(["fmt", "--check"]).arg(&file).output().unwrap();
+        let output = regatta()
+            .args(["fmt", "--check"])
+            .arg(&file)
+            .output()
+            .unwrap();
         assert_eq!(
             output.status.code(),
             Some(0),
@@ -931,7 +935,11 @@ fn csv_quotes_what_needs_it_and_is_byte_identical_run_to_run() {
             .arg(&world)
             .output()
             .unwrap();
-        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
         let out = dir.join(format!("csv{k}"));
         let export = regatta()
             .args(["log", "export"])
@@ -961,6 +969,58 @@ fn csv_quotes_what_needs_it_and_is_byte_identical_run_to_run() {
         pose.contains("\n1,10000000,0.010000000,\"scout, \"\"the first\"\"\","),
         "{pose}"
     );
-    assert!(pose.contains("\n25,250000000,0.250000000,second,"), "{pose}");
+    assert!(
+        pose.contains("\n25,250000000,0.250000000,second,"),
+        "{pose}"
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn damaged_logs_are_refused_or_read_up_to_the_damage_never_a_crash() {
+    let dir = temp_dir("damaged");
+    let log = run_logged(&dir, "run.mcap", "200");
+    let bytes = std::fs::read(&log).unwrap();
+    // Deterministic damage all over the file: flipped bytes (chunk headers, lengths,
+    // compressed data, CRCs), and cuts.
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = |n: usize| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state % n as u64) as usize
+    };
+    for case in 0..24 {
+        let mut damaged = bytes.clone();
+        for _ in 0..1 + next(8) {
+            let at = next(damaged.len());
+            damaged[at] ^= 1 << next(8);
+        }
+        if case % 4 == 0 {
+            damaged.truncate(next(damaged.len()));
+        }
+        let path = dir.join("damaged.mcap");
+        std::fs::write(&path, &damaged).unwrap();
+        for args in [
+            vec!["log", "export", "{log}", "--csv", "{dir}/csv"],
+            vec!["replay", "--verify", "{log}"],
+            vec!["plot", "{log}", "--out", "{dir}/plots"],
+        ] {
+            let args: Vec<String> = args
+                .iter()
+                .map(|a| {
+                    a.replace("{log}", path.to_str().unwrap())
+                        .replace("{dir}", dir.to_str().unwrap())
+                })
+                .collect();
+            let output = regatta().args(&args).output().unwrap();
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            assert!(
+                matches!(output.status.code(), Some(0) | Some(1)) && !stderr.contains("panicked"),
+                "case {case}, {args:?}: {:?}\n{stderr}",
+                output.status
+            );
+        }
+    }
     std::fs::remove_dir_all(dir).ok();
 }

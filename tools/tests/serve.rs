@@ -162,7 +162,10 @@ fn misbehaving_clients_never_kill_the_server_nor_reach_the_next_one() {
     // SIGTERM: exit 143, and the log is complete (summary and footer written).
     let (code, stderr) = stop(&mut child, libc::SIGTERM);
     assert_eq!(code, Some(143), "{stderr}");
-    assert!(stderr.contains("lost") || stderr.contains("left"), "{stderr}");
+    assert!(
+        stderr.contains("lost") || stderr.contains("left"),
+        "{stderr}"
+    );
     assert!(stderr.contains("stopped by SIGTERM"), "{stderr}");
     let export = regatta()
         .args(["log", "export"])
