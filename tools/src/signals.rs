@@ -51,7 +51,7 @@ impl Stop {
 
     /// How the command ends when a signal stopped it: 128 + the signal's number.
     pub fn outcome(&self) -> Option<crate::Outcome> {
-        self.signal().map(|s| crate::Outcome::Signalled(s))
+        self.signal().map(crate::Outcome::Signalled)
     }
 
     /// The signal's name, for messages.
