@@ -217,7 +217,7 @@ impl Controller for ApiProbe {
 
 #[test]
 fn the_khepera_api_checks_its_arguments_and_its_filters() {
-    let text = "#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" }\nKhepera { controller \"none\" turret PanoramicTurret { } }\n";
+    let text = "#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" }\nKhepera { controller \"none\" wheelSpeedNoise 0 turret PanoramicTurret { } }\n";
     let compiled = compile_text(text);
     let mut simulation = Simulation::new(&compiled, None).unwrap();
     let log = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));

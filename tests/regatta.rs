@@ -266,3 +266,88 @@ fn logs_do_not_depend_on_how_many_threads_run_worlds() {
         "four worlds on four threads log what they log alone"
     );
 }
+
+/// Buoy visits (merged) and how many continued a cyclic order, over ten minutes.
+fn regatta_in(world: &str) -> (Vec<usize>, u64) {
+    let compiled = compile_world(world);
+    let mut simulation = Simulation::new(&compiled, None).unwrap();
+    simulation.run((600.0 / simulation.time_step).ceil() as u64);
+    let robot = &simulation.robots[0];
+    assert!(robot.contacts.longest < 2.0, "{world}: stuck in contact");
+    let places = regatta_places(&compiled);
+    let visits = merged(&robot.visits.sequence);
+    // Count transitions that continue the direction of the one before.
+    let n = compiled.landmarks.len();
+    let mut cyclic = 0;
+    let mut last_step = None;
+    for pair in visits.windows(2) {
+        let step = (places[pair[1]] + n - places[pair[0]]) % n;
+        if (step == 1 || step == n - 1) && last_step.is_none_or(|s| s == step) {
+            cyclic += 1;
+        }
+        last_step = Some(step);
+    }
+    (visits, cyclic)
+}
+
+/// Each buoy's place by angle around the buoys' centroid.
+fn regatta_places(compiled: &regatta_runtime::Compiled) -> Vec<usize> {
+    let n = compiled.landmarks.len() as f64;
+    let (cx, cz) = compiled.landmarks.iter().fold((0.0, 0.0), |(x, z), l| {
+        (x + l.center.x / n, z + l.center.y / n)
+    });
+    let mut order: Vec<usize> = (0..compiled.landmarks.len()).collect();
+    let angle = |k: usize| {
+        let c = compiled.landmarks[k].center;
+        libm::atan2(c.y - cz, c.x - cx)
+    };
+    order.sort_by(|&a, &b| angle(a).total_cmp(&angle(b)));
+    let mut places = vec![0; order.len()];
+    for (rank, &k) in order.iter().enumerate() {
+        places[k] = rank;
+    }
+    places
+}
+
+#[test]
+fn the_regatta_emerges_across_layouts() {
+    // (world, least cyclic visits in ten minutes): every buoy is visited again and again.
+    for (world, least) in [
+        ("regatta_small.wbt", 60),
+        ("regatta_two.wbt", 40),
+        ("regatta_four.wbt", 40),
+        ("regatta_five.wbt", 50),
+        ("regatta_offcentre.wbt", 20),
+    ] {
+        let (visits, cyclic) = regatta_in(world);
+        assert!(
+            cyclic >= least,
+            "{world}: {cyclic} cyclic visits: {visits:?}"
+        );
+        let buoys = compile_world(world).landmarks.len();
+        for buoy in 0..buoys {
+            assert!(
+                visits.iter().filter(|&&k| k == buoy).count() >= 5,
+                "{world}: buoy {buoy} visited too rarely: {visits:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_robot_driven_into_a_corner_does_not_stay_there() {
+    // Facing the corner, the IR network's two sides cancel and the wheels stop (with or
+    // without wheel noise, which scales speeds that are zero): the controller turns away.
+    for noise in ["0", "0.05"] {
+        let compiled = compile_text(&format!(
+            "#VRML_SIM R2023b utf8\nWorldInfo {{ coordinateSystem \"NUE\" }}\nArena {{ size 1 1 }}\nKhepera {{ translation 0.4 0 0.4 rotation 0 1 0 -0.7854 controller \"regatta\" wheelSpeedNoise {noise} turret PanoramicTurret {{ lambda 5 }} }}\n"
+        ));
+        let mut simulation = Simulation::new(&compiled, None).unwrap();
+        simulation.run((60.0 / simulation.time_step) as u64);
+        let pose = simulation.robots[0].pose;
+        assert!(
+            pose.x.max(pose.z) < 0.35,
+            "noise {noise}: still in the corner at {pose:?}"
+        );
+    }
+}

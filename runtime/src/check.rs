@@ -1,6 +1,7 @@
 //! Checks of a typed scene that need the runtime's knowledge, run by `regatta check` and by
 //! every command before it runs a world: controllers and their arguments
-//! ([`crate::controllers::check_scene`]) and time steps the simulation cannot follow.
+//! ([`crate::controllers::check_scene`]), each robot's network against its inputs and outputs
+//! ([`crate::neural::check_networks`]), and time steps the simulation cannot follow.
 
 use regatta_parser::Diagnostic;
 use regatta_schema::{Checked, FileDiagnostic, Value};
@@ -13,6 +14,8 @@ const GAUSSIAN_BOUND: f64 = 8.6;
 /// Adds every runtime diagnostic to `checked`.
 pub fn check_scene(checked: &mut Checked) {
     crate::controllers::check_scene(checked);
+    let networks = crate::neural::check_networks(&checked.scene);
+    checked.diagnostics.extend(networks);
     check_time_step(checked);
     checked.sort_diagnostics();
 }
@@ -51,7 +54,7 @@ fn check_time_step(checked: &mut Checked) {
     let node = scene.node(info);
     let index = scene.spec(info).field_index("basicTimeStep");
     let at = index
-        .and_then(|i| node.written_at(i))
+        .and_then(|i| node.value_span_at(i))
         .unwrap_or(node.origin);
     checked.diagnostics.push(FileDiagnostic {
         file: at.file,

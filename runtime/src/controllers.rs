@@ -14,7 +14,12 @@
 //!   filter's output is scanned for light-intensity maxima (a negative lobe followed by a
 //!   positive one, both beyond `minContrast` LSB); the maximum nearest the centre of the retina
 //!   steers the robot by `lightGain` pulses/10 ms per pixel of distance from the centre, added
-//!   to the network's output.
+//!   to the network's output. A robot that stalls facing an obstacle (both commands within
+//!   ±`STALL_SPEED` while a front sensor reads more than `STALL_PROXIMITY`, for `STALL_STEPS`
+//!   steps: the Braitenberg network's deadlock in a corner) turns on the spot, away from the
+//!   nearer side, for `ESCAPE_STEPS` steps.
+//! - `neural`: the robot's `NeuralNetwork` node (see [`crate::neural`]); it takes no
+//!   `controllerArgs`: its parameters are the network's fields.
 
 use std::ops::ControlFlow;
 
@@ -22,6 +27,7 @@ use regatta_parser::{Diagnostic, Severity};
 use regatta_schema::catalogue::did_you_mean as did_you_mean_in;
 use regatta_schema::{Checked, FileDiagnostic, Value};
 
+use crate::compile::rig::RobotRig;
 use crate::khepera::{Controller, Khepera, KheperaError, Senses};
 use crate::retina::FilterKind;
 
@@ -32,29 +38,29 @@ pub const RIGHT_WEIGHTS: [f64; 8] = [-5.0, -15.0, -18.0, 6.0, 4.0, 4.0, 3.0, 5.0
 /// Why a controller could not be built from a world's fields.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ControllerError {
-    #[error("unknown controller \"{name}\"; built in: {known}{hint}")]
+    #[error("unknown controller \"{name}\"; built in: {}{}", known_names(), did_you_mean_note(*.hint))]
     Unknown {
         name: String,
-        known: String,
-        /// ", did you mean …?" or nothing.
-        hint: String,
+        /// The built-in name closest to it, if one is close.
+        hint: Option<&'static str>,
     },
+    #[error(transparent)]
+    Network(#[from] crate::neural::NetworkError),
     #[error("controller argument \"{0}\" is not key=value")]
     Malformed(String),
-    #[error("controller {controller} has no parameter \"{key}\"; it takes {known}{hint}")]
+    #[error("controller {controller} has no parameter \"{key}\"; it takes {}{}", parameter_names(controller), did_you_mean_note(*.hint))]
     UnknownKey {
-        controller: String,
+        controller: &'static str,
         key: String,
-        known: String,
-        /// "; did you mean …?" or nothing.
-        hint: String,
+        /// The parameter closest to it, if one is close.
+        hint: Option<&'static str>,
     },
     #[error("controller argument {key}={value} is not {expected}")]
     NotANumber {
         key: String,
         value: String,
         /// "a finite number", "a whole number"…
-        expected: String,
+        expected: &'static str,
     },
 }
 
@@ -92,9 +98,16 @@ pub struct ControllerSpec {
     pub aliases: &'static [&'static str],
     pub doc: &'static str,
     pub parameters: &'static [ParameterSpec],
-    /// Builds the controller from arguments already checked against `parameters`.
-    pub build: fn(&Arguments) -> Box<dyn Controller>,
+    /// Builds the controller from arguments already checked against `parameters`, and the
+    /// robot it drives when there is one (a controller may need more of the world than its
+    /// arguments: `neural` takes its network from there).
+    pub build: Builder,
 }
+
+/// How a registry entry makes its controller: from checked arguments and, for a run, the
+/// robot it drives.
+pub type Builder =
+    fn(&Arguments, Option<&RobotRig>) -> Result<Box<dyn Controller>, ControllerError>;
 
 /// Checked `controllerArgs`: each known key with its value.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -152,17 +165,17 @@ pub static CONTROLLERS: &[ControllerSpec] = &[
         aliases: &["", "<none>"],
         doc: "Does nothing: the robot stands still (its sensors still read).",
         parameters: &[],
-        build: |_| Box::new(Idle),
+        build: |_, _| Ok(Box::new(Idle)),
     },
     ControllerSpec {
         name: "braitenberg",
         aliases: &[],
         doc: "Mondada's obstacle avoider: the Khepera BIOS's feed-forward IR network.",
         parameters: BRAITENBERG_PARAMETERS,
-        build: |args| {
-            Box::new(Braitenberg {
+        build: |args, _| {
+            Ok(Box::new(Braitenberg {
                 parameters: Parameters::from_arguments(args),
-            })
+            }))
         },
     },
     ControllerSpec {
@@ -170,13 +183,25 @@ pub static CONTROLLERS: &[ControllerSpec] = &[
         aliases: &[],
         doc: "The paper's controller: the Braitenberg network plus light seeking with the Panoramic turret's odd filter.",
         parameters: REGATTA_PARAMETERS,
-        build: |args| {
-            Box::new(Regatta {
+        build: |args, _| {
+            Ok(Box::new(Regatta {
                 parameters: Parameters::from_arguments(args),
                 thresholds: None,
                 enabled: false,
                 odd: Vec::new(),
-            })
+                escape: StallEscape::default(),
+            }))
+        },
+    },
+    ControllerSpec {
+        name: "neural",
+        aliases: &[],
+        doc: "The robot's NeuralNetwork node (feed-forward, Elman or CTRNN); its parameters are the network's fields.",
+        parameters: &[],
+        build: |_, rig| match rig.and_then(|rig| rig.network.as_ref()) {
+            Some(Ok(spec)) => Ok(Box::new(crate::neural::Neural::from_spec(spec)?)),
+            Some(Err(error)) => Err(error.clone().into()),
+            None => Err(crate::neural::NetworkError::NoNetwork.into()),
         },
     },
 ];
@@ -197,14 +222,31 @@ fn known_names() -> String {
         .join(", ")
 }
 
+/// The parameters of the controller called `name`, for messages.
+fn parameter_names(name: &str) -> String {
+    match find(name) {
+        Some(spec) if !spec.parameters.is_empty() => spec
+            .parameters
+            .iter()
+            .map(|p| p.key)
+            .collect::<Vec<_>>()
+            .join(", "),
+        _ => "no parameters".to_owned(),
+    }
+}
+
+/// "; did you mean …?", or nothing.
+fn did_you_mean_note(close: Option<&str>) -> String {
+    close
+        .map(|close| format!("; did you mean \"{close}\"?"))
+        .unwrap_or_default()
+}
+
 /// The controller called `name`, or why not.
 pub fn spec_of(name: &str) -> Result<&'static ControllerSpec, ControllerError> {
     find(name).ok_or_else(|| ControllerError::Unknown {
         name: name.to_owned(),
-        known: known_names(),
-        hint: did_you_mean_in(name, CONTROLLERS.iter().map(|c| c.name))
-            .map(|close| format!("; did you mean \"{close}\"?"))
-            .unwrap_or_default(),
+        hint: did_you_mean_in(name, CONTROLLERS.iter().map(|c| c.name)),
     })
 }
 
@@ -223,22 +265,10 @@ fn argument(spec: &ControllerSpec, item: &str) -> Result<(&'static str, f64), Co
         .ok_or_else(|| ControllerError::Malformed(item.to_owned()))?;
     let key = key.trim();
     let Some(parameter) = spec.parameters.iter().find(|p| p.key == key) else {
-        let known = if spec.parameters.is_empty() {
-            "no parameters".to_owned()
-        } else {
-            spec.parameters
-                .iter()
-                .map(|p| p.key)
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
         return Err(ControllerError::UnknownKey {
-            controller: spec.name.to_owned(),
+            controller: spec.name,
             key: key.to_owned(),
-            known,
-            hint: did_you_mean_in(key, spec.parameters.iter().map(|p| p.key))
-                .map(|close| format!("; did you mean \"{close}\"?"))
-                .unwrap_or_default(),
+            hint: did_you_mean_in(key, spec.parameters.iter().map(|p| p.key)),
         });
     };
     let number = value
@@ -250,7 +280,7 @@ fn argument(spec: &ControllerSpec, item: &str) -> Result<(&'static str, f64), Co
         .ok_or_else(|| ControllerError::NotANumber {
             key: key.to_owned(),
             value: value.to_owned(),
-            expected: parameter.kind.noun().to_owned(),
+            expected: parameter.kind.noun(),
         })?;
     Ok((parameter.key, number))
 }
@@ -265,10 +295,20 @@ pub fn arguments(name: &str, args: &[String]) -> Result<Arguments, ControllerErr
     Ok(Arguments { values })
 }
 
-/// Builds a built-in controller.
+/// Builds a built-in controller from its name and arguments (`neural` needs its robot: see
+/// [`build_for`]).
 pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, ControllerError> {
     let spec = spec_of(name)?;
-    Ok((spec.build)(&arguments(name, args)?))
+    (spec.build)(&arguments(name, args)?, None)
+}
+
+/// Builds a robot's controller as its world sets it.
+pub fn build_for(rig: &RobotRig) -> Result<Box<dyn Controller>, ControllerError> {
+    let spec = spec_of(&rig.controller)?;
+    (spec.build)(
+        &arguments(&rig.controller, &rig.controller_args)?,
+        Some(rig),
+    )
 }
 
 /// Checks every robot's `controller` and `controllerArgs` against the registry, adding a
@@ -299,7 +339,7 @@ pub fn check_scene(checked: &mut Checked) {
             .cloned()
             .unwrap_or_default();
         let args = node.fields[args_index].strings().to_vec();
-        let at = |index: usize| node.written_at(index).unwrap_or(node.origin);
+        let at = |index: usize| node.value_span_at(index).unwrap_or(node.origin);
         let (name_at, args_at) = (at(controller_index), at(args_index));
         let mut problems: Vec<(regatta_schema::scene::Origin, Diagnostic)> = Vec::new();
         let mut kept_args = Vec::new();
@@ -310,10 +350,11 @@ pub fn check_scene(checked: &mut Checked) {
                         .with_label("no built-in controller has this name")
                         .with_note(format!("built in: {}", known_names()))
                         .with_code("unknown-controller");
-                if let ControllerError::Unknown { hint, .. } = &error {
-                    if !hint.is_empty() {
-                        diagnostic = diagnostic.with_note(hint.trim_start_matches("; ").to_owned());
-                    }
+                if let ControllerError::Unknown {
+                    hint: Some(close), ..
+                } = &error
+                {
+                    diagnostic = diagnostic.with_note(format!("did you mean \"{close}\"?"));
                 }
                 if lenient {
                     diagnostic = diagnostic.with_note("the robot runs no controller");
@@ -432,7 +473,9 @@ pub fn braitenberg_speeds(proximity: &[u16; 8], parameters: &Parameters) -> (f64
     )
 }
 
-fn to_command(speed: f64) -> i32 {
+/// A wheel speed (pulses per 10 ms) as the robot takes it: rounded half away from zero,
+/// clamped to −127 … 127.
+pub fn to_command(speed: f64) -> i32 {
     libm::round(speed).clamp(-127.0, 127.0) as i32
 }
 
@@ -574,6 +617,57 @@ fn partition_point_u16(holds: impl Fn(u32) -> bool) -> u32 {
     lo
 }
 
+/// Commands this close to zero count as stopped.
+pub const STALL_SPEED: i32 = 1;
+/// A front IR reading above this counts as facing an obstacle.
+pub const STALL_PROXIMITY: u16 = 300;
+/// Steps stalled before turning away (about a second at 32 ms).
+pub const STALL_STEPS: u32 = 32;
+/// Steps of turning on the spot (about 0.8 s at 32 ms: roughly a right angle at the bias
+/// speed).
+pub const ESCAPE_STEPS: u32 = 24;
+
+/// Turns a stalled robot away from what it faces.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct StallEscape {
+    stalled: u32,
+    /// Steps left to turn, and the direction (+1 turns right).
+    escaping: u32,
+    direction: i32,
+}
+
+impl StallEscape {
+    /// The commands to send instead of `(left, right)`, if the robot must turn away.
+    pub fn check(
+        &mut self,
+        proximity: &[u16; 8],
+        (left, right): (i32, i32),
+        bias: f64,
+    ) -> Option<(i32, i32)> {
+        let turn = to_command(bias).max(1);
+        if self.escaping > 0 {
+            self.escaping -= 1;
+            return Some((self.direction * turn, -self.direction * turn));
+        }
+        let front = proximity[1..5].iter().copied().max().unwrap_or(0);
+        if left.abs() <= STALL_SPEED && right.abs() <= STALL_SPEED && front > STALL_PROXIMITY {
+            self.stalled += 1;
+        } else {
+            self.stalled = 0;
+        }
+        if self.stalled < STALL_STEPS {
+            return None;
+        }
+        self.stalled = 0;
+        self.escaping = ESCAPE_STEPS - 1;
+        // Away from the side that reads more (left sensors 0…2, right 3…5); right on a tie.
+        let left_side: u32 = proximity[0..3].iter().map(|&v| v as u32).sum();
+        let right_side: u32 = proximity[3..6].iter().map(|&v| v as u32).sum();
+        self.direction = if right_side > left_side { -1 } else { 1 };
+        Some((self.direction * turn, -self.direction * turn))
+    }
+}
+
 /// The paper's regatta controller.
 pub struct Regatta {
     pub parameters: Parameters,
@@ -582,6 +676,7 @@ pub struct Regatta {
     enabled: bool,
     /// The odd filter's last reading, its buffer reused.
     odd: Vec<u16>,
+    escape: StallEscape,
 }
 
 impl Controller for Regatta {
@@ -615,7 +710,12 @@ impl Controller for Regatta {
             left += self.parameters.light_gain * offset;
             right -= self.parameters.light_gain * offset;
         }
-        robot.set_speed(to_command(left), to_command(right))
+        let command = (to_command(left), to_command(right));
+        let (left, right) = self
+            .escape
+            .check(&proximity, command, self.parameters.bias)
+            .unwrap_or(command);
+        robot.set_speed(left, right)
     }
 
     fn senses(&self) -> Senses {

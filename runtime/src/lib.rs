@@ -14,6 +14,7 @@ pub mod controllers;
 pub mod geometry;
 pub mod khepera;
 pub mod log;
+pub mod neural;
 pub mod optics;
 pub mod render;
 pub mod retina;

@@ -2,7 +2,8 @@
 //!
 //! Format decisions:
 //! - One channel per robot and sensor: `/{robot}/pose`, `/wheels`, `/proximity`, `/ambient`,
-//!   `/retina`, `/k213`, `/contacts`, `/controller`.
+//!   `/retina`, `/k213`, `/contacts` (when contact begins or ends, with what is touched),
+//!   `/visits` (each entry into a buoy's visit disc), `/controller`.
 //! - Chunks of 4 MB (uncompressed) with zstd level 1: the size and speed targets of a ten-minute
 //!   regatta at full rate (18.9 MB; logging costs about 45 % of the speed) both hold.
 //! - Messages are CDR-encoded with a `ros2msg` schema per channel (the ROS 2 convention that
@@ -97,6 +98,7 @@ struct RobotChannels {
     retina: Option<u16>,
     k213: Option<u16>,
     contacts: u16,
+    visits: u16,
     controller: u16,
 }
 
@@ -104,6 +106,10 @@ struct RobotChannels {
 pub struct Recorder<W: Write + Seek> {
     writer: mcap::Writer<W>,
     robots: Vec<RobotChannels>,
+    /// What robots can touch, named once ([`Simulation::obstacle_names`]).
+    obstacle_names: Vec<String>,
+    /// Per robot: visits already written.
+    visits_written: Vec<usize>,
     sequence: u32,
     cdr: Cdr,
 }
@@ -115,7 +121,8 @@ pub const SCHEMAS: &[(&str, &str)] = &[
     ("regatta/msg/Readings8", "# Eight sensor readings, 0..1023\nfloat64 t\nuint16[8] values\n"),
     ("regatta/msg/Retina", "# EDI retina: analog[150]; per enabled filter (in `filters` order) 150 filtered values and the digital values over the region of interest\nfloat64 t\nbool dark\nuint16 roi_first\nuint16 roi_last\nfloat32[] analog\nstring[] filters\nfloat32[] filtered\nuint16[] digital\n"),
     ("regatta/msg/LinearCamera", "# K213: grey levels, pixel 0 at the left, and the light level\nfloat64 t\nuint16[] pixels\nuint16 light_level\n"),
-    ("regatta/msg/Contact", "# A contact began (touching) or ended; contacts begun so far\nfloat64 t\nbool touching\nuint64 contacts\n"),
+    ("regatta/msg/Contact", "# A contact began (touching) or ended; contacts begun so far; what is touched now\nfloat64 t\nbool touching\nuint64 contacts\nstring[] with\n"),
+    ("regatta/msg/Visit", "# The robot entered a buoy's visit disc (its radius plus two body diameters): buoy number (from 1, in file order), its name, visits so far\nfloat64 t\nuint32 buoy\nstring name\nuint32 visits\n"),
     ("regatta/msg/ControllerEvent", "# A controller call failed\nfloat64 t\nstring error\n"),
 ];
 
@@ -347,12 +354,15 @@ impl<W: Write + Seek> Recorder<W> {
                     None
                 },
                 contacts: channel("contacts", "regatta/msg/Contact")?,
+                visits: channel("visits", "regatta/msg/Visit")?,
                 controller: channel("controller", "regatta/msg/ControllerEvent")?,
             });
         }
         Ok(Recorder {
             writer,
             robots,
+            obstacle_names: simulation.obstacle_names(),
+            visits_written: vec![0; simulation.robots.len()],
             sequence: 0,
             cdr: Cdr {
                 buf: Vec::with_capacity(4096),
@@ -384,7 +394,7 @@ impl<W: Write + Seek> Recorder<W> {
         for (index, robot) in simulation.robots.iter().enumerate() {
             let rig = &simulation.compiled.rig.robots[index];
             let channels = &self.robots[index];
-            let (pose, wheels, proximity, ambient, retina, k213, contacts, controller) = (
+            let (pose, wheels, proximity, ambient, retina, k213, contacts, visits, controller) = (
                 channels.pose,
                 channels.wheels,
                 channels.proximity,
@@ -392,6 +402,7 @@ impl<W: Write + Seek> Recorder<W> {
                 channels.retina,
                 channels.k213,
                 channels.contacts,
+                channels.visits,
                 channels.controller,
             );
             let updated = robot.updated;
@@ -472,7 +483,25 @@ impl<W: Write + Seek> Recorder<W> {
                 self.cdr.f64(t);
                 self.cdr.bool(robot.contacts.is_touching());
                 self.cdr.u64(robot.contacts.events);
+                let touching = robot.contacts.touching();
+                self.cdr
+                    .u32(touching.iter().filter(|&&touched| touched).count() as u32);
+                for (name, _) in self.obstacle_names.iter().zip(touching).filter(|(_, &t)| t) {
+                    self.cdr.string(name);
+                }
                 self.write(contacts, ns(t))?;
+            }
+            let landmarks = &simulation.compiled.landmarks;
+            while self.visits_written[index] < robot.visits.sequence.len() {
+                let n = self.visits_written[index];
+                let buoy = robot.visits.sequence[n];
+                self.cdr.start();
+                self.cdr.f64(robot.visits.times[n]);
+                self.cdr.u32(buoy as u32 + 1);
+                self.cdr.string(&landmarks[buoy].name);
+                self.cdr.u32(n as u32 + 1);
+                self.write(visits, ns(robot.visits.times[n]))?;
+                self.visits_written[index] += 1;
             }
         }
         Ok(())

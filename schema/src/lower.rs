@@ -1275,7 +1275,7 @@ impl<'c> Lowerer<'c> {
             .map(|f| f.default_value.clone().unwrap_or(Value::Bool(false)))
             .collect();
         let mut written = vec![false; fields.len()];
-        let mut written_at: Vec<(u16, Origin)> = Vec::new();
+        let mut value_spans = vec![None; fields.len()];
         // Each url of a `file` field, with where it was written and the file it is relative to.
         let mut urls: Vec<(usize, String, FileId, Span)> = Vec::new();
         let mut seen: HashMap<&str, Span> = HashMap::new();
@@ -1322,8 +1322,13 @@ impl<'c> Lowerer<'c> {
                         }
                         fields[index] = value;
                         written[index] = true;
-                        written_at.retain(|(i, _)| *i as usize != index);
-                        written_at.push((index as u16, Origin { file: site.0, span: site.2 }));
+                        // A value written here points at itself; one bound through IS at the
+                        // instance that gave it.
+                        let span = match &field.value {
+                            syntax::FieldValue::Value(value) => value.span,
+                            _ => site.2,
+                        };
+                        value_spans[index] = Some(Origin { file: site.0, span });
                     }
                 }
                 BodyItem::Declaration(declaration) => self.strict_or_warn(
@@ -1348,7 +1353,7 @@ impl<'c> Lowerer<'c> {
             span: node.span,
         };
         if spec.name == "Inline" {
-            return self.inline(&urls, node, scope, origin, written_at);
+            return self.inline(&urls, node, scope, origin);
         }
         // Other files are named, not read (textures): each must still lie inside the root.
         for (_, url, file, span) in &urls {
@@ -1361,10 +1366,10 @@ impl<'c> Lowerer<'c> {
                 spec: spec_id,
                 fields,
                 written,
+                value_spans,
                 def_name: None,
                 proto_names: Vec::new(),
                 origin,
-                written_at,
             },
             scope.file,
             node.span,
@@ -1400,7 +1405,6 @@ impl<'c> Lowerer<'c> {
         node: &syntax::Node,
         scope: &Scope,
         origin: Origin,
-        written_at: Vec<(u16, Origin)>,
     ) -> Option<NodeId> {
         let group = self
             .catalogue()
@@ -1458,11 +1462,11 @@ impl<'c> Lowerer<'c> {
             SceneNode {
                 spec: group,
                 written,
+                value_spans: vec![None; group_fields.len()],
                 fields: group_fields,
                 def_name: None,
                 proto_names: vec!["Inline".to_owned()],
                 origin,
-                written_at,
             },
             scope.file,
             node.span,
@@ -2877,9 +2881,9 @@ impl Lowerer<'_> {
         }
         for (id, index, name, first) in renames {
             let node = &self.nodes[id.index()];
-            let at = node.written_at(index).unwrap_or(node.origin);
+            let at = node.value_span_at(index).unwrap_or(node.origin);
             let first_node = &self.nodes[first.index()];
-            let first_at = first_node.written_at(index).unwrap_or(first_node.origin);
+            let first_at = first_node.value_span_at(index).unwrap_or(first_node.origin);
             let mut diagnostic = Diagnostic::error(
                 at.span,
                 format!("a robot named '{name}' already exists: robot names must be unique"),

@@ -38,24 +38,22 @@ pub struct SceneNode {
     pub fields: Vec<Value>,
     /// Whether each field was written (or bound through IS) rather than defaulted.
     pub written: Vec<bool>,
+    /// Where each field's value was written (for a field bound through IS, where the PROTO
+    /// instance wrote it, or the instance itself for a built-in PROTO's default; `None`:
+    /// defaulted), for messages about values that only later checks reject (a controller's
+    /// name and arguments, a network's sizes): they point at the user's line.
+    pub value_spans: Vec<Option<Origin>>,
     pub def_name: Option<String>,
     /// The PROTO whose instance this node is the root of (innermost first when nested).
     pub proto_names: Vec<String>,
     /// Where the node was written: for a PROTO's root, the user's instance.
     pub origin: Origin,
-    /// Where each written field's value was written (field index, place), for messages
-    /// about values that only later stages understand (a controller's name and arguments).
-    /// A value passed into a PROTO points at the instance's line, not the PROTO's.
-    pub written_at: Vec<(u16, Origin)>,
 }
 
 impl SceneNode {
-    /// Where field `index`'s value was written, if it was.
-    pub fn written_at(&self, index: usize) -> Option<Origin> {
-        self.written_at
-            .iter()
-            .find(|(i, _)| *i as usize == index)
-            .map(|(_, origin)| *origin)
+    /// Where field `index`'s value was written, if it was (see [`SceneNode::value_spans`]).
+    pub fn value_span_at(&self, index: usize) -> Option<Origin> {
+        self.value_spans.get(index).copied().flatten()
     }
 }
 
@@ -87,6 +85,16 @@ impl Scene {
     /// The catalogue type of a node.
     pub fn spec(&self, id: NodeId) -> &'static NodeSpec {
         Catalogue::get().spec(self.node(id).spec)
+    }
+
+    /// Where a field's value was written, else where the node was: what a message about the
+    /// value points at.
+    pub fn value_span(&self, id: NodeId, name: &str) -> Origin {
+        let node = self.node(id);
+        self.spec(id)
+            .field_index(name)
+            .and_then(|index| node.value_span_at(index))
+            .unwrap_or(node.origin)
     }
 
     /// The type name of a node (the catalogue's, not an alias).

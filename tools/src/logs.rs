@@ -144,12 +144,77 @@ enum LogCommand {
         #[arg(long, value_name = "DIR")]
         csv: PathBuf,
     },
+    /// Compute a fitness from the log's channels: the value `run --json` gives for the run
+    /// (the mean over robots first, then each robot's).
+    Fitness {
+        /// The log.
+        log: PathBuf,
+        /// NAME[:key=value,...]: avoidance, regatta, phototaxis.
+        #[arg(long, value_parser = crate::run::parse_fitness)]
+        fitness: regatta_evolve::Fitness,
+        #[command(flatten)]
+        world: crate::world::LogWorldOptions,
+    },
 }
 
 pub fn log(args: LogArgs) -> anyhow::Result<Outcome> {
     match args.what {
         LogCommand::Export { log, csv } => export(&log, &csv),
+        LogCommand::Fitness {
+            log,
+            fitness,
+            world,
+        } => log_fitness(&log, &fitness, &world.into()),
     }
+}
+
+/// `regatta log fitness`: a fitness computed from a log's channels, the same value a live
+/// run computes (both read the same per-step records).
+fn log_fitness(
+    log: &Path,
+    fitness: &regatta_evolve::Fitness,
+    world: &crate::world::WorldOptions,
+) -> anyhow::Result<Outcome> {
+    let contents = load(log)?;
+    let compiled = compile_embedded(&contents.run, world)?;
+    let (time_step, robots) = regatta_evolve::record::records_from_log(&contents)
+        .with_context(|| format!("cannot read {}", log.display()))?;
+    let mut values = Vec::new();
+    let mut lines = Vec::new();
+    for robot in &robots {
+        let mut meters = regatta_evolve::fitness::Meters::new(fitness, &compiled.landmarks);
+        robot.for_each(time_step, |record| meters.add(record));
+        let terms = meters.terms();
+        let value = terms.value(fitness);
+        values.push(value);
+        let detail = match fitness {
+            regatta_evolve::Fitness::Avoidance { .. } => format!(
+                "V {:?}, Δv {:?}, i {:?}",
+                terms.avoidance.speed, terms.avoidance.turning, terms.avoidance.proximity
+            ),
+            regatta_evolve::Fitness::Regatta { .. } => format!(
+                "cyclic visits {}, other visits {}, contact {:?} s",
+                terms.regatta.cyclic_visits, terms.regatta.other_visits, terms.regatta.contact_s
+            ),
+            regatta_evolve::Fitness::Phototaxis { .. } => match terms.phototaxis.buoy {
+                Some(buoy) => format!("brightest buoy {buoy}"),
+                None => "no buoy".to_owned(),
+            },
+        };
+        lines.push(format!("{}: {value:?} ({detail})", robot.name));
+    }
+    if values.is_empty() {
+        bail!(
+            "{} has no robot poses to compute a fitness from",
+            log.display()
+        );
+    }
+    let mean = values.iter().sum::<f64>() / values.len() as f64;
+    println!("{} {:?}", fitness.name(), mean);
+    for line in lines {
+        println!("{line}");
+    }
+    Ok(Outcome::Clean)
 }
 
 /// The robot and the channel kind of a topic `/{robot}/{kind}`.
@@ -232,6 +297,15 @@ const UNITS: &[(&str, &str, &str, &str)] = &[
         "whether the robot touches something",
     ),
     ("contacts", "contacts", "1", "contacts begun so far"),
+    (
+        "contacts",
+        "with",
+        "",
+        "what the robot touches, names separated by ;",
+    ),
+    ("visits", "buoy", "1", "the buoy's index, in file order"),
+    ("visits", "name", "", "the buoy's name"),
+    ("visits", "visits", "1", "visits so far"),
     ("controller", "error", "", "why a controller call failed"),
 ];
 
@@ -307,9 +381,18 @@ fn decode(kind: &str, data: &[u8]) -> Result<Option<CsvRow>, regatta_runtime::lo
             row.push(light.to_string());
             (header, row)
         }
-        "contacts" => (
-            vec!["touching".into(), "contacts".into()],
-            vec![r.bool()?.to_string(), r.u64()?.to_string()],
+        "contacts" => {
+            let (touching, contacts) = (r.bool()?, r.u64()?);
+            // Logs written before contacts said with what have no such field.
+            let with = r.strings().unwrap_or_default();
+            (
+                vec!["touching".into(), "contacts".into(), "with".into()],
+                vec![touching.to_string(), contacts.to_string(), with.join(";")],
+            )
+        }
+        "visits" => (
+            vec!["buoy".into(), "name".into(), "visits".into()],
+            vec![r.u32()?.to_string(), r.string()?, r.u32()?.to_string()],
         ),
         "controller" => (vec!["error".into()], vec![r.string()?]),
         _ => return Ok(None),

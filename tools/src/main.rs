@@ -2,11 +2,14 @@
 //! dispatches and maps results to exit codes (0 clean, 1 errors found, 2 usage errors,
 //! 128 + n when signal n stopped a run: 130 for Ctrl-C, 143 for SIGTERM).
 
+mod batch;
 mod bench;
 mod bench_retina;
 mod bench_step;
 mod check;
+mod evolve;
 mod explain;
+mod figures;
 mod fmt;
 mod font;
 mod gltf;
@@ -62,8 +65,12 @@ enum Command {
     Serve(serial::ServeArgs),
     /// Run a built-in controller on a real Khepera, or a served one, over the serial protocol.
     Drive(serial::DriveArgs),
-    /// Step a world and print a summary: time, speed, contacts, buoy visits.
+    /// Step a world and print a summary: time, speed, contacts, buoy visits (--json: as data).
     Run(run::Args),
+    /// Run one world under many seeds in parallel; one JSON or CSV row per run.
+    Batch(batch::Args),
+    /// Evolve the weights of a world's NeuralNetwork (CMA-ES or a genetic algorithm).
+    Evolve(evolve::Args),
     /// Re-run a log's world and seed and check that every message is the same.
     Replay(logs::ReplayArgs),
     /// Work with sensor logs (export to CSV).
@@ -135,6 +142,8 @@ fn run() -> ExitCode {
         Command::Render(args) => render::run(args, color),
         Command::Gltf(args) => gltf::run(args, color),
         Command::Run(args) => run::run(args, color),
+        Command::Batch(args) => batch::run(args),
+        Command::Evolve(args) => evolve::run(args),
         Command::Serve(args) => serial::serve(args, color),
         Command::Drive(args) => serial::drive(args),
         Command::Replay(args) => logs::replay(args),

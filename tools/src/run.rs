@@ -32,6 +32,16 @@ pub struct Args {
     /// What renders vision devices.
     #[arg(long, value_enum, default_value_t)]
     renderer: crate::vision::RendererKind,
+    /// Print the run as one JSON object (docs/run.schema.json) instead of text.
+    #[arg(long)]
+    json: bool,
+    /// The fitness the JSON's top-level `fitness` reports (NAME[:key=value,...]).
+    #[arg(long, default_value = "regatta", value_parser = parse_fitness)]
+    fitness: regatta_evolve::Fitness,
+}
+
+pub(crate) fn parse_fitness(text: &str) -> Result<regatta_evolve::Fitness, String> {
+    regatta_evolve::Fitness::parse(text).map_err(|e| e.to_string())
 }
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
@@ -67,6 +77,10 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
     // SIGINT and SIGTERM end the run between steps; the log is then closed properly and
     // marked interrupted, and the exit code says which signal it was.
     let stop = crate::signals::Stop::install();
+    let mut observer = args.json.then(|| {
+        regatta_evolve::experiment::sense_for_fitness(&mut simulation);
+        regatta_evolve::Observer::new(&simulation, &args.fitness)
+    });
     let progress = progress_bar(steps);
     let started = Instant::now();
     let mut failure = None;
@@ -82,6 +96,9 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
             recorder
                 .record(&simulation)
                 .with_context(|| format!("while logging step {}", simulation.steps))?;
+        }
+        if let Some(observer) = &mut observer {
+            observer.after_step(&simulation);
         }
         // A controller that fails is a broken run: said once, and the run ends there (the
         // log keeps the step with the failure).
@@ -131,6 +148,11 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
             }
         );
     }
+    if let Some(observer) = &observer {
+        let summary = observer.summary(&simulation, &name, Some(wall));
+        println!("{}", serde_json::to_string_pretty(&summary)?);
+        return Ok(finish(failure, &simulation, &name, &args, &stop));
+    }
     println!("world {name}: seed {}", simulation.seed);
     if let Some(vision) = vision {
         println!("vision rendered by {vision}");
@@ -170,12 +192,24 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         }
         println!();
     }
+    Ok(finish(failure, &simulation, &name, &args, &stop))
+}
+
+/// How a run ends once its summary is printed: a controller's failure (said once), a world
+/// without robots (an error unless `--allow-empty`), a signal, or clean.
+fn finish(
+    failure: Option<String>,
+    simulation: &Simulation,
+    name: &str,
+    args: &Args,
+    stop: &crate::signals::Stop,
+) -> Outcome {
     if let Some(failure) = failure {
         eprintln!("error: {failure}");
         if args.log.is_some() {
             eprintln!("the log is complete up to the failed step");
         }
-        return Ok(Outcome::Errors);
+        return Outcome::Errors;
     }
     if simulation.robots.is_empty() {
         eprintln!(
@@ -184,10 +218,10 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         );
         if !args.allow_empty {
             eprintln!("error: nothing to run; `--allow-empty` runs a world without robots");
-            return Ok(Outcome::Errors);
+            return Outcome::Errors;
         }
     }
-    Ok(stop.outcome().unwrap_or(Outcome::Clean))
+    stop.outcome().unwrap_or(Outcome::Clean)
 }
 
 /// A progress bar on standard error when it is a terminal (hidden otherwise); it shows up only

@@ -250,7 +250,7 @@ pub fn warn_about_cost(checked: &mut Checked) {
         let node = scene.node(id);
         let samples_index = scene.spec(id).field_index("samples");
         let at = samples_index
-            .and_then(|i| node.written_at(i))
+            .and_then(|i| node.value_span_at(i))
             .unwrap_or(node.origin);
         warnings.push(FileDiagnostic {
             file: at.file,

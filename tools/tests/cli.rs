@@ -37,13 +37,21 @@ fn temp_dir(name: &str) -> PathBuf {
 
 #[test]
 fn project_worlds_check_clean() {
-    let worlds =
-        ["regatta.wbt", "single_buoy.wbt", "k213.wbt"].map(|w| root().join("worlds").join(w));
+    let mut worlds: Vec<PathBuf> = std::fs::read_dir(root().join("worlds"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "wbt"))
+        .collect();
+    worlds.sort();
+    assert!(worlds.len() >= 10, "{worlds:?}");
     let output = regatta().arg("check").args(&worlds).output().unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(0), "{stderr}");
     assert!(
-        stderr.contains("checked 3 files: 0 errors, 0 warnings"),
+        stderr.contains(&format!(
+            "checked {} files: 0 errors, 0 warnings",
+            worlds.len()
+        )),
         "{stderr}"
     );
 }

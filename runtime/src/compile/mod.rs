@@ -41,6 +41,11 @@ pub struct Landmark {
     /// (x, z) of its centre.
     pub center: glam::DVec2,
     pub radius: f64,
+    /// Luminance of its brightest emissive part (Rec. 709 weights): what makes a buoy the
+    /// brightest for the `phototaxis` fitness.
+    pub brightness: f64,
+    /// Its primitives in the render graph.
+    pub primitives: std::ops::Range<usize>,
 }
 
 /// Everything a run needs, compiled from one scene.
@@ -86,7 +91,7 @@ pub fn compile(scene: &Scene) -> Compiled {
         compiler.walk(node, &root_frame, Owner::Static, 0);
     }
     index_static(&mut compiler.graph);
-    let settings = settings_of(scene);
+    let settings = world_settings(scene);
     let plan = Plan::new(&compiler.graph, &compiler.rig);
     Compiled {
         graph: compiler.graph,
@@ -98,7 +103,8 @@ pub fn compile(scene: &Scene) -> Compiled {
     }
 }
 
-fn settings_of(scene: &Scene) -> WorldSettings {
+/// The world's WorldInfo settings (defaults where it has none).
+pub fn world_settings(scene: &Scene) -> WorldSettings {
     match scene.find("WorldInfo").first() {
         Some(&info) => WorldSettings {
             title: scene.string(info, "title").to_owned(),
@@ -141,6 +147,13 @@ impl Compiler<'_> {
                 .fold(crate::geometry::Aabb::EMPTY, |b, p| b.union(p.bounds));
             if !bounds.is_empty() {
                 let number = self.landmarks.len() + 1;
+                let brightness = self.graph.primitives[first..]
+                    .iter()
+                    .map(|p| {
+                        let [r, g, b] = self.graph.materials[p.material].emissive;
+                        0.2126 * r + 0.7152 * g + 0.0722 * b
+                    })
+                    .fold(0.0, f64::max);
                 self.landmarks.push(Landmark {
                     name: format!("buoy {number}"),
                     center: glam::DVec2::new(
@@ -148,6 +161,8 @@ impl Compiler<'_> {
                         (bounds.min.z + bounds.max.z) / 2.0,
                     ),
                     radius: (bounds.max.x - bounds.min.x).max(bounds.max.z - bounds.min.z) / 2.0,
+                    brightness,
+                    primitives: first..self.graph.primitives.len(),
                 });
             }
             return;
@@ -377,6 +392,17 @@ impl Compiler<'_> {
             body_height: scene.float(node, "bodyHeight"),
             controller: scene.string(node, "controller").to_owned(),
             controller_args: scene.strings(node, "controllerArgs").to_vec(),
+            network: scene.child(node, "network").map(|network| {
+                let panoramic = scene
+                    .child(node, "turret")
+                    .is_some_and(|t| scene.type_name(t) == "PanoramicTurret");
+                crate::neural::network_from_scene(
+                    scene,
+                    network,
+                    panoramic,
+                    world_settings(scene).time_step,
+                )
+            }),
             distance_sensors: Vec::new(),
             light_sensors: Vec::new(),
             turret: None,

@@ -200,6 +200,8 @@ pub struct RobotRig {
     pub body_height: f64,
     pub controller: String,
     pub controller_args: Vec<String>,
+    /// The `network` field's NeuralNetwork, read and checked (`None`: the field is NULL).
+    pub network: Option<Result<crate::neural::NetworkSpec, crate::neural::NetworkError>>,
     pub distance_sensors: Vec<DistanceSensorRig>,
     pub light_sensors: Vec<LightSensorRig>,
     pub turret: Option<TurretRig>,
@@ -222,18 +224,22 @@ impl SensorRig {
     }
 }
 
+/// The filter a world names.
+pub(crate) fn filter_kind(name: &str) -> Option<FilterKind> {
+    Some(match name {
+        "raw" => FilterKind::Raw,
+        "lowpass" => FilterKind::Lowpass,
+        "highpass" => FilterKind::Highpass,
+        "bandpass" => FilterKind::Bandpass,
+        "odd" => FilterKind::Odd,
+        _ => return None,
+    })
+}
+
 /// Filters named in a world's `filters` field.
 pub(crate) fn filter_set(names: &[String]) -> FilterSet {
     let mut set = FilterSet::default();
-    for name in names {
-        let kind = match name.as_str() {
-            "raw" => FilterKind::Raw,
-            "lowpass" => FilterKind::Lowpass,
-            "highpass" => FilterKind::Highpass,
-            "bandpass" => FilterKind::Bandpass,
-            "odd" => FilterKind::Odd,
-            _ => continue,
-        };
+    for kind in names.iter().filter_map(|name| filter_kind(name)) {
         set.insert(kind);
     }
     set

@@ -76,6 +76,12 @@ impl Contacts {
     pub fn is_touching(&self) -> bool {
         self.touching.iter().any(|&t| t)
     }
+
+    /// What it ended the last step touching, per obstacle (in
+    /// [`Simulation::obstacle_names`] order).
+    pub fn touching(&self) -> &[bool] {
+        &self.touching
+    }
 }
 
 /// Visits to the world's landmarks (buoys).
@@ -83,6 +89,8 @@ impl Contacts {
 pub struct Visits {
     /// Landmark indices in the order they were entered.
     pub sequence: Vec<usize>,
+    /// When each entry of `sequence` happened (simulated s, the end of the step).
+    pub times: Vec<f64>,
     inside: Vec<bool>,
 }
 
@@ -202,11 +210,9 @@ impl<'c> Simulation<'c> {
         let mut robots = Vec::with_capacity(compiled.rig.robots.len());
         for (index, rig) in compiled.rig.robots.iter().enumerate() {
             let controller =
-                controllers::build(&rig.controller, &rig.controller_args).map_err(|source| {
-                    SimError::Controller {
-                        robot: rig.name.clone(),
-                        source,
-                    }
+                controllers::build_for(rig).map_err(|source| SimError::Controller {
+                    robot: rig.name.clone(),
+                    source,
                 })?;
             robots.push(RobotState {
                 name: rig.name.clone(),
@@ -256,6 +262,7 @@ impl<'c> Simulation<'c> {
                 },
                 visits: Visits {
                     sequence: Vec::new(),
+                    times: Vec::new(),
                     inside: vec![false; landmarks],
                 },
             });
@@ -673,6 +680,33 @@ impl<'c> Simulation<'c> {
         }
     }
 
+    /// A name for everything a robot can touch, in [`Contacts::per_obstacle`] order: a buoy's
+    /// landmark name, else the outermost named group the obstacle stands in (a DEF or PROTO
+    /// name such as `Arena`), then the robots by name.
+    pub fn obstacle_names(&self) -> Vec<String> {
+        let graph = &self.compiled.graph;
+        let statics = self.slab.obstacles.iter().map(|obstacle| {
+            if let Some(landmark) = self
+                .compiled
+                .landmarks
+                .iter()
+                .find(|l| l.primitives.contains(&obstacle.primitive))
+            {
+                return landmark.name.clone();
+            }
+            let mut group = graph.primitives[obstacle.primitive].group;
+            let mut name = None;
+            while let Some(g) = group {
+                name = Some(&graph.groups[g].name);
+                group = graph.groups[g].parent;
+            }
+            name.cloned().unwrap_or_else(|| "an obstacle".to_owned())
+        });
+        statics
+            .chain(self.robots.iter().map(|r| r.name.clone()))
+            .collect()
+    }
+
     /// Counts entries into each landmark's visit disc (its radius plus two body diameters).
     fn track_visits(&mut self) {
         let compiled = self.compiled;
@@ -686,6 +720,7 @@ impl<'c> Simulation<'c> {
                 let inside = distance <= landmark.radius + 4.0 * rig.body_radius;
                 if inside && !robot.visits.inside[k] {
                     robot.visits.sequence.push(k);
+                    robot.visits.times.push(self.time);
                 }
                 robot.visits.inside[k] = inside;
             }

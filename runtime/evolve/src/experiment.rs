@@ -1,0 +1,592 @@
+//! A world loaded once and evaluated many times: parsed, checked and compiled once, then run
+//! for any seed and any candidate weights of its network, in parallel, with results in a
+//! fixed order whatever the number of threads.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::DVec2;
+use rayon::prelude::*;
+use regatta_runtime::neural::{NetworkError, Neural, Topology};
+use regatta_runtime::sim::{SimError, Simulation};
+use regatta_runtime::Compiled;
+use serde::Serialize;
+
+use crate::fitness::{Fitness, FitnessTerms, Meters};
+use crate::record::LiveRecords;
+use crate::world::{apply_overrides, EditError, Override};
+
+/// Why a world cannot be loaded for evaluation.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    #[error(transparent)]
+    Read(#[from] regatta_parser::SourceError),
+    #[error(transparent)]
+    Edit(#[from] EditError),
+    /// The diagnostics, rendered.
+    #[error("{name} has {errors} error(s):\n{rendered}")]
+    Check {
+        name: String,
+        errors: usize,
+        rendered: String,
+    },
+    #[error("cannot run {name}: {source}")]
+    Start {
+        name: String,
+        #[source]
+        source: SimError,
+    },
+}
+
+/// Why an evaluation failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EvalError {
+    #[error("{world} has no robot with controller \"neural\" whose weights could be set")]
+    NoNetwork { world: String },
+    #[error("{world}: {source}")]
+    Network {
+        world: String,
+        #[source]
+        source: NetworkError,
+    },
+    #[error("{world}: {source}")]
+    Start {
+        world: String,
+        #[source]
+        source: SimError,
+    },
+    #[error("{world}: step {step}: {message}")]
+    Vision {
+        world: String,
+        step: u64,
+        message: String,
+    },
+}
+
+/// The robots a world's network drives, and its topology.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldNetwork {
+    /// Robots with controller "neural" (every one gets a candidate's weights).
+    pub robots: Vec<usize>,
+    pub topology: Arc<Topology>,
+    /// The weights the world file holds.
+    pub weights: Vec<f64>,
+}
+
+/// A world ready for many evaluations.
+#[derive(Debug)]
+pub struct Experiment {
+    /// The world's name as given (a path).
+    pub name: String,
+    /// The world's text, overrides applied.
+    pub text: String,
+    pub lenient: bool,
+    pub compiled: Compiled,
+    /// The network of its `neural` robots, if any (the first robot's: they must share it).
+    pub network: Option<WorldNetwork>,
+    /// Warnings of the check, rendered (empty when none).
+    pub warnings: String,
+}
+
+impl Experiment {
+    /// Reads, edits (`--set`), checks and compiles a world file.
+    pub fn load(
+        path: &Path,
+        lenient: bool,
+        overrides: &[Override],
+    ) -> Result<Experiment, LoadError> {
+        let source = regatta_parser::SourceText::read(path)?;
+        let base = path.parent().map(Path::to_owned).unwrap_or_default();
+        Experiment::from_text(&source.name, &source.text, Some(base), lenient, overrides)
+    }
+
+    /// A world given as text; `base_dir` is where its EXTERNPROTOs and Inlines resolve
+    /// (`None`: it may read no file).
+    pub fn from_text(
+        name: &str,
+        text: &str,
+        base_dir: Option<PathBuf>,
+        lenient: bool,
+        overrides: &[Override],
+    ) -> Result<Experiment, LoadError> {
+        let text = apply_overrides(text, overrides)?;
+        // The world reads files under its own folder only (see regatta_schema::access).
+        let base_dir = base_dir.and_then(|dir| dir.canonicalize().ok());
+        let mut access = regatta_schema::FileAccess::none();
+        if let Some(dir) = &base_dir {
+            let _ = access.allow(dir);
+        }
+        let mut checked = regatta_schema::check(
+            regatta_parser::SourceText::from_bytes(name.to_owned(), text.clone().into_bytes()),
+            &regatta_schema::Options {
+                strict: !lenient,
+                access,
+                base_dir,
+                ..regatta_schema::Options::default()
+            },
+        );
+        regatta_runtime::check::check_scene(&mut checked);
+        let render = |errors: bool| -> String {
+            checked
+                .diagnostics
+                .iter()
+                .filter(|d| d.diagnostic.is_error() == errors)
+                .map(|d| {
+                    let source = &checked.sources[d.file.0 as usize];
+                    d.diagnostic.render(&source.name, &source.text, false)
+                })
+                .collect()
+        };
+        let errors = checked
+            .diagnostics
+            .iter()
+            .filter(|d| d.diagnostic.is_error())
+            .count();
+        if errors > 0 {
+            return Err(LoadError::Check {
+                name: name.to_owned(),
+                errors,
+                rendered: render(true),
+            });
+        }
+        let warnings = if lenient {
+            render(false)
+        } else {
+            String::new()
+        };
+        let compiled = regatta_runtime::compile(&checked.scene);
+        // A world that cannot start is refused now, not once per evaluation.
+        Simulation::new(&compiled, None).map_err(|source| LoadError::Start {
+            name: name.to_owned(),
+            source,
+        })?;
+        let robots: Vec<usize> = compiled
+            .rig
+            .robots
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.controller == "neural")
+            .map(|(i, _)| i)
+            .collect();
+        let network = robots
+            .first()
+            .and_then(|&first| match &compiled.rig.robots[first].network {
+                Some(Ok(spec)) => Some(WorldNetwork {
+                    robots: robots.clone(),
+                    topology: spec.topology.clone(),
+                    weights: spec.weights.clone(),
+                }),
+                _ => None,
+            });
+        Ok(Experiment {
+            name: name.to_owned(),
+            text,
+            lenient,
+            compiled,
+            network,
+            warnings,
+        })
+    }
+
+    /// How many weights a candidate has: the world's network's parameter count.
+    pub fn parameter_count(&self) -> Option<usize> {
+        self.network.as_ref().map(|n| n.topology.parameter_count())
+    }
+
+    /// Steps covering `duration` seconds (a partial step counts as one).
+    pub fn steps_for(&self, duration: f64) -> u64 {
+        (duration / self.compiled.settings.time_step)
+            .ceil()
+            .max(0.0) as u64
+    }
+
+    /// A simulation of the world under `seed`, its network robots given `weights` (the
+    /// world's own when `None`).
+    pub fn simulation(
+        &self,
+        seed: u64,
+        weights: Option<&[f64]>,
+    ) -> Result<Simulation<'_>, EvalError> {
+        let mut simulation =
+            Simulation::new(&self.compiled, Some(seed)).map_err(|source| EvalError::Start {
+                world: self.name.clone(),
+                source,
+            })?;
+        sense_for_fitness(&mut simulation);
+        if let Some(weights) = weights {
+            let network = self.network.as_ref().ok_or_else(|| EvalError::NoNetwork {
+                world: self.name.clone(),
+            })?;
+            let shared: Arc<[f64]> = weights.into();
+            for &robot in &network.robots {
+                let controller =
+                    Neural::new(network.topology.clone(), shared.clone()).map_err(|source| {
+                        EvalError::Network {
+                            world: self.name.clone(),
+                            source,
+                        }
+                    })?;
+                simulation.set_controller(robot, Box::new(controller));
+            }
+        }
+        Ok(simulation)
+    }
+
+    /// One evaluation: `steps` steps under `seed`, summarised with `fitness`.
+    pub fn evaluate(
+        &self,
+        seed: u64,
+        steps: u64,
+        weights: Option<&[f64]>,
+        fitness: &Fitness,
+    ) -> Result<RunSummary, EvalError> {
+        let mut simulation = self.simulation(seed, weights)?;
+        let mut observer = Observer::new(&simulation, fitness);
+        for _ in 0..steps {
+            simulation.step();
+            observer.after_step(&simulation);
+        }
+        if let Some(error) = &simulation.vision_error {
+            return Err(EvalError::Vision {
+                world: self.name.clone(),
+                step: simulation.steps,
+                message: error.to_string(),
+            });
+        }
+        Ok(observer.summary(&simulation, &self.name, None))
+    }
+}
+
+/// Makes `simulation` refresh what the fitness functions read (the IR sensors) whether or
+/// not a controller reads it. Each sensor draws from its own noise stream, so this changes
+/// nothing else in the run.
+pub fn sense_for_fitness(simulation: &mut Simulation) {
+    simulation.always_sensed = simulation
+        .always_sensed
+        .union(regatta_runtime::khepera::Senses {
+            proximity: true,
+            ..regatta_runtime::khepera::Senses::NONE
+        });
+}
+
+/// A thread pool of `threads` threads (0: one per core).
+pub fn thread_pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap_or_else(|_| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .expect("a one-thread pool")
+        })
+}
+
+/// Evaluates every candidate (each row of `weights`; the world's own weights when `None`)
+/// under every seed, in parallel on `pool`. Rows come back candidate by candidate, seeds in
+/// the order given, whatever the number of threads; `done` is called after each evaluation.
+pub fn evaluate(
+    experiment: &Experiment,
+    weights: Option<&[Vec<f64>]>,
+    seeds: &[u64],
+    fitness: &Fitness,
+    steps: u64,
+    pool: &rayon::ThreadPool,
+    done: &(dyn Fn() + Sync),
+) -> Result<Vec<RunSummary>, EvalError> {
+    let candidates: Vec<Option<&[f64]>> = match weights {
+        Some(rows) => rows.iter().map(|r| Some(r.as_slice())).collect(),
+        None => vec![None],
+    };
+    let jobs: Vec<(usize, u64)> = (0..candidates.len())
+        .flat_map(|c| seeds.iter().map(move |&s| (c, s)))
+        .collect();
+    pool.install(|| {
+        jobs.par_iter()
+            .map(|&(candidate, seed)| {
+                let mut summary =
+                    experiment.evaluate(seed, steps, candidates[candidate], fitness)?;
+                if weights.is_some() {
+                    summary.candidate = Some(candidate);
+                }
+                done();
+                Ok(summary)
+            })
+            .collect()
+    })
+}
+
+/// Watches a live run step by step: fitness meters and distances per robot, and what a
+/// summary reports.
+pub struct Observer {
+    fitness: Fitness,
+    records: LiveRecords,
+    meters: Vec<Meters>,
+    distance: Vec<f64>,
+    last: Vec<DVec2>,
+}
+
+impl Observer {
+    pub fn new(simulation: &Simulation, fitness: &Fitness) -> Observer {
+        let landmarks = &simulation.compiled.landmarks;
+        Observer {
+            fitness: *fitness,
+            records: LiveRecords::new(simulation),
+            meters: simulation
+                .robots
+                .iter()
+                .map(|_| Meters::new(fitness, landmarks))
+                .collect(),
+            distance: vec![0.0; simulation.robots.len()],
+            last: simulation
+                .robots
+                .iter()
+                .map(|r| DVec2::new(r.pose.x, r.pose.z))
+                .collect(),
+        }
+    }
+
+    /// Takes in the step just done.
+    pub fn after_step(&mut self, simulation: &Simulation) {
+        let (meters, distance, last) = (&mut self.meters, &mut self.distance, &mut self.last);
+        self.records.after_step(simulation, |robot, record| {
+            meters[robot].add(record);
+            let here = DVec2::new(record.pose.x, record.pose.z);
+            distance[robot] += (here - last[robot]).length();
+            last[robot] = here;
+        });
+    }
+
+    /// The run so far as data; `wall_s` only where timing belongs (a single `run`).
+    pub fn summary(&self, simulation: &Simulation, world: &str, wall_s: Option<f64>) -> RunSummary {
+        let compiled = simulation.compiled;
+        let names = simulation.obstacle_names();
+        let robots: Vec<RobotSummary> = simulation
+            .robots
+            .iter()
+            .enumerate()
+            .map(|(index, robot)| {
+                let terms = self.meters[index].terms();
+                let contacts = &robot.contacts;
+                RobotSummary {
+                    name: robot.name.clone(),
+                    controller: compiled.rig.robots[index].controller.clone(),
+                    final_pose: PoseSummary {
+                        x: robot.pose.x,
+                        z: robot.pose.z,
+                        heading_deg: robot.pose.heading.to_degrees(),
+                    },
+                    distance_m: self.distance[index],
+                    mean_speed_m_s: if simulation.time > 0.0 {
+                        self.distance[index] / simulation.time
+                    } else {
+                        0.0
+                    },
+                    contacts: ContactSummary {
+                        events: contacts.events,
+                        steps: contacts.steps,
+                        time_s: contacts.steps as f64 * simulation.time_step,
+                        longest_s: contacts.longest,
+                        with: names
+                            .iter()
+                            .zip(&contacts.per_obstacle)
+                            .filter(|(_, &n)| n > 0)
+                            .map(|(name, &n)| ObstacleContacts {
+                                obstacle: name.clone(),
+                                contacts: n,
+                            })
+                            .collect(),
+                    },
+                    visits: self.meters[index]
+                        .regatta
+                        .visits()
+                        .iter()
+                        .map(|&(buoy, t, cyclic)| VisitSummary {
+                            buoy: buoy + 1,
+                            name: compiled.landmarks[buoy].name.clone(),
+                            t,
+                            cyclic,
+                        })
+                        .collect(),
+                    controller_errors: robot.controller_errors,
+                    last_controller_error: robot.last_controller_error.clone(),
+                    fitness: terms,
+                }
+            })
+            .collect();
+        let value = if robots.is_empty() {
+            0.0
+        } else {
+            robots
+                .iter()
+                .map(|r| r.fitness.value(&self.fitness))
+                .sum::<f64>()
+                / robots.len() as f64
+        };
+        RunSummary {
+            world: world.to_owned(),
+            seed: simulation.seed,
+            version: env!("CARGO_PKG_VERSION").to_owned(),
+            candidate: None,
+            steps: simulation.steps,
+            time_step_s: simulation.time_step,
+            simulated_s: simulation.time,
+            wall_s,
+            fitness: FitnessValue {
+                name: self.fitness.name().to_owned(),
+                value,
+            },
+            robots,
+        }
+    }
+}
+
+/// One run as data: what `regatta run --json` prints and `regatta batch` writes per row
+/// (`docs/run.schema.json` documents it). Keys come in this order.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RunSummary {
+    pub world: String,
+    pub seed: u64,
+    /// regatta's version.
+    pub version: String,
+    /// The candidate's row in an evaluation of many weights.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub candidate: Option<usize>,
+    pub steps: u64,
+    pub time_step_s: f64,
+    pub simulated_s: f64,
+    /// Wall-clock time of a single run (never in batch rows, which depend on nothing else).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wall_s: Option<f64>,
+    /// The chosen fitness: the mean of the robots' values.
+    pub fitness: FitnessValue,
+    pub robots: Vec<RobotSummary>,
+}
+
+/// A fitness's name and value.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FitnessValue {
+    pub name: String,
+    pub value: f64,
+}
+
+/// One robot's run.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RobotSummary {
+    pub name: String,
+    pub controller: String,
+    pub final_pose: PoseSummary,
+    /// Path length of the robot's centre (m).
+    pub distance_m: f64,
+    pub mean_speed_m_s: f64,
+    pub contacts: ContactSummary,
+    /// Entries into the buoys' visit discs, in order.
+    pub visits: Vec<VisitSummary>,
+    pub controller_errors: u64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub last_controller_error: Option<String>,
+    /// Every named fitness with its terms.
+    pub fitness: FitnessTerms,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PoseSummary {
+    pub x: f64,
+    pub z: f64,
+    pub heading_deg: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ContactSummary {
+    /// Contacts begun.
+    pub events: u64,
+    /// Steps that ended in contact.
+    pub steps: u64,
+    /// Time in contact (s).
+    pub time_s: f64,
+    /// Longest unbroken contact (s).
+    pub longest_s: f64,
+    /// What was touched, with the contacts begun with each.
+    pub with: Vec<ObstacleContacts>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ObstacleContacts {
+    pub obstacle: String,
+    pub contacts: u64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct VisitSummary {
+    /// Numbered from 1, in file order.
+    pub buoy: usize,
+    pub name: String,
+    /// Simulated time (s).
+    pub t: f64,
+    /// Whether the visit continued the cyclic order around the buoys.
+    pub cyclic: bool,
+}
+
+impl RunSummary {
+    /// The CSV header of [`RunSummary::csv_row`] for these robots.
+    pub fn csv_header(&self) -> String {
+        let mut columns = vec![
+            "world".to_owned(),
+            "seed".to_owned(),
+            "candidate".to_owned(),
+            "steps".to_owned(),
+            "simulated_s".to_owned(),
+            "fitness".to_owned(),
+        ];
+        for robot in &self.robots {
+            for column in [
+                "distance_m",
+                "mean_speed_m_s",
+                "contacts",
+                "contact_s",
+                "visits",
+                "cyclic_visits",
+                "avoidance",
+                "regatta",
+                "phototaxis",
+            ] {
+                columns.push(format!("{}.{column}", robot.name));
+            }
+        }
+        columns.join(",")
+    }
+
+    /// One CSV row: the run's fitness and each robot's main figures.
+    pub fn csv_row(&self) -> String {
+        let quote = |s: &str| {
+            if s.contains([',', '"', '\n']) {
+                format!("\"{}\"", s.replace('"', "\"\""))
+            } else {
+                s.to_owned()
+            }
+        };
+        let mut cells = vec![
+            quote(&self.world),
+            self.seed.to_string(),
+            self.candidate.map(|c| c.to_string()).unwrap_or_default(),
+            self.steps.to_string(),
+            format!("{:?}", self.simulated_s),
+            format!("{:?}", self.fitness.value),
+        ];
+        for robot in &self.robots {
+            let f = &robot.fitness;
+            cells.extend([
+                format!("{:?}", robot.distance_m),
+                format!("{:?}", robot.mean_speed_m_s),
+                robot.contacts.events.to_string(),
+                format!("{:?}", robot.contacts.time_s),
+                robot.visits.len().to_string(),
+                f.regatta.cyclic_visits.to_string(),
+                format!("{:?}", f.avoidance.value),
+                format!("{:?}", f.regatta.value),
+                format!("{:?}", f.phototaxis.value),
+            ]);
+        }
+        cells.join(",")
+    }
+}

@@ -1,0 +1,315 @@
+//! Populations end to end: `run --json` against its documented schema, a fitness from a log
+//! equal to the live one, `batch` and `evolve` the same for any `-j`, a resumed evolution
+//! equal to an uninterrupted one, and a short evolution that improves.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+fn regatta() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_regatta"))
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_owned()
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("regatta-pop-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn stdout_of(args: &[&str]) -> String {
+    let output = regatta().args(args).current_dir(root()).output().unwrap();
+    assert!(
+        output.status.success(),
+        "regatta {args:?}: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    String::from_utf8(output.stdout).unwrap()
+}
+
+/// Checks `value` against the keywords docs/run.schema.json uses (type, required,
+/// properties with no others, items, enum, minimum), and that an object's keys come in the
+/// order its properties are listed.
+fn validate(value: &Value, schema: &Value, at: &str) {
+    if let Some(types) = schema.get("type") {
+        let names: Vec<&str> = match types {
+            Value::String(t) => vec![t.as_str()],
+            Value::Array(ts) => ts.iter().filter_map(Value::as_str).collect(),
+            _ => vec![],
+        };
+        let fits = names.iter().any(|t| match *t {
+            "object" => value.is_object(),
+            "array" => value.is_array(),
+            "string" => value.is_string(),
+            "number" => value.is_number(),
+            "integer" => value.is_u64() || value.is_i64(),
+            "boolean" => value.is_boolean(),
+            "null" => value.is_null(),
+            _ => false,
+        });
+        assert!(fits, "{at}: {value} is not {names:?}");
+    }
+    if let (Some(allowed), Some(text)) = (schema.get("enum"), value.as_str()) {
+        assert!(
+            allowed.as_array().unwrap().iter().any(|a| a == text),
+            "{at}: {text}"
+        );
+    }
+    if let (Some(minimum), Some(number)) = (schema.get("minimum"), value.as_f64()) {
+        assert!(
+            number >= minimum.as_f64().unwrap(),
+            "{at}: {number} < {minimum}"
+        );
+    }
+    if let (Some(properties), Some(object)) = (schema.get("properties"), value.as_object()) {
+        let properties = properties.as_object().unwrap();
+        for required in schema["required"].as_array().unwrap() {
+            let key = required.as_str().unwrap();
+            assert!(object.contains_key(key), "{at}: {key} is missing");
+        }
+        let order: Vec<usize> = object
+            .keys()
+            .map(|k| {
+                properties
+                    .keys()
+                    .position(|p| p == k)
+                    .unwrap_or_else(|| panic!("{at}: {k} is not in the schema"))
+            })
+            .collect();
+        assert!(
+            order.windows(2).all(|w| w[0] < w[1]),
+            "{at}: keys out of order"
+        );
+        for (key, inner) in object {
+            validate(inner, &properties[key], &format!("{at}.{key}"));
+        }
+    }
+    if let (Some(items), Some(array)) = (schema.get("items"), value.as_array()) {
+        for (i, item) in array.iter().enumerate() {
+            validate(item, items, &format!("{at}[{i}]"));
+        }
+    }
+}
+
+#[test]
+fn run_json_follows_its_schema_and_a_log_gives_the_live_fitness() {
+    let schema: Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("docs/run.schema.json")).unwrap(),
+    )
+    .unwrap();
+    let dir = temp_dir("json");
+    for (world, fitness) in [
+        ("worlds/regatta.wbt", "regatta"),
+        ("worlds/avoidance.wbt", "avoidance"),
+        ("worlds/regatta_two.wbt", "phototaxis:range=0.3"),
+    ] {
+        let log = dir.join("run.mcap");
+        let text = stdout_of(&[
+            "run",
+            world,
+            "--duration",
+            "40",
+            "--json",
+            "--fitness",
+            fitness,
+            "--log",
+            log.to_str().unwrap(),
+        ]);
+        let value: Value = serde_json::from_str(&text).unwrap();
+        validate(&value, &schema, world);
+        // The same fitness from the log's channels, to the last bit.
+        let live = &value["fitness"]["value"];
+        let from_log = stdout_of(&[
+            "log",
+            "fitness",
+            log.to_str().unwrap(),
+            "--fitness",
+            fitness,
+        ]);
+        let first = from_log.lines().next().unwrap();
+        let logged: Value = serde_json::from_str(first.split_whitespace().nth(1).unwrap()).unwrap();
+        assert_eq!(live, &logged, "{world} {fitness}: {from_log}");
+        // The log answers "when did it reach buoy 2".
+        let csv = dir.join("csv");
+        stdout_of(&[
+            "log",
+            "export",
+            log.to_str().unwrap(),
+            "--csv",
+            csv.to_str().unwrap(),
+        ]);
+        if world.contains("regatta") {
+            let visits = std::fs::read_to_string(csv.join("visits.csv")).unwrap();
+            assert!(visits.starts_with("step,t_ns,t,robot,buoy,name,visits\n"), "{visits}");
+            let rows = visits.lines().count() - 1;
+            assert_eq!(rows, value["robots"][0]["visits"].as_array().unwrap().len());
+        }
+    }
+    // The avoidance world's robot touches things: contacts say with what.
+    let text = stdout_of(&["run", "worlds/avoidance.wbt", "--duration", "30", "--json"]);
+    let value: Value = serde_json::from_str(&text).unwrap();
+    let with = &value["robots"][0]["contacts"]["with"];
+    assert!(
+        with.as_array()
+            .unwrap()
+            .iter()
+            .all(|w| w["obstacle"].is_string()),
+        "{with}"
+    );
+}
+
+#[test]
+fn batch_rows_are_the_same_for_any_thread_count() {
+    for format in ["--json", "--csv"] {
+        let rows = |jobs: &str| {
+            stdout_of(&[
+                "batch",
+                "worlds/regatta.wbt",
+                "--seeds",
+                "1..6",
+                "--duration",
+                "10",
+                "-j",
+                jobs,
+                format,
+                "--set",
+                "Khepera.controllerArgs=irGain=2",
+            ])
+        };
+        let one = rows("1");
+        assert_eq!(one, rows("2"), "{format}");
+        let lines = one.lines().count();
+        assert_eq!(lines, if format == "--csv" { 7 } else { 6 }, "{one}");
+    }
+    // Seeds differ, so rows do.
+    let rows = stdout_of(&[
+        "batch",
+        "worlds/regatta_two.wbt",
+        "--seeds",
+        "3,4",
+        "--duration",
+        "20",
+    ]);
+    let lines: Vec<&str> = rows.lines().collect();
+    assert_ne!(
+        lines[0].replace("\"seed\":3", ""),
+        lines[1].replace("\"seed\":4", "")
+    );
+    // A bad --set is a clear error.
+    let output = regatta()
+        .args(["batch", "worlds/regatta.wbt", "--set", "Lamp.on=TRUE"])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("no node of type or DEF name 'Lamp'"));
+}
+
+fn evolve(out: &Path, extra: &[&str]) {
+    let mut args = vec![
+        "evolve",
+        "worlds/avoidance.wbt",
+        "--fitness",
+        "avoidance",
+        "--population",
+        "8",
+        "--trials",
+        "2",
+        "--duration",
+        "8",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    stdout_of(&args);
+}
+
+/// The outputs of an evolution written to `dir` (logs name their world by path, so runs
+/// compared share one output folder).
+fn outputs(dir: &Path) -> Vec<Vec<u8>> {
+    ["fitness.csv", "best.wbt", "best.mcap"]
+        .iter()
+        .map(|f| std::fs::read(dir.join(f)).unwrap())
+        .collect()
+}
+
+#[test]
+fn evolve_is_deterministic_resumes_exactly_and_improves() {
+    let dir = temp_dir("evolve");
+    let a = dir.join("out");
+    evolve(&a, &["--generations", "6", "-j", "1"]);
+    let one = outputs(&a);
+    evolve(&a, &["--generations", "6", "-j", "2"]);
+    assert!(one == outputs(&a), "-j 1 and -j 2 differ");
+    // Three generations, then three more from the checkpoint: as if uninterrupted.
+    let checkpoint = dir.join("checkpoint");
+    evolve(
+        &a,
+        &[
+            "--generations",
+            "3",
+            "--checkpoint",
+            checkpoint.to_str().unwrap(),
+        ],
+    );
+    evolve(
+        &a,
+        &[
+            "--generations",
+            "6",
+            "--resume",
+            checkpoint.to_str().unwrap(),
+        ],
+    );
+    assert!(one == outputs(&a), "the resumed run differs");
+    // Resuming under other settings is refused.
+    let output = regatta()
+        .args([
+            "evolve",
+            "worlds/avoidance.wbt",
+            "--fitness",
+            "regatta",
+            "--population",
+            "8",
+            "--trials",
+            "2",
+            "--duration",
+            "8",
+            "--resume",
+            checkpoint.to_str().unwrap(),
+        ])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("--fitness differs"));
+    // It improved: the best so far at the end beats the first generation's best.
+    let csv = std::fs::read_to_string(a.join("fitness.csv")).unwrap();
+    let best_ever = |line: &str| line.split(',').nth(5).unwrap().parse::<f64>().unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 6);
+    assert!(best_ever(rows[5]) > best_ever(rows[0]), "{csv}");
+    // best.wbt is canonical and runs: its network is the evolved one.
+    let best = a.join("best.wbt");
+    stdout_of(&["fmt", "--check", best.to_str().unwrap()]);
+    let text = stdout_of(&[
+        "run",
+        best.to_str().unwrap(),
+        "--duration",
+        "8",
+        "--json",
+        "--fitness",
+        "avoidance",
+    ]);
+    let value: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(value["robots"][0]["controller"], "neural");
+    assert!(std::fs::metadata(a.join("fitness.png")).unwrap().len() > 1000);
+}
