@@ -97,10 +97,12 @@ fn copy_tree(from: &Path, to: &Path) {
     }
 }
 
-/// The first diagnostic of rendered output, as `file:line:col: severity: message`; any other
-/// first `error:`/`warning:` line as it is; `(none)` when there is none.
+/// The first diagnostic of rendered output, as `file:line:col: severity: message`; when no
+/// message has a place, the first `error:`/`warning:` line as it is; `(none)` when there is
+/// none.
 fn first_diagnostic(stderr: &str) -> String {
     let lines: Vec<&str> = stderr.lines().collect();
+    let mut plain = None;
     for (i, line) in lines.iter().enumerate() {
         let Some((severity, message)) = ["error", "warning"]
             .iter()
@@ -114,9 +116,9 @@ fn first_diagnostic(stderr: &str) -> String {
         {
             return format!("{}: {severity}: {message}", place.trim());
         }
-        return line.to_string();
+        plain.get_or_insert_with(|| line.to_string());
     }
-    "(none)".to_owned()
+    plain.unwrap_or_else(|| "(none)".to_owned())
 }
 
 #[test]

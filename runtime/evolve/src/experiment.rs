@@ -95,8 +95,26 @@ impl Experiment {
         lenient: bool,
         overrides: &[Override],
     ) -> Result<Experiment, LoadError> {
+        if path.as_os_str() == "-" {
+            // Standard input: a world with no folder, which reads no file.
+            let bytes = regatta_parser::source::read_bytes(
+                std::io::stdin().lock(),
+                regatta_parser::source::MAX_FILE_SIZE,
+            )
+            .map_err(|error| {
+                LoadError::Read(regatta_parser::SourceError::Io {
+                    path: path.to_owned(),
+                    source: std::io::Error::other(error.to_string()),
+                })
+            })?;
+            let source = regatta_parser::SourceText::from_bytes("<stdin>".to_owned(), bytes);
+            return Experiment::from_text(&source.name, &source.text, None, lenient, overrides);
+        }
         let source = regatta_parser::SourceText::read(path)?;
-        let base = path.parent().map(Path::to_owned).unwrap_or_default();
+        let base = match path.parent() {
+            Some(parent) if !parent.as_os_str().is_empty() => parent.to_owned(),
+            _ => PathBuf::from("."),
+        };
         Experiment::from_text(&source.name, &source.text, Some(base), lenient, overrides)
     }
 
