@@ -3,16 +3,14 @@
 //! it (`REGATTA_BLESS=1` rewrites them). Whatever the case, nothing may panic or hang, and no
 //! `# never:` text (a secret's bytes) may appear in what regatta prints.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_owned()
-}
+use common::{regatta, root};
+use regatta_tests::expect_file;
 
 /// One case: its directives.
 struct Case {
@@ -144,7 +142,7 @@ fn every_bad_input_gets_its_one_clear_error() {
         if !case.symlinks.is_empty() {
             continue;
         }
-        let mut command = Command::new(env!("CARGO_BIN_EXE_regatta"));
+        let mut command = regatta();
         command
             .arg("--color")
             .arg("never")
@@ -185,7 +183,7 @@ fn every_bad_input_gets_its_one_clear_error() {
             .map_or("killed".to_owned(), |c| c.to_string());
         let actual = format!("exit: {code}\nfirst: {}\n", first_diagnostic(&stderr));
         let expected = source.join(&case.name).with_extension("expected");
-        if let Err(message) = regatta_expect(&expected, &actual) {
+        if let Err(message) = expect_file(&expected, &actual) {
             failures.push(format!("{message}\n--- stderr:\n{stderr}"));
         }
         #[cfg(unix)]
@@ -195,27 +193,4 @@ fn every_bad_input_gets_its_one_clear_error() {
     }
     let _ = std::fs::remove_dir_all(&work);
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
-}
-
-/// The expect-file rule of the workspace (`tests/support.rs`): compare, or rewrite when
-/// `REGATTA_BLESS` is set.
-fn regatta_expect(expected: &Path, actual: &str) -> Result<(), String> {
-    if std::env::var_os("REGATTA_BLESS").is_some() {
-        std::fs::write(expected, actual).map_err(|e| format!("{}: {e}", expected.display()))?;
-        return Ok(());
-    }
-    let wanted = std::fs::read_to_string(expected).map_err(|e| {
-        format!(
-            "{}: {e} (run with REGATTA_BLESS=1 to create it)",
-            expected.display()
-        )
-    })?;
-    if wanted == actual {
-        Ok(())
-    } else {
-        Err(format!(
-            "{}:\n  expected: {wanted:?}\n  actual:   {actual:?}\n(run with REGATTA_BLESS=1 to accept)",
-            expected.display()
-        ))
-    }
 }

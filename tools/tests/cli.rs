@@ -4,18 +4,11 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 
-fn regatta() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_regatta"))
-}
+mod common;
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_owned()
-}
+use common::{regatta, root};
 
 fn run_with_stdin(args: &[&str], input: &[u8]) -> Output {
     let mut child = regatta()
@@ -30,9 +23,7 @@ fn run_with_stdin(args: &[&str], input: &[u8]) -> Output {
 }
 
 fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("regatta-cli-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::temp_dir(&format!("cli-{name}"))
 }
 
 #[test]
