@@ -2213,6 +2213,36 @@ impl<'c> Lowerer<'c> {
                         }
                     }
                 }
+                if let Some(bad) = value
+                    .strings()
+                    .iter()
+                    .find(|s| !spec.values.is_empty() && !spec.values.contains(s))
+                {
+                    let allowed = spec
+                        .values
+                        .iter()
+                        .map(|v| format!("\"{v}\""))
+                        .collect::<Vec<_>>()
+                        .join(", ");
+                    let mut diagnostic = Diagnostic::error(
+                        blamed_span,
+                        format!("\"{bad}\" is not a valid value of '{field_name}'"),
+                    )
+                    .with_label(format!("expected one of {allowed}"))
+                    .with_code("range");
+                    if let Some(close) = did_you_mean(bad, spec.values.iter().map(String::as_str)) {
+                        diagnostic = diagnostic.with_note(format!("did you mean \"{close}\"?"));
+                    }
+                    if blamed_file != file {
+                        diagnostic = diagnostic.with_secondary_in(
+                            file.0 as usize,
+                            target.span,
+                            format!("'{}' goes to '{field_name}' here", target.text),
+                        );
+                    }
+                    self.error(blamed_file, diagnostic);
+                    return None;
+                }
                 if !self.check_ranges(&value, spec, blamed_file, blamed_span) {
                     return None;
                 }
