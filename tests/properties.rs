@@ -422,3 +422,15 @@ mod worlds_that_check {
         }
     }
 }
+
+/// Found by `arbitrary_bytes_never_panic`: a list left open whose last token ends in a
+/// multi-byte character (here U+FFFD from an invalid byte) once made `fmt` slice inside it.
+#[test]
+fn an_unclosed_list_ending_inside_a_character_formats() {
+    let source = SourceText::from_bytes("cut".to_owned(), vec![58, 123, 58, 91, 48, 0, 128]);
+    let parsed = parse(&source.text);
+    let _ = format(&parsed.file, &source.text);
+    let text = "Group { children [ 0 1é";
+    let parsed = parse(text);
+    let _ = format(&parsed.file, text);
+}

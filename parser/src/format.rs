@@ -280,7 +280,9 @@ impl Printer<'_> {
         }
         if value.bracketed {
             if let (false, Some((_, last))) = (multiline, flat_items) {
-                if self.src[last.min(close)..close].contains('\n') {
+                // Bytes, not text: an unclosed list may end inside a character.
+                let between = self.src.as_bytes().get(last.min(close)..close);
+                if between.is_some_and(|gap| gap.contains(&b'\n')) {
                     self.flush_comments_before(close);
                     if !self.at_line_start() {
                         self.newline();
