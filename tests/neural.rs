@@ -40,6 +40,8 @@ fn log_of(world: &str, steps: u64) -> Vec<u8> {
         seed: simulation.seed,
         lenient: false,
         steps_requested: steps,
+        channels: regatta_runtime::log::Channels::ALL,
+        controllers: Vec::new(),
     };
     let mut sink = std::io::Cursor::new(Vec::new());
     let mut recorder = Recorder::new(&mut sink, &mut simulation, &run).unwrap();

@@ -289,15 +289,6 @@ impl Printer<'_> {
                     }
                 }
             }
-            if flat_items.is_none() && self.out.ends_with('[') {
-                // An empty list is `[]`.
-                self.flush_comments_before(close);
-                if self.out.ends_with('[') {
-                    self.out.push(']');
-                    self.last_source_end = value.span.end as usize;
-                    return;
-                }
-            }
             self.word("]", close);
             self.last_source_end = value.span.end as usize;
         }

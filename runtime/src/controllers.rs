@@ -30,6 +30,7 @@ use regatta_schema::{Checked, FileDiagnostic, Value};
 use crate::compile::rig::RobotRig;
 use crate::khepera::{Controller, Khepera, KheperaError, Senses};
 use crate::retina::FilterKind;
+use crate::webots_controllers::{resolve, Resolution, LENIENT_DEFAULT, MAPPED};
 
 /// K-Team's weights, sensors 0…7 (khepera.md).
 pub const LEFT_WEIGHTS: [f64; 8] = [4.0, 4.0, 6.0, -18.0, -15.0, -5.0, 5.0, 3.0];
@@ -343,25 +344,52 @@ pub fn check_scene(checked: &mut Checked) {
         let (name_at, args_at) = (at(controller_index), at(args_index));
         let mut problems: Vec<(regatta_schema::scene::Origin, Diagnostic)> = Vec::new();
         let mut kept_args = Vec::new();
-        match spec_of(&name) {
-            Err(error) => {
+        let mut replacement = None;
+        match resolve(&name) {
+            Resolution::Unknown => {
+                let candidates = CONTROLLERS
+                    .iter()
+                    .map(|c| c.name)
+                    .chain(MAPPED.iter().map(|(n, _, _)| *n));
                 let mut diagnostic =
                     Diagnostic::error(name_at.span, format!("unknown controller \"{name}\""))
                         .with_label("no built-in controller has this name")
-                        .with_note(format!("built in: {}", known_names()))
+                        .with_note(format!(
+                            "built in: {}, and the Webots names in the README",
+                            known_names()
+                        ))
                         .with_code("unknown-controller");
-                if let ControllerError::Unknown {
-                    hint: Some(close), ..
-                } = &error
-                {
+                if let Some(close) = did_you_mean_in(&name, candidates) {
                     diagnostic = diagnostic.with_note(format!("did you mean \"{close}\"?"));
                 }
                 if lenient {
-                    diagnostic = diagnostic.with_note("the robot runs no controller");
+                    diagnostic = diagnostic
+                        .with_note(format!("lenient mode runs \"{LENIENT_DEFAULT}\" instead"));
+                    replacement = Some((LENIENT_DEFAULT, Vec::new()));
                 }
                 problems.push((name_at, diagnostic));
             }
-            Ok(spec) => {
+            // Driven from outside (`regatta serve`): `run` says so, `serve` drives it.
+            Resolution::External(_) => {}
+            Resolution::Builtin(builtin, why) if builtin != name && !why.is_empty() => {
+                // A Webots name: its controllerArgs were for Webots' program, not regatta's.
+                if items(&args).next().is_some() {
+                    let diagnostic = Diagnostic::warning(
+                        args_at.span,
+                        format!(
+                            "controllerArgs of Webots' \"{name}\" are not used: it runs as regatta's \"{builtin}\" ({why})"
+                        ),
+                    )
+                    .with_label("ignored")
+                    .with_code("controller-args");
+                    problems.push((args_at, diagnostic));
+                    replacement = Some((builtin, Vec::new()));
+                }
+            }
+            Resolution::Builtin(builtin, _) => {
+                let Some(spec) = find(builtin) else {
+                    continue;
+                };
                 for item in items(&args) {
                     match argument(spec, item) {
                         Ok(_) => kept_args.push(item.to_owned()),
@@ -379,12 +407,14 @@ pub fn check_scene(checked: &mut Checked) {
                         }
                     }
                 }
+                if lenient {
+                    replacement = Some((spec.name, kept_args));
+                }
             }
         }
         if problems.is_empty() {
             continue;
         }
-        let unknown = problems.iter().any(|(_, d)| d.code == "unknown-controller");
         for (origin, mut diagnostic) in problems {
             if lenient {
                 diagnostic.severity = Severity::Warning;
@@ -394,14 +424,11 @@ pub fn check_scene(checked: &mut Checked) {
                 diagnostic,
             });
         }
-        if lenient {
+        // What runs instead, where the world goes on (lenient mode, ignored Webots arguments).
+        if let Some((controller, args)) = replacement {
             let node = &mut checked.scene.nodes[id.index()];
-            if unknown {
-                node.fields[controller_index] = Value::String("none".to_owned());
-                node.fields[args_index] = Value::Strings(Vec::new());
-            } else {
-                node.fields[args_index] = Value::Strings(kept_args);
-            }
+            node.fields[controller_index] = Value::String(controller.to_owned());
+            node.fields[args_index] = Value::Strings(args);
         }
     }
 }

@@ -20,5 +20,6 @@ pub mod render;
 pub mod retina;
 pub mod sim;
 pub mod vision;
+pub mod webots_controllers;
 
 pub use compile::{compile, Compiled};

@@ -3,7 +3,11 @@
 //! Format decisions:
 //! - One channel per robot and sensor: `/{robot}/pose`, `/wheels`, `/proximity`, `/ambient`,
 //!   `/retina`, `/k213`, `/contacts` (when contact begins or ends, with what is touched),
-//!   `/visits` (each entry into a buoy's visit disc), `/controller`.
+//!   `/visits` (each entry into a buoy's visit disc), `/controller` (regatta's own schemas:
+//!   the reproducible record), and beside them Foxglove's well-known schemas (`foxglove`:
+//!   scene, transforms, poses, images, events) so that Foxglove and ROS 2 tools show a log
+//!   as it is. `{robot}` is the robot's name made a valid ROS 2 token (`channels`);
+//!   `--channels` picks the channels a log holds, and the log's metadata says which.
 //! - Chunks of 4 MB (uncompressed) with zstd level 1: the size and speed targets of a ten-minute
 //!   regatta at full rate (18.9 MB; logging costs about 45 % of the speed) both hold.
 //! - Messages are CDR-encoded with a `ros2msg` schema per channel (the ROS 2 convention that
@@ -21,7 +25,14 @@ use std::io::{Seek, Write};
 
 use sha2::{Digest, Sha256};
 
+use crate::khepera::Senses;
 use crate::sim::Simulation;
+
+mod channels;
+mod foxglove;
+
+pub use channels::{is_ros2_topic, robot_tokens, sanitize, Channel, Channels, UnknownChannel};
+pub use foxglove::SCHEMAS as FOXGLOVE_SCHEMAS;
 
 /// Why a log could not be written or read.
 #[derive(Debug, thiserror::Error)]
@@ -46,6 +57,12 @@ pub struct RunInfo {
     pub seed: u64,
     pub lenient: bool,
     pub steps_requested: u64,
+    /// The channels recorded.
+    pub channels: Channels,
+    /// Robots whose controller is not the one their world gives (a `--controller` override,
+    /// a Webots name mapped to a built-in, lenient mode's fallback): (robot, controller,
+    /// controllerArgs). Written only when there is one, so other logs do not change.
+    pub controllers: Vec<(String, String, Vec<String>)>,
 }
 
 impl RunInfo {
@@ -54,7 +71,7 @@ impl RunInfo {
         let mut hash = Sha256::new();
         hash.update(self.world_text.as_bytes());
         let digest: String = hash.finalize().iter().map(|b| format!("{b:02x}")).collect();
-        BTreeMap::from([
+        let mut metadata = BTreeMap::from([
             ("world_name".to_owned(), self.world_name.clone()),
             ("world".to_owned(), self.world_text.clone()),
             ("world_sha256".to_owned(), digest),
@@ -65,11 +82,23 @@ impl RunInfo {
                 self.steps_requested.to_string(),
             ),
             ("time_step".to_owned(), format!("{time_step}")),
+            ("channels".to_owned(), self.channels.to_string()),
             (
                 "regatta_version".to_owned(),
                 env!("CARGO_PKG_VERSION").to_owned(),
             ),
-        ])
+        ]);
+        if !self.controllers.is_empty() {
+            let lines: Vec<String> = self
+                .controllers
+                .iter()
+                .map(|(robot, controller, args)| {
+                    format!("{robot}\t{controller}\t{}", args.join("\u{1f}"))
+                })
+                .collect();
+            metadata.insert("controllers".to_owned(), lines.join("\n"));
+        }
+        metadata
     }
 
     /// Reads the metadata back.
@@ -85,27 +114,55 @@ impl RunInfo {
             steps_requested: get("steps_requested")?
                 .parse()
                 .map_err(|_| LogError::MissingField("steps_requested"))?,
+            // Logs from before `--channels` hold regatta's own channels.
+            channels: match metadata.get("channels") {
+                Some(names) => names
+                    .parse()
+                    .map_err(|_| LogError::MissingField("channels"))?,
+                None => Channels::REGATTA,
+            },
+            controllers: metadata
+                .get("controllers")
+                .map(|text| {
+                    text.lines()
+                        .filter_map(|line| {
+                            let mut parts = line.splitn(3, '\t');
+                            let robot = parts.next()?.to_owned();
+                            let controller = parts.next()?.to_owned();
+                            let args = parts
+                                .next()
+                                .unwrap_or("")
+                                .split('\u{1f}')
+                                .filter(|a| !a.is_empty())
+                                .map(str::to_owned)
+                                .collect();
+                            Some((robot, controller, args))
+                        })
+                        .collect()
+                })
+                .unwrap_or_default(),
         })
     }
 }
 
-/// The channels of one robot.
+/// The channels of one robot (`None`: not recorded).
 struct RobotChannels {
-    pose: u16,
-    wheels: u16,
-    proximity: u16,
-    ambient: u16,
+    pose: Option<u16>,
+    wheels: Option<u16>,
+    proximity: Option<u16>,
+    ambient: Option<u16>,
     retina: Option<u16>,
     k213: Option<u16>,
-    contacts: u16,
-    visits: u16,
-    controller: u16,
+    contacts: Option<u16>,
+    visits: Option<u16>,
+    controller: Option<u16>,
 }
 
 /// Writes a run's messages, step by step.
 pub struct Recorder<W: Write + Seek> {
     writer: mcap::Writer<W>,
     robots: Vec<RobotChannels>,
+    foxglove: Option<foxglove::Foxglove>,
     /// What robots can touch, named once ([`Simulation::obstacle_names`]).
     obstacle_names: Vec<String>,
     /// Per robot: visits already written.
@@ -293,15 +350,22 @@ impl<'a> CdrReader<'a> {
 }
 
 impl<W: Write + Seek> Recorder<W> {
-    /// Starts a log for `simulation`, writing the header, metadata, schemas and channels. From
-    /// now on the simulation refreshes every sensor, read or not, so that the log holds them
-    /// all (see [`Simulation::sense_everything`]).
+    /// Starts a log for `simulation`, writing the header, metadata, schemas and the channels
+    /// `run.channels` names. From now on the simulation refreshes every sensor those channels
+    /// record, read or not (see [`Simulation::always_sensed`]).
     pub fn new(
         sink: W,
         simulation: &mut Simulation,
         run: &RunInfo,
     ) -> Result<Recorder<W>, LogError> {
-        simulation.sense_everything();
+        let wanted = run.channels;
+        simulation.always_sensed = Senses {
+            proximity: wanted.contains(Channel::Proximity),
+            ambient: wanted.contains(Channel::Ambient),
+            vision: wanted.contains(Channel::Retina)
+                || wanted.contains(Channel::K213)
+                || wanted.contains(Channel::Images),
+        };
         let simulation = &*simulation;
         let options = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Zstd))
@@ -317,61 +381,95 @@ impl<W: Write + Seek> Recorder<W> {
             })
             .map_err(LogError::Write)?;
         let mut schema = BTreeMap::new();
+        let kinds = [
+            (Channel::Pose, "regatta/msg/Pose"),
+            (Channel::Wheels, "regatta/msg/Wheels"),
+            (Channel::Proximity, "regatta/msg/Readings8"),
+            (Channel::Ambient, "regatta/msg/Readings8"),
+            (Channel::Retina, "regatta/msg/Retina"),
+            (Channel::K213, "regatta/msg/LinearCamera"),
+            (Channel::Contacts, "regatta/msg/Contact"),
+            (Channel::Visits, "regatta/msg/Visit"),
+            (Channel::Controller, "regatta/msg/ControllerEvent"),
+        ];
         for (name, text) in SCHEMAS {
-            schema.insert(
-                *name,
-                writer
-                    .add_schema(name, "ros2msg", text.as_bytes())
-                    .map_err(LogError::Write)?,
-            );
+            if kinds.iter().any(|(c, s)| s == name && wanted.contains(*c)) {
+                schema.insert(
+                    *name,
+                    writer
+                        .add_schema(name, "ros2msg", text.as_bytes())
+                        .map_err(LogError::Write)?,
+                );
+            }
         }
+        let tokens = robot_tokens(simulation.robots.iter().map(|r| r.name.as_str()));
         let mut robots = Vec::new();
-        let none = BTreeMap::new();
-        for robot in &simulation.robots {
-            let mut channel = |topic: &str, schema_name: &str| {
+        for (robot, token) in simulation.robots.iter().zip(&tokens) {
+            let owner = BTreeMap::from([("robot".to_owned(), robot.name.clone())]);
+            let mut channel = |kind: Channel, present: bool| -> Result<Option<u16>, LogError> {
+                if !present || !wanted.contains(kind) {
+                    return Ok(None);
+                }
+                let schema_name = kinds
+                    .iter()
+                    .find(|(c, _)| *c == kind)
+                    .map(|(_, s)| *s)
+                    .expect("every regatta channel has a schema");
                 writer
                     .add_channel(
                         schema[schema_name],
-                        &format!("/{}/{topic}", robot.name),
+                        &format!("/{token}/{}", kind.name()),
                         "cdr",
-                        &none,
+                        &owner,
                     )
+                    .map(Some)
                     .map_err(LogError::Write)
             };
             robots.push(RobotChannels {
-                pose: channel("pose", "regatta/msg/Pose")?,
-                wheels: channel("wheels", "regatta/msg/Wheels")?,
-                proximity: channel("proximity", "regatta/msg/Readings8")?,
-                ambient: channel("ambient", "regatta/msg/Readings8")?,
-                retina: if robot.panoramic.is_some() {
-                    Some(channel("retina", "regatta/msg/Retina")?)
-                } else {
-                    None
-                },
-                k213: if robot.linear_camera.is_some() {
-                    Some(channel("k213", "regatta/msg/LinearCamera")?)
-                } else {
-                    None
-                },
-                contacts: channel("contacts", "regatta/msg/Contact")?,
-                visits: channel("visits", "regatta/msg/Visit")?,
-                controller: channel("controller", "regatta/msg/ControllerEvent")?,
+                pose: channel(Channel::Pose, true)?,
+                wheels: channel(Channel::Wheels, true)?,
+                proximity: channel(Channel::Proximity, true)?,
+                ambient: channel(Channel::Ambient, true)?,
+                retina: channel(Channel::Retina, robot.panoramic.is_some())?,
+                k213: channel(Channel::K213, robot.linear_camera.is_some())?,
+                contacts: channel(Channel::Contacts, true)?,
+                visits: channel(Channel::Visits, true)?,
+                controller: channel(Channel::Controller, true)?,
             });
         }
+        let mut cdr = Cdr {
+            buf: Vec::with_capacity(4096),
+        };
+        let mut sequence = 0;
+        let foxglove = if wanted.any_foxglove() {
+            Some(foxglove::Foxglove::new(
+                &mut writer,
+                &mut cdr,
+                &mut sequence,
+                simulation,
+                wanted,
+                &tokens,
+                &run.world_name,
+            )?)
+        } else {
+            None
+        };
         Ok(Recorder {
             writer,
             robots,
+            foxglove,
             obstacle_names: simulation.obstacle_names(),
             visits_written: vec![0; simulation.robots.len()],
-            sequence: 0,
-            cdr: Cdr {
-                buf: Vec::with_capacity(4096),
-            },
+            sequence,
+            cdr,
         })
     }
 
-    /// Writes the message encoded in `self.cdr`.
-    fn write(&mut self, channel: u16, time_ns: u64) -> Result<(), LogError> {
+    /// Writes the message encoded in `self.cdr` (nothing when the channel is not recorded).
+    fn write(&mut self, channel: Option<u16>, time_ns: u64) -> Result<(), LogError> {
+        let Some(channel) = channel else {
+            return Ok(());
+        };
         self.sequence = self.sequence.wrapping_add(1);
         let header = mcap::records::MessageHeader {
             channel_id: channel,
@@ -406,13 +504,13 @@ impl<W: Write + Seek> Recorder<W> {
                 channels.controller,
             );
             let updated = robot.updated;
-            if updated.proximity {
+            if updated.proximity && proximity.is_some() {
                 self.cdr.start();
                 self.cdr.f64(read_at);
                 robot.proximity.iter().for_each(|&v| self.cdr.u16(v));
                 self.write(proximity, ns(read_at))?;
             }
-            if updated.ambient {
+            if updated.ambient && ambient.is_some() {
                 self.cdr.start();
                 self.cdr.f64(read_at);
                 robot.ambient.iter().for_each(|&v| self.cdr.u16(v));
@@ -420,6 +518,7 @@ impl<W: Write + Seek> Recorder<W> {
             }
             if updated.vision {
                 if let (Some(channel), Some(turret)) = (retina, &robot.panoramic) {
+                    let channel = Some(channel);
                     let out = &turret.output;
                     let roi = turret.model.rig.roi;
                     let cdr = &mut self.cdr;
@@ -450,6 +549,7 @@ impl<W: Write + Seek> Recorder<W> {
                     self.write(channel, ns(read_at))?;
                 }
                 if let (Some(channel), Some(camera)) = (k213, &robot.linear_camera) {
+                    let channel = Some(channel);
                     self.cdr.start();
                     self.cdr.f64(read_at);
                     self.cdr.u16s(&camera.output.digital);
@@ -457,7 +557,7 @@ impl<W: Write + Seek> Recorder<W> {
                     self.write(channel, ns(read_at))?;
                 }
             }
-            if updated.controller_error {
+            if updated.controller_error && controller.is_some() {
                 self.cdr.start();
                 self.cdr.f64(read_at);
                 self.cdr
@@ -465,20 +565,24 @@ impl<W: Write + Seek> Recorder<W> {
                 self.write(controller, ns(read_at))?;
             }
             let (left, right) = robot.counters(rig);
-            self.cdr.start();
-            self.cdr.f64(t);
-            self.cdr.i32(robot.command.0);
-            self.cdr.i32(robot.command.1);
-            self.cdr.i32(left);
-            self.cdr.i32(right);
-            self.write(wheels, ns(t))?;
-            self.cdr.start();
-            self.cdr.f64(t);
-            self.cdr.f64(robot.pose.x);
-            self.cdr.f64(robot.pose.z);
-            self.cdr.f64(robot.pose.heading);
-            self.write(pose, ns(t))?;
-            if updated.contact {
+            if wheels.is_some() {
+                self.cdr.start();
+                self.cdr.f64(t);
+                self.cdr.i32(robot.command.0);
+                self.cdr.i32(robot.command.1);
+                self.cdr.i32(left);
+                self.cdr.i32(right);
+                self.write(wheels, ns(t))?;
+            }
+            if pose.is_some() {
+                self.cdr.start();
+                self.cdr.f64(t);
+                self.cdr.f64(robot.pose.x);
+                self.cdr.f64(robot.pose.z);
+                self.cdr.f64(robot.pose.heading);
+                self.write(pose, ns(t))?;
+            }
+            if updated.contact && contacts.is_some() {
                 self.cdr.start();
                 self.cdr.f64(t);
                 self.cdr.bool(robot.contacts.is_touching());
@@ -504,6 +608,14 @@ impl<W: Write + Seek> Recorder<W> {
                 self.visits_written[index] += 1;
             }
         }
+        if let Some(foxglove) = &mut self.foxglove {
+            foxglove.record(
+                &mut self.writer,
+                &mut self.cdr,
+                &mut self.sequence,
+                simulation,
+            )?;
+        }
         Ok(())
     }
 
@@ -514,6 +626,16 @@ impl<W: Write + Seek> Recorder<W> {
             ("time".to_owned(), format!("{}", simulation.time)),
             ("interrupted".to_owned(), interrupted.to_string()),
         ]);
+        let mut end = end;
+        // Robots that fell off the world: only then is the key written.
+        for robot in &simulation.robots {
+            if let Some(fall) = robot.fell {
+                end.insert(
+                    format!("fell.{}", robot.name),
+                    format!("t={} x={} z={}", fall.time, fall.pose.x, fall.pose.z),
+                );
+            }
+        }
         self.writer
             .write_metadata(&mcap::records::Metadata {
                 name: "regatta.end".to_owned(),
@@ -525,9 +647,24 @@ impl<W: Write + Seek> Recorder<W> {
     }
 }
 
+/// A channel of a log.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TopicInfo {
+    pub topic: String,
+    /// Its schema's name (`regatta/msg/Pose`, `foxglove_msgs/msg/FrameTransform`, …).
+    pub schema: String,
+    pub message_encoding: String,
+    /// The robot it belongs to (its own name, before sanitising), if any.
+    pub robot: Option<String>,
+}
+
 /// A log read back.
 pub struct LogContents {
     pub run: RunInfo,
+    /// Every channel, in the order they were added.
+    pub topics: Vec<TopicInfo>,
+    /// The `regatta` metadata record as written (world hash, version, time step, …).
+    pub metadata: BTreeMap<String, String>,
     /// The run's basic time step (s), when the log says it.
     pub time_step: Option<f64>,
     /// The end record's entries, if the run finished writing it.
@@ -587,47 +724,87 @@ fn sound_prefix(bytes: &[u8]) -> (&[u8], Option<String>) {
     (bytes, None)
 }
 
-/// Reads a log; a file cut short yields what its complete chunks hold, and says so.
+/// The reader's bounds: every length at most [`MAX_CHUNK`] (a damaged length must not make it
+/// allocate what it says), every chunk's CRC checked before its records are read.
+fn reader_options() -> mcap::sans_io::LinearReaderOptions {
+    mcap::sans_io::LinearReaderOptions::default()
+        .with_skip_end_magic(true)
+        .with_record_length_limit(MAX_CHUNK as usize)
+        .with_prevalidate_chunk_crcs(true)
+}
+
+/// Calls `visit` on every record of `bytes`, chunks flattened; returns why reading stopped
+/// early, if it did.
+fn each_record(
+    bytes: &[u8],
+    mut visit: impl FnMut(mcap::records::Record<'_>) -> Result<(), LogError>,
+) -> Result<Option<String>, LogError> {
+    let mut reader = mcap::sans_io::LinearReader::new_with_options(reader_options());
+    let mut at = 0;
+    while let Some(event) = reader.next_event() {
+        match event {
+            Ok(mcap::sans_io::LinearReadEvent::ReadRequest(need)) => {
+                let n = need.min(bytes.len() - at);
+                reader.insert(n).copy_from_slice(&bytes[at..at + n]);
+                reader.notify_read(n);
+                at += n;
+            }
+            Ok(mcap::sans_io::LinearReadEvent::Record { data, opcode }) => {
+                match mcap::parse_record(opcode, data) {
+                    Ok(record) => visit(record)?,
+                    Err(error) => return Ok(Some(error.to_string())),
+                }
+            }
+            Err(error) => return Ok(Some(error.to_string())),
+        }
+    }
+    Ok(None)
+}
+
+/// Reads a log; a file cut short or damaged yields what its complete chunks hold, and says so.
 pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
     let (bytes, damaged) = sound_prefix(bytes);
     let mut run = None;
     let mut time_step = None;
     let mut end = None;
-    let mut truncated = damaged;
-    let reader = mcap::read::LinearReader::new_with_options(
-        bytes,
-        mcap::read::Options::IgnoreEndMagic.into(),
-    )
-    .map_err(LogError::Read)?;
-    for record in reader {
+    let mut schemas = BTreeMap::new();
+    let mut topics = Vec::new();
+    let mut raw_metadata = BTreeMap::new();
+    let stopped = each_record(bytes, |record| {
         match record {
-            Ok(mcap::records::Record::Metadata(metadata)) if metadata.name == "regatta" => {
+            mcap::records::Record::Schema { header, .. } => {
+                schemas.insert(header.id, header.name);
+            }
+            mcap::records::Record::Channel(channel)
+                if !topics.iter().any(|t: &TopicInfo| t.topic == channel.topic) =>
+            {
+                topics.push(TopicInfo {
+                    schema: schemas.get(&channel.schema_id).cloned().unwrap_or_default(),
+                    robot: channel.metadata.get("robot").cloned(),
+                    topic: channel.topic,
+                    message_encoding: channel.message_encoding,
+                });
+            }
+            mcap::records::Record::Metadata(metadata) if metadata.name == "regatta" => {
                 time_step = metadata
                     .metadata
                     .get("time_step")
                     .and_then(|t| t.parse::<f64>().ok())
                     .filter(|t| *t > 0.0 && t.is_finite());
-                run = Some(RunInfo::from_metadata(&metadata.metadata)?)
+                run = Some(RunInfo::from_metadata(&metadata.metadata)?);
+                raw_metadata = metadata.metadata;
             }
-            Ok(mcap::records::Record::Metadata(metadata)) if metadata.name == "regatta.end" => {
+            mcap::records::Record::Metadata(metadata) if metadata.name == "regatta.end" => {
                 end = Some(metadata.metadata)
             }
-            Ok(_) => {}
-            Err(error) => {
-                truncated.get_or_insert(error.to_string());
-                break;
-            }
+            _ => {}
         }
-    }
+        Ok(())
+    })?;
+    let mut truncated = damaged.or(stopped);
     let run = run.ok_or(LogError::NoMetadata)?;
     let mut messages = Vec::new();
-    // Every length bounded (a damaged length inside a chunk must not make the reader allocate
-    // what it says) and every chunk's CRC checked before its records are read.
-    let options = mcap::sans_io::LinearReaderOptions::default()
-        .with_skip_end_magic(true)
-        .with_record_length_limit(MAX_CHUNK as usize)
-        .with_prevalidate_chunk_crcs(true);
-    let stream = mcap::io::MessageReader::new_with_options(bytes, options);
+    let stream = mcap::io::MessageReader::new_with_options(bytes, reader_options());
     for message in stream {
         match message {
             Ok(message) => messages.push((
@@ -646,6 +823,8 @@ pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
     }
     Ok(LogContents {
         run,
+        topics,
+        metadata: raw_metadata,
         time_step,
         end,
         messages,

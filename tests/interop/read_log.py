@@ -1,5 +1,8 @@
 """Interoperability check: an independent MCAP reader (Python's `mcap` package) reads a regatta
 log back, and its messages match what regatta wrote (compared with `regatta log export`).
+Every message is also decoded by the ROS 2 reader that Foxglove's Python tools use
+(`mcap-ros2-support`) from its channel's own schema, and the Foxglove messages say what the
+run did: a scene once, a transform per step that matches the pose, one-row images, events.
 
 It also checks that a debug and a release build of regatta write byte-identical logs.
 
@@ -12,7 +15,10 @@ import subprocess
 import sys
 import tempfile
 
+import math
+
 from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
 
 
 def main() -> int:
@@ -41,6 +47,12 @@ def main() -> int:
                     t, x, z, heading = struct.unpack_from("<dddd", message.data, 4)
                     poses.append((t, x, z, heading, message.log_time))
 
+        decoded = {}
+        with open(log, "rb") as f:
+            reader = make_reader(f, decoder_factories=[DecoderFactory()])
+            for schema, channel, message, ros in reader.iter_decoded_messages():
+                decoded.setdefault(channel.topic, []).append((schema.name, message.log_time, ros))
+
         def check(condition, what):
             nonlocal failures, checks
             checks += 1
@@ -59,6 +71,29 @@ def main() -> int:
         )
         check(same, "poses decoded by Python equal regatta's export bit for bit")
         check(all(log_time == round(t * 1e9) for t, _, _, _, log_time in poses), "log times are simulated time")
+        check(sum(len(v) for v in decoded.values()) == sum(topics.values()), "mcap-ros2-support decodes every message")
+        scene = decoded.get("/scene", [])
+        check(len(scene) == 1 and scene[0][0] == "foxglove_msgs/msg/SceneUpdate", "one SceneUpdate")
+        if scene:
+            entities = scene[0][2].entities
+            check(entities[0].frame_id == "world" and len(entities[0].cubes) >= 4, "the arena's walls in the scene")
+            check([t.text for t in entities[0].texts] == ["1", "2", "3"], "numbered buoys in the scene")
+        transforms = decoded.get("/tf", [])
+        check(len(transforms) == 500, f"a FrameTransform per step ({len(transforms)})")
+        same = all(
+            tf.child_frame_id == "khepera" and tf.parent_frame_id == "world"
+            and tf.translation.x == x and tf.translation.y == -z
+            and abs(math.remainder(2 * math.atan2(tf.rotation.z, tf.rotation.w) - h, 2 * math.pi)) < 1e-9
+            for (_, _, tf), (_, x, z, h, _) in zip(transforms, poses)
+        )
+        check(same, "transforms put the robot where its pose says")
+        images = decoded.get("/khepera/retina/odd/image", [])
+        check(
+            len(images) == 500 and all(i.height == 1 and i.encoding == "mono8" and len(i.data) == i.width == i.step for _, _, i in images),
+            "a one-row mono8 RawImage per retina update",
+        )
+        events = decoded.get("/events", [])
+        check(all(e.name == "khepera" and e.message.startswith("visit ") for _, _, e in events) and len(events) > 0, f"visits as Log events ({len(events)})")
         if len(sys.argv) > 2:
             other = os.path.join(tmp, "other.mcap")
             subprocess.run([sys.argv[2], "run", "--steps", "500", "--log", other, world], check=True, stdout=subprocess.DEVNULL)

@@ -128,12 +128,24 @@ fn parse_child(path: &std::path::Path, runs: usize) -> anyhow::Result<Outcome> {
     Ok(Outcome::Clean)
 }
 
-/// The process's peak resident set size (`VmHWM`), where the system reports it.
+/// The process's peak resident set size, from `getrusage` (`ru_maxrss`: kilobytes on Linux
+/// and the BSDs, bytes on macOS); `None` where the system does not report it.
 pub fn peak_resident_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kilobytes: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kilobytes * 1024)
+    #[cfg(unix)]
+    {
+        use nix::sys::resource::{getrusage, UsageWho};
+        let peak = u64::try_from(getrusage(UsageWho::RUSAGE_SELF).ok()?.max_rss()).ok()?;
+        let bytes = if cfg!(target_os = "macos") {
+            peak
+        } else {
+            peak * 1024
+        };
+        (bytes > 0).then_some(bytes)
+    }
+    #[cfg(not(unix))]
+    {
+        None
+    }
 }
 
 fn gltf(points: usize, runs: usize) -> anyhow::Result<Outcome> {
@@ -180,4 +192,16 @@ fn gltf(points: usize, runs: usize) -> anyhow::Result<Outcome> {
         load.as_secs_f64()
     );
     Ok(Outcome::Clean)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn peak_memory_covers_what_this_process_touched() {
+        let block = vec![1u8; 64 << 20];
+        std::hint::black_box(&block);
+        let peak = super::peak_resident_bytes().expect("reported on this system");
+        assert!(peak >= 64 << 20, "peak {peak} bytes after touching 64 MiB");
+        drop(block);
+    }
 }

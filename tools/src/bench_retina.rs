@@ -10,7 +10,6 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use image::{Rgb, RgbImage};
 use regatta_runtime::compile::plan::RendererChoice;
 use regatta_runtime::compile::rig::{Optics, PanoramicRig, Pose2, TurretRig};
 use regatta_runtime::optics::{Panoramic, Renderer, RetinaOutput};
@@ -26,9 +25,12 @@ pub struct Args {
     /// Poses to average over.
     #[arg(long, default_value_t = 24)]
     poses: usize,
-    /// Directory for retina.csv and retina.png.
+    /// Directory for retina.csv and the chart (retina.png or retina.svg).
     #[arg(long, default_value = "out/bench")]
     out: PathBuf,
+    /// File format of the chart.
+    #[arg(long, value_enum, default_value_t)]
+    format: crate::plot::FigureFormat,
     /// Minimum time spent timing each configuration (ms).
     #[arg(long, default_value_t = 300)]
     millis: u64,
@@ -239,11 +241,12 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let csv_path = args.out.join("retina.csv");
     std::fs::write(&csv_path, csv)
         .with_context(|| format!("cannot write {}", csv_path.display()))?;
-    let png_path = args.out.join("retina.png");
-    plot(&rows)
-        .save(&png_path)
-        .with_context(|| format!("cannot write {}", png_path.display()))?;
-    println!("wrote {} and {}", csv_path.display(), png_path.display());
+    println!("{}", csv_path.display());
+    let world = args.world.file_name().map_or_else(
+        || args.world.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    crate::plot::save(&chart(&rows, &world), &args.out, "retina", args.format)?;
     Ok(Outcome::Clean)
 }
 
@@ -379,120 +382,47 @@ fn time_per_update(
     best * 1e6
 }
 
-/// Error (mean LSB, log scale) against time per update (µs, log scale): exact columns in
-/// blue, exact rays in green, paper in red; larger dots for more samples. Grid lines at
-/// decades.
-fn plot(rows: &[Row]) -> RgbImage {
-    let (width, height, pad) = (640u32, 440u32, 48u32);
-    let mut image = RgbImage::from_pixel(width, height, Rgb([255, 255, 255]));
-    let (t_min, t_max) = (0.1f64, 1e6f64);
-    let (e_min, e_max) = (1e-3f64, 10.0f64);
-    let x_of = |t: f64| {
-        pad as f64
-            + (t.clamp(t_min, t_max) / t_min).log10() / (t_max / t_min).log10()
-                * (width - 2 * pad) as f64
-    };
-    let y_of = |e: f64| {
-        (height - pad) as f64
-            - (e.clamp(e_min, e_max) / e_min).log10() / (e_max / e_min).log10()
-                * (height - 2 * pad) as f64
-    };
-    let mut decade = t_min;
-    while decade <= t_max * 1.01 {
-        let x = x_of(decade) as u32;
-        for y in pad..=height - pad {
-            image.put_pixel(x, y, Rgb([220, 220, 220]));
+/// Error (mean LSB) against time per update (µs), both on log axes: one series per optics
+/// and renderer, larger dots for more samples. An error of 0 is drawn at the axis' floor
+/// (10⁻³ LSB), as a log axis has no zero.
+fn chart(rows: &[Row], world: &str) -> regatta_figures::Chart {
+    use regatta_figures::{Axis, Chart, Corner, Series};
+    let floor = 1e-3;
+    let mut chart = Chart::new(
+        format!("retina update on {world}: time against error"),
+        Axis::log("time per update (µs)"),
+        Axis::log("mean digital error (LSB; 0 drawn at 0.001)"),
+    )
+    .legend(Corner::UpperRight);
+    for (name, optics, renderer) in [
+        ("exact optics, columns", "exact", "columns"),
+        ("exact optics, rays", "exact", "rays"),
+        ("paper optics", "paper", ""),
+    ] {
+        let picked: Vec<&Row> = rows
+            .iter()
+            .filter(|r| r.optics == optics && (renderer.is_empty() || r.renderer == renderer))
+            .collect();
+        if picked.is_empty() {
+            continue;
         }
-        decade *= 10.0;
-    }
-    let mut decade = e_min;
-    while decade <= e_max * 1.01 {
-        let y = y_of(decade) as u32;
-        for x in pad..=width - pad {
-            image.put_pixel(x, y, Rgb([220, 220, 220]));
-        }
-        decade *= 10.0;
-    }
-    for x in pad..=width - pad {
-        image.put_pixel(x, height - pad, Rgb([0, 0, 0]));
-    }
-    for y in pad..=height - pad {
-        image.put_pixel(pad, y, Rgb([0, 0, 0]));
-    }
-    // Labels: decades on both axes, axis titles, legend.
-    let ink = Rgb([40, 40, 40]);
-    let mut decade = t_min;
-    while decade <= t_max * 1.01 {
-        let label = if decade >= 1e6 {
-            "1M".to_owned()
-        } else if decade >= 1e3 {
-            format!("{}k", (decade / 1e3).round())
-        } else {
-            format!("{decade}")
-        };
-        let x = x_of(decade) as u32;
-        crate::font::draw_text(
-            &mut image,
-            x.saturating_sub(crate::font::text_width(&label, 2) / 2),
-            height - pad + 6,
-            &label,
-            2,
-            ink,
+        chart = chart.with(
+            Series::markers(
+                name,
+                picked
+                    .iter()
+                    .map(|r| (r.micros, r.lsb_mean.max(floor)))
+                    .collect(),
+            )
+            .marker_sizes(
+                picked
+                    .iter()
+                    .map(|r| 6 + 2 * r.samples.trailing_zeros())
+                    .collect(),
+            ),
         );
-        decade *= 10.0;
     }
-    let mut decade = e_min;
-    while decade <= e_max * 1.01 {
-        let label = format!("{decade}");
-        let y = y_of(decade) as u32;
-        crate::font::draw_text(&mut image, 2, y.saturating_sub(5), &label, 2, ink);
-        decade *= 10.0;
-    }
-    let title = "time per update (us), log";
-    crate::font::draw_text(
-        &mut image,
-        (width - crate::font::text_width(title, 2)) / 2,
-        height - 14,
-        title,
-        2,
-        ink,
-    );
-    crate::font::draw_text(&mut image, pad, 8, "mean digital error (LSB), log", 2, ink);
-    let legend = [
-        ("exact, columns", Rgb([40, 80, 210])),
-        ("exact, rays", Rgb([40, 160, 60])),
-        ("paper", Rgb([210, 40, 40])),
-    ];
-    for (k, (name, color)) in legend.iter().enumerate() {
-        let y = pad + 8 + 16 * k as u32;
-        for dy in 0..8 {
-            for dx in 0..8 {
-                image.put_pixel(width - pad - 140 + dx, y + dy, *color);
-            }
-        }
-        crate::font::draw_text(&mut image, width - pad - 126, y, name, 2, ink);
-    }
-    for row in rows {
-        let color = match (row.optics, row.renderer) {
-            ("paper", _) => Rgb([210, 40, 40]),
-            (_, "rays") => Rgb([40, 160, 60]),
-            _ => Rgb([40, 80, 210]),
-        };
-        let (cx, cy) = (
-            x_of(row.micros) as i64,
-            y_of(row.lsb_mean.max(e_min)) as i64,
-        );
-        let r = 2 + row.samples.trailing_zeros() as i64;
-        for dy in -r..=r {
-            for dx in -r..=r {
-                if dx * dx + dy * dy <= r * r {
-                    let (x, y) = (cx + dx, cy + dy);
-                    if x >= 0 && y >= 0 && (x as u32) < width && (y as u32) < height {
-                        image.put_pixel(x as u32, y as u32, color);
-                    }
-                }
-            }
-        }
-    }
-    image
+    let top = rows.iter().map(|r| r.lsb_mean).fold(10.0f64, f64::max);
+    chart.y = chart.y.clone().range(floor, 10f64.powf(top.log10().ceil()));
+    chart
 }

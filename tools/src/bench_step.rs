@@ -114,6 +114,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             seed: simulation.seed,
             lenient: false,
             steps_requested: 0,
+            channels: regatta_runtime::log::Channels::ALL,
+            controllers: Vec::new(),
         };
         let mut sink = std::io::Cursor::new(Vec::new());
         let mut recorder = regatta_runtime::log::Recorder::new(&mut sink, &mut simulation, &run)?;

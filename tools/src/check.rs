@@ -46,6 +46,9 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
             }
         }
         any_error |= checked.has_errors();
+        if !args.quiet {
+            crate::world::print_substitutions(&checked);
+        }
         let keep = |d: &regatta_schema::FileDiagnostic| !args.quiet || d.diagnostic.is_error();
         if args.short {
             let map = checked.source_map();

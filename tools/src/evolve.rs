@@ -61,6 +61,9 @@ pub struct Args {
     /// Where the outputs go.
     #[arg(long, default_value = "out/evolve")]
     out: PathBuf,
+    /// File format of the fitness chart.
+    #[arg(long, value_enum, default_value_t)]
+    format: crate::plot::FigureFormat,
     /// Set a field in every world: NODE.FIELD=VALUE (repeatable).
     #[arg(long = "set", value_name = "NODE.FIELD=VALUE", value_parser = crate::batch::parse_override)]
     overrides: Vec<Override>,
@@ -220,7 +223,13 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             dir.display()
         );
     }
-    write_outputs(&evolution, &experiments[0], &fitness, &args.out)?;
+    write_outputs(
+        &evolution,
+        &experiments[0],
+        &fitness,
+        &args.out,
+        args.format,
+    )?;
     eprintln!(
         "{} runs in {wall:.1} s ({:.1} evaluations/s)",
         done.load(Ordering::Relaxed),
@@ -229,12 +238,13 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     Ok(stop.outcome().unwrap_or(Outcome::Clean))
 }
 
-/// best.wbt, fitness.csv, fitness.png and best.mcap in `out`.
+/// best.wbt, fitness.csv, fitness.png (or .svg) and best.mcap in `out`.
 fn write_outputs(
     evolution: &Evolution,
     experiment: &Experiment,
     fitness: &Fitness,
     out: &Path,
+    format: crate::plot::FigureFormat,
 ) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let csv_path = out.join("fitness.csv");
@@ -249,9 +259,8 @@ fn write_outputs(
         .with_context(|| format!("cannot write {}", csv_path.display()))?;
     println!("{}", csv_path.display());
     if !evolution.history.is_empty() {
-        let png = out.join("fitness.png");
-        plot_fitness(&evolution.history, &evolution.settings.fitness, &png)?;
-        println!("{}", png.display());
+        let chart = fitness_chart(&evolution.history, &evolution.settings.fitness);
+        crate::plot::save(&chart, out, "fitness", format)?;
     }
     let Some(best) = &evolution.best else {
         return Ok(());
@@ -281,6 +290,8 @@ fn write_outputs(
         seed: best.seed,
         lenient: experiment.lenient,
         steps_requested: evolution.settings.steps,
+        channels: regatta_runtime::log::Channels::ALL,
+        controllers: Vec::new(),
     };
     let mut recorder =
         regatta_runtime::log::Recorder::new(std::io::BufWriter::new(file), &mut simulation, &run)?;
@@ -302,70 +313,33 @@ fn write_outputs(
     Ok(())
 }
 
-/// The best, mean and worst fitness per generation, as a line chart.
-pub fn plot_fitness(history: &[GenerationStats], fitness: &str, path: &Path) -> anyhow::Result<()> {
-    use plotters::prelude::*;
-    crate::figures::register_fonts();
-    let root = BitMapBackend::new(path, (900, 560)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let last = history.last().map_or(1, |h| h.generation).max(1);
-    let finite = |v: f64| if v.is_finite() { Some(v) } else { None };
-    let values: Vec<f64> = history
-        .iter()
-        .flat_map(|h| [h.best, h.mean, h.worst])
-        .filter_map(finite)
-        .collect();
-    let (low, high) = values
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
-            (l.min(v), h.max(v))
-        });
-    let (low, high) = if low.is_finite() {
-        (low, high)
-    } else {
-        (0.0, 1.0)
+/// The fitness per generation: the population's spread (worst to best) as a band, best and
+/// mean as lines.
+fn fitness_chart(history: &[GenerationStats], fitness: &str) -> regatta_figures::Chart {
+    use regatta_figures::{Axis, Chart, Corner, Series};
+    let finite =
+        |h: &&GenerationStats| h.best.is_finite() && h.mean.is_finite() && h.worst.is_finite();
+    let kept: Vec<&GenerationStats> = history.iter().filter(finite).collect();
+    let line = |value: fn(&GenerationStats) -> f64| -> Vec<(f64, f64)> {
+        kept.iter()
+            .map(|h| (h.generation as f64, value(h)))
+            .collect()
     };
-    let pad = ((high - low) * 0.05).max(1e-6);
-    let mut chart = ChartBuilder::on(&root)
-        .caption(format!("regatta evolve: {fitness}"), ("sans-serif", 24))
-        .margin(12)
-        .x_label_area_size(44)
-        .y_label_area_size(64)
-        .build_cartesian_2d(0u64..last, (low - pad)..(high + pad))?;
-    chart
-        .configure_mesh()
-        .x_desc("generation")
-        .y_desc(format!("fitness ({fitness})"))
-        .label_style(("sans-serif", 15))
-        .draw()?;
-    let series = [
-        ("best", RGBColor(30, 80, 200), 0),
-        ("mean", RGBColor(30, 150, 60), 1),
-        ("worst", RGBColor(200, 40, 40), 2),
-    ];
-    for (name, color, which) in series {
-        let points: Vec<(u64, f64)> = history
-            .iter()
-            .filter_map(|h| {
-                let v = [h.best, h.mean, h.worst][which];
-                finite(v).map(|v| (h.generation, v))
-            })
-            .collect();
-        chart
-            .draw_series(LineSeries::new(points, color.stroke_width(2)))?
-            .label(name)
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-            });
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 15))
-        .position(SeriesLabelPosition::LowerRight)
-        .draw()?;
-    root.present()
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(())
+    Chart::new(
+        format!("regatta evolve: {fitness}"),
+        Axis::linear("generation"),
+        Axis::linear(format!("fitness ({fitness})")),
+    )
+    .with(
+        Series::band(
+            "worst to best",
+            kept.iter()
+                .map(|h| (h.generation as f64, h.worst, h.best))
+                .collect(),
+        )
+        .color(regatta_figures::style::color(0)),
+    )
+    .with(Series::line("best", line(|h| h.best)).color(regatta_figures::style::color(0)))
+    .with(Series::line("mean", line(|h| h.mean)).color(regatta_figures::style::color(1)))
+    .legend(Corner::LowerRight)
 }

@@ -114,7 +114,7 @@ fn tracks_from_log(
     }
     let mut poses: BTreeMap<&str, (Vec<f64>, Vec<Pose2>)> = BTreeMap::new();
     for (topic, _, data) in &contents.messages {
-        let (robot, kind) = crate::logs::split_topic(topic);
+        let (robot, kind) = crate::logs::robot_of(&contents, topic);
         if kind != "pose" {
             continue;
         }

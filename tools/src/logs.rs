@@ -1,4 +1,4 @@
-//! Commands over sensor logs: `regatta replay --verify`, `regatta log export`, `regatta plot`.
+//! Commands over sensor logs: `regatta replay --verify`, `regatta log export`, `regatta log info`.
 
 use std::path::{Path, PathBuf};
 
@@ -9,7 +9,7 @@ use regatta_runtime::sim::Simulation;
 use crate::Outcome;
 
 /// Reads a log file, warning when it was cut short.
-fn load(path: &Path) -> anyhow::Result<LogContents> {
+pub(crate) fn load(path: &Path) -> anyhow::Result<LogContents> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
     let contents =
         read(&bytes).with_context(|| format!("{} is not a regatta log", path.display()))?;
@@ -27,7 +27,7 @@ fn load(path: &Path) -> anyhow::Result<LogContents> {
 /// reads files (Inline, EXTERNPROTO) only under the recorded world's folder when that folder
 /// is inside the current directory (a user replaying their own runs), or under folders given
 /// with `--allow-path`; never elsewhere.
-fn compile_embedded(
+pub(crate) fn compile_embedded(
     run: &RunInfo,
     world: &crate::world::WorldOptions,
 ) -> anyhow::Result<regatta_runtime::Compiled> {
@@ -61,7 +61,22 @@ fn compile_embedded(
         eprint!("{}", checked.render(false));
         bail!("the world embedded in the log no longer checks with this regatta");
     }
-    Ok(regatta_runtime::compile(&checked.scene))
+    let mut compiled = regatta_runtime::compile(&checked.scene);
+    // The controllers the run had: Webots names mapped as `run` maps them, then what the log
+    // says the run changed.
+    crate::webots::resolve_controllers(
+        &mut compiled,
+        &crate::webots::ControllerOverride::default(),
+        true,
+        None,
+    )?;
+    for (robot, controller, args) in &run.controllers {
+        if let Some(rig) = compiled.rig.robots.iter_mut().find(|r| &r.name == robot) {
+            rig.controller = controller.clone();
+            rig.controller_args = args.clone();
+        }
+    }
+    Ok(compiled)
 }
 
 #[derive(clap::Args)]
@@ -144,6 +159,12 @@ enum LogCommand {
         #[arg(long, value_name = "DIR")]
         csv: PathBuf,
     },
+    /// What a log holds: world, seed, version, duration, and each channel with its schema and
+    /// message count.
+    Info {
+        /// The log.
+        log: PathBuf,
+    },
     /// Compute a fitness from the log's channels: the value `run --json` gives for the run
     /// (the mean over robots first, then each robot's).
     Fitness {
@@ -160,6 +181,7 @@ enum LogCommand {
 pub fn log(args: LogArgs) -> anyhow::Result<Outcome> {
     match args.what {
         LogCommand::Export { log, csv } => export(&log, &csv),
+        LogCommand::Info { log } => info(&log),
         LogCommand::Fitness {
             log,
             fitness,
@@ -221,6 +243,19 @@ fn log_fitness(
 pub(crate) fn split_topic(topic: &str) -> (&str, &str) {
     let trimmed = topic.trim_start_matches('/');
     trimmed.rsplit_once('/').unwrap_or(("", trimmed))
+}
+
+/// The robot's own name and the channel kind of a topic: the name from the channel's
+/// metadata (topics carry the name sanitised), else from the topic itself (older logs).
+pub(crate) fn robot_of<'a>(contents: &'a LogContents, topic: &'a str) -> (&'a str, &'a str) {
+    let (token, kind) = split_topic(topic);
+    let name = contents
+        .topics
+        .iter()
+        .find(|t| t.topic == topic)
+        .and_then(|t| t.robot.as_deref())
+        .unwrap_or(token);
+    (name, kind)
 }
 
 /// A decoded message: the CSV header after `step,t_ns,t,robot`, and the row.
@@ -426,7 +461,7 @@ fn export(log: &Path, dir: &Path) -> anyhow::Result<Outcome> {
     let mut files: std::collections::BTreeMap<String, CsvFile> = Default::default();
     let mut order: Vec<String> = Vec::new();
     for (topic, t_ns, data) in &contents.messages {
-        let (robot, kind) = split_topic(topic);
+        let (robot, kind) = robot_of(&contents, topic);
         let Some((header, row)) =
             decode(kind, data).with_context(|| format!("a {topic} message is damaged"))?
         else {
@@ -481,178 +516,115 @@ fn export(log: &Path, dir: &Path) -> anyhow::Result<Outcome> {
     Ok(Outcome::Clean)
 }
 
-#[derive(clap::Args)]
-pub struct PlotArgs {
-    /// The log.
-    log: PathBuf,
-    /// Directory for the pictures.
-    #[arg(long, default_value = "out/plots")]
-    out: PathBuf,
-    #[command(flatten)]
-    world: crate::world::LogWorldOptions,
-}
-
-/// `regatta plot`: a top view of the arena with every robot's trajectory, and for each robot
-/// with a retina a kymograph (time downwards, 150 photodiodes across, digital values as grey).
-pub fn plot(args: PlotArgs) -> anyhow::Result<Outcome> {
-    use image::{Rgb, RgbImage};
-    let contents = load(&args.log)?;
-    let compiled = compile_embedded(&contents.run, &args.world.into())?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    // Trajectories and retina rows per robot, in file order.
-    let mut paths: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
-    let mut retinas: Vec<(String, Vec<Vec<f64>>)> = Vec::new();
-    for (topic, _, data) in &contents.messages {
-        let (robot, kind) = split_topic(topic);
-        let mut r = CdrReader::new(data);
-        match kind {
-            "pose" => {
-                if let Ok((_, pose)) = regatta_runtime::log::decode_pose(data) {
-                    let point = (pose.x, pose.z);
-                    match paths.iter_mut().find(|(name, _)| name == robot) {
-                        Some((_, path)) => path.push(point),
-                        None => paths.push((robot.to_owned(), vec![point])),
-                    }
-                }
-            }
-            "retina" => {
-                let row = (|| -> Result<Vec<f64>, regatta_runtime::log::ShortMessage> {
-                    r.f64()?;
-                    r.bool()?;
-                    r.u16()?;
-                    r.u16()?;
-                    let analog = r.f32s()?;
-                    let filters = r.strings()?;
-                    r.f32s()?;
-                    let digital = r.u16s(None)?;
-                    // The first filter's digital values, scaled to 0…1; analog when none.
-                    if filters.is_empty() || digital.is_empty() {
-                        let peak = analog
-                            .iter()
-                            .fold(0.0f32, |m, v| m.max(*v))
-                            .max(f32::MIN_POSITIVE);
-                        return Ok(analog.iter().map(|&a| (a / peak) as f64).collect());
-                    }
-                    let width = digital.len() / filters.len();
-                    let top = digital.iter().copied().max().unwrap_or(1).max(1) as f64;
-                    let top = if top <= 63.0 { 63.0 } else { top };
-                    Ok(digital[..width].iter().map(|&d| d as f64 / top).collect())
-                })();
-                if let Ok(row) = row {
-                    match retinas.iter_mut().find(|(name, _)| name == robot) {
-                        Some((_, rows)) => rows.push(row),
-                        None => retinas.push((robot.to_owned(), vec![row])),
-                    }
-                }
-            }
-            _ => {}
+/// `regatta log info`: the run, then one line per channel (like `mcap info`).
+fn info(path: &Path) -> anyhow::Result<Outcome> {
+    let contents = load(path)?;
+    let size = std::fs::metadata(path)
+        .with_context(|| format!("cannot read {}", path.display()))?
+        .len();
+    let run = &contents.run;
+    let meta = |key: &str| {
+        contents
+            .metadata
+            .get(key)
+            .map(String::as_str)
+            .unwrap_or("?")
+    };
+    let first = contents.messages.first().map_or(0, |m| m.1);
+    let last = contents.messages.last().map_or(0, |m| m.1);
+    let simulated = contents
+        .end
+        .as_ref()
+        .and_then(|e| e.get("time"))
+        .and_then(|t| t.parse::<f64>().ok())
+        .unwrap_or(last as f64 / 1e9);
+    println!("log:          {}", path.display());
+    println!(
+        "size:         {} bytes{}",
+        size,
+        if simulated > 0.0 {
+            format!(
+                " ({:.0} bytes per simulated minute)",
+                size as f64 * 60.0 / simulated
+            )
+        } else {
+            String::new()
         }
-    }
-    // Top view: x to the right, z downwards, 800 px across the static geometry and the paths.
-    let mut bounds = compiled.graph.static_bounds();
-    for (_, path) in &paths {
-        for &(x, z) in path {
-            bounds = bounds.union(regatta_runtime::geometry::Aabb {
-                min: glam_point(x, z),
-                max: glam_point(x, z),
-            });
-        }
-    }
-    if bounds.is_empty() {
-        bail!("the log has neither geometry nor poses to plot");
-    }
-    let (span_x, span_z) = (
-        (bounds.max.x - bounds.min.x).max(1e-6),
-        (bounds.max.z - bounds.min.z).max(1e-6),
     );
-    let scale = 760.0 / span_x.max(span_z);
-    let (width, height) = ((span_x * scale) as u32 + 40, (span_z * scale) as u32 + 40);
-    let mut top = RgbImage::from_pixel(width, height, Rgb([250, 250, 250]));
-    let to_pixel = |x: f64, z: f64| {
-        (
-            (20.0 + (x - bounds.min.x) * scale) as i64,
-            (20.0 + (z - bounds.min.z) * scale) as i64,
-        )
+    println!(
+        "world:        {} (sha256 {})",
+        run.world_name,
+        meta("world_sha256")
+    );
+    println!("seed:         {}", run.seed);
+    println!("regatta:      {}", meta("regatta_version"));
+    println!(
+        "time step:    {} s{}",
+        meta("time_step"),
+        if run.lenient { "; read leniently" } else { "" }
+    );
+    let state = match (&contents.end, &contents.truncated) {
+        (_, Some(reason)) => format!("truncated ({reason})"),
+        (Some(end), None) if end.get("interrupted").is_some_and(|v| v == "true") => {
+            "interrupted".to_owned()
+        }
+        _ => "complete".to_owned(),
     };
-    let dot = |image: &mut RgbImage, (px, py): (i64, i64), color: Rgb<u8>| {
-        if px >= 0 && py >= 0 && (px as u32) < image.width() && (py as u32) < image.height() {
-            image.put_pixel(px as u32, py as u32, color);
-        }
-    };
-    // Static geometry standing on the floor, as footprints.
-    for &index in &compiled.graph.static_primitives {
-        let primitive = &compiled.graph.primitives[index];
-        let b = primitive.bounds;
-        if b.max.y <= 0.001 {
-            continue; // floors
-        }
-        let (x0, z0) = to_pixel(b.min.x, b.min.z);
-        let (x1, z1) = to_pixel(b.max.x, b.max.z);
-        for py in z0..=z1 {
-            for px in x0..=x1 {
-                dot(&mut top, (px, py), Rgb([150, 150, 150]));
-            }
-        }
+    let steps = contents
+        .end
+        .as_ref()
+        .and_then(|e| e.get("steps"))
+        .map_or("?".to_owned(), String::clone);
+    println!(
+        "steps:        {steps} of {} requested; {state}",
+        run.steps_requested
+    );
+    println!(
+        "duration:     {:.3} s simulated (messages from {:.3} s to {:.3} s)",
+        simulated,
+        first as f64 / 1e9,
+        last as f64 / 1e9
+    );
+    println!("messages:     {}", contents.messages.len());
+    println!("channels:     {}", run.channels);
+    let mut counts: std::collections::BTreeMap<&str, (usize, u64, u64)> = Default::default();
+    for (topic, time, _) in &contents.messages {
+        let entry = counts.entry(topic).or_insert((0, *time, *time));
+        entry.0 += 1;
+        entry.1 = entry.1.min(*time);
+        entry.2 = entry.2.max(*time);
     }
-    for landmark in &compiled.landmarks {
-        let (cx, cz) = to_pixel(landmark.center.x, landmark.center.y);
-        let r = (landmark.radius * scale).max(2.0) as i64;
-        for dy in -r..=r {
-            for dx in -r..=r {
-                if dx * dx + dy * dy <= r * r {
-                    dot(&mut top, (cx + dx, cz + dy), Rgb([230, 180, 20]));
-                }
+    let width = contents
+        .topics
+        .iter()
+        .map(|t| t.topic.chars().count())
+        .max()
+        .unwrap_or(5)
+        .max(5);
+    println!(
+        "{:<width$}  {:<34}  {:>9}  {:>9}  {:>9}",
+        "topic", "schema", "messages", "first (s)", "last (s)"
+    );
+    for topic in &contents.topics {
+        let (n, from, to) = counts
+            .get(topic.topic.as_str())
+            .copied()
+            .unwrap_or((0, 0, 0));
+        let times = |ns: u64| {
+            if n == 0 {
+                "-".to_owned()
+            } else {
+                format!("{:.3}", ns as f64 / 1e9)
             }
-        }
-    }
-    let colors = [
-        Rgb([30, 80, 200]),
-        Rgb([200, 40, 40]),
-        Rgb([30, 150, 60]),
-        Rgb([140, 60, 180]),
-        Rgb([20, 150, 160]),
-    ];
-    for (k, (_, path)) in paths.iter().enumerate() {
-        for pair in path.windows(2) {
-            let (a, b) = (
-                to_pixel(pair[0].0, pair[0].1),
-                to_pixel(pair[1].0, pair[1].1),
-            );
-            let steps = (a.0 - b.0).abs().max((a.1 - b.1).abs()).max(1);
-            for s in 0..=steps {
-                let p = (a.0 + (b.0 - a.0) * s / steps, a.1 + (b.1 - a.1) * s / steps);
-                dot(&mut top, p, colors[k % colors.len()]);
-            }
-        }
-    }
-    let path = args.out.join("top.png");
-    top.save(&path)
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    println!("{}", path.display());
-    // Kymographs: at most 3000 rows, each pixel 4 px wide.
-    for (robot, rows) in &retinas {
-        let every = rows.len().div_ceil(3000).max(1);
-        let kept: Vec<&Vec<f64>> = rows.iter().step_by(every).collect();
-        let width = kept.iter().map(|r| r.len()).max().unwrap_or(0) as u32 * 4;
-        let mut image = image::GrayImage::new(width.max(1), kept.len().max(1) as u32);
-        for (y, row) in kept.iter().enumerate() {
-            for (i, &v) in row.iter().enumerate() {
-                let grey = (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-                for dx in 0..4 {
-                    image.put_pixel(i as u32 * 4 + dx, y as u32, image::Luma([grey]));
-                }
-            }
-        }
-        let path = args.out.join(format!("{robot}-kymograph.png"));
-        image
-            .save(&path)
-            .with_context(|| format!("cannot write {}", path.display()))?;
-        println!("{}", path.display());
+        };
+        println!(
+            "{:<width$}  {:<34}  {:>9}  {:>9}  {:>9}",
+            topic.topic,
+            topic.schema,
+            n,
+            times(from),
+            times(to)
+        );
     }
     Ok(Outcome::Clean)
-}
-
-fn glam_point(x: f64, z: f64) -> glam::DVec3 {
-    glam::DVec3::new(x, 0.0, z)
 }

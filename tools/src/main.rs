@@ -9,17 +9,17 @@ mod bench_step;
 mod check;
 mod evolve;
 mod explain;
-mod figures;
 mod fmt;
-mod font;
 mod gltf;
 mod logs;
+mod plot;
 mod render;
 mod run;
 mod schema;
 mod serial;
 mod signals;
 mod vision;
+mod webots;
 mod world;
 
 use std::io::IsTerminal;
@@ -34,6 +34,10 @@ struct Cli {
     /// When to colour diagnostics.
     #[arg(long, global = true, value_enum, default_value_t = Color::Auto)]
     color: Color,
+    /// A folder where `webots://` PROTOs are looked for before regatta's stand-ins (a Webots
+    /// installation or any folder of PROTOs); repeatable, after it REGATTA_PROTO_PATH's.
+    #[arg(long = "proto-path", global = true, value_name = "DIR")]
+    proto_path: Vec<std::path::PathBuf>,
     #[command(subcommand)]
     command: Command,
 }
@@ -73,10 +77,10 @@ enum Command {
     Evolve(evolve::Args),
     /// Re-run a log's world and seed and check that every message is the same.
     Replay(logs::ReplayArgs),
-    /// Work with sensor logs (export to CSV).
+    /// Work with sensor logs (export to CSV, print what a log holds).
     Log(logs::LogArgs),
-    /// Pictures of a log: the arena from above with the trajectories, and retina kymographs.
-    Plot(logs::PlotArgs),
+    /// Figures of a log: the arena from above, retina kymographs, and (--series) sensor time series.
+    Plot(plot::PlotArgs),
 }
 
 /// What a subcommand reports back.
@@ -133,6 +137,9 @@ fn run() -> ExitCode {
         Color::Never => false,
         Color::Auto => std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none(),
     };
+    world::set_proto_path(regatta_schema::proto_path::from_flags_and_env(
+        &cli.proto_path,
+    ));
     let result = match cli.command {
         Command::Check(args) => check::run(args, color),
         Command::Schema(args) => schema::run(args),
@@ -148,7 +155,7 @@ fn run() -> ExitCode {
         Command::Drive(args) => serial::drive(args),
         Command::Replay(args) => logs::replay(args),
         Command::Log(args) => logs::log(args),
-        Command::Plot(args) => logs::plot(args),
+        Command::Plot(args) => plot::plot(args),
     };
     match result {
         Ok(Outcome::Clean) => ExitCode::SUCCESS,

@@ -29,9 +29,15 @@ pub struct Args {
     /// Record every sensor and actuator to this MCAP file.
     #[arg(long, value_name = "FILE.mcap")]
     log: Option<PathBuf>,
+    /// The log's channels, comma-separated: `all`, `regatta` (the reproducible record),
+    /// `foxglove` (scene, tf, world_pose, images, events), or single channels.
+    #[arg(long, value_name = "LIST", default_value = "all", requires = "log")]
+    channels: regatta_runtime::log::Channels,
     /// What renders vision devices.
     #[arg(long, value_enum, default_value_t)]
     renderer: crate::vision::RendererKind,
+    #[command(flatten)]
+    controllers: crate::webots::ControllerOverride,
     /// Print the run as one JSON object (docs/run.schema.json) instead of text.
     #[arg(long)]
     json: bool,
@@ -45,7 +51,14 @@ pub(crate) fn parse_fitness(text: &str) -> Result<regatta_evolve::Fitness, Strin
 }
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
-    let loaded = crate::world::load(&args.world, &args.options, color)?;
+    let mut loaded = crate::world::load(&args.world, &args.options, color)?;
+    crate::webots::refuse_unbuilt_robots(&loaded)?;
+    crate::webots::resolve_controllers(
+        &mut loaded.compiled,
+        &args.controllers,
+        args.options.lenient,
+        None,
+    )?;
     let compiled = &loaded.compiled;
     let name = crate::world::world_name(&args.world);
     let mut simulation =
@@ -71,6 +84,7 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 &mut simulation,
                 args.options.lenient,
                 steps,
+                args.channels,
             )
         })
         .transpose()?;
@@ -189,6 +203,12 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 .map(|&k| (k + 1).to_string())
                 .collect();
             print!("; buoy visits {}: {}", sequence.len(), sequence.join(" "));
+        }
+        if let Some(fall) = &robot.fell {
+            print!(
+                "; fell off the floor at t {:.3} s, x {:.3} z {:.3}",
+                fall.time, fall.pose.x, fall.pose.z
+            );
         }
         println!();
     }

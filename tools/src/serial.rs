@@ -49,8 +49,13 @@ pub struct ServeArgs {
     /// Record every sensor and actuator to this MCAP file, as `regatta run --log` does.
     #[arg(long, value_name = "FILE.mcap")]
     log: Option<PathBuf>,
+    /// The log's channels, as for `regatta run`.
+    #[arg(long, value_name = "LIST", default_value = "all", requires = "log")]
+    channels: regatta_runtime::log::Channels,
     #[command(flatten)]
     options: crate::world::WorldOptions,
+    #[command(flatten)]
+    controllers: crate::webots::ControllerOverride,
 }
 
 /// Where `--tcp` and `--bind` say to listen: the --bind address (127.0.0.1 by default) and
@@ -81,7 +86,22 @@ pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
         .as_deref()
         .map(|tcp| listen_address(tcp, args.bind))
         .transpose()?;
-    let loaded = crate::world::load(&args.world, &args.options, color)?;
+    let mut loaded = crate::world::load(&args.world, &args.options, color)?;
+    crate::webots::refuse_unbuilt_robots(&loaded)?;
+    let served = match &args.robot {
+        Some(name) => Some(crate::world::robot_named(
+            &loaded.compiled,
+            &args.world,
+            name,
+        )?),
+        None => (!loaded.compiled.rig.robots.is_empty()).then_some(0),
+    };
+    crate::webots::resolve_controllers(
+        &mut loaded.compiled,
+        &args.controllers,
+        args.options.lenient,
+        served,
+    )?;
     let compiled = &loaded.compiled;
     let world_name = crate::world::world_name(&args.world);
     let robot = match &args.robot {
@@ -109,6 +129,7 @@ pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
                 &mut simulation,
                 args.options.lenient,
                 max_steps.unwrap_or(0),
+                args.channels,
             )
         })
         .transpose()?;

@@ -75,6 +75,7 @@ impl WorldOptions {
             access,
             limits,
             base_dir: None,
+            proto_path: proto_path(),
         })
     }
 }
@@ -108,6 +109,29 @@ pub fn check_world(path: &Path, world: &WorldOptions) -> anyhow::Result<Checked>
     Ok(check_path(path, &options)?)
 }
 
+static PROTO_PATH: std::sync::OnceLock<Vec<std::path::PathBuf>> = std::sync::OnceLock::new();
+
+/// Sets the folders where `webots://` PROTOs are looked for (`--proto-path`, then
+/// `REGATTA_PROTO_PATH`), once, before any world is read.
+pub fn set_proto_path(dirs: Vec<std::path::PathBuf>) {
+    let _ = PROTO_PATH.set(dirs);
+}
+
+/// The folders where `webots://` PROTOs are looked for.
+pub fn proto_path() -> Vec<std::path::PathBuf> {
+    PROTO_PATH.get().cloned().unwrap_or_default()
+}
+
+/// Prints which Webots PROTOs regatta's stand-ins replaced (`note:` lines on stderr).
+pub fn print_substitutions(checked: &Checked) {
+    for substitution in &checked.substitutions {
+        eprintln!(
+            "note: '{}' is regatta's built-in stand-in for {}",
+            substitution.name, substitution.url
+        );
+    }
+}
+
 /// A checked and compiled world.
 pub struct Loaded {
     pub checked: Checked,
@@ -118,6 +142,7 @@ pub struct Loaded {
 /// it; fails on errors.
 pub fn load(path: &Path, world: &WorldOptions, color: bool) -> anyhow::Result<Loaded> {
     let mut checked = check_world(path, world)?;
+    print_substitutions(&checked);
     regatta_runtime::check::check_scene(&mut checked);
     eprint!(
         "{}",
@@ -177,6 +202,7 @@ pub fn create_recorder(
     simulation: &mut regatta_runtime::sim::Simulation,
     lenient: bool,
     steps_requested: u64,
+    channels: regatta_runtime::log::Channels,
 ) -> anyhow::Result<Recorder<std::io::BufWriter<std::fs::File>>> {
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent)
@@ -190,6 +216,8 @@ pub fn create_recorder(
         seed: simulation.seed,
         lenient,
         steps_requested,
+        channels,
+        controllers: changed_controllers(loaded),
     };
     Ok(Recorder::new(
         std::io::BufWriter::new(file),
@@ -268,4 +296,26 @@ pub fn warn_about_cost(checked: &mut Checked) {
     }
     checked.diagnostics.extend(warnings);
     checked.sort_diagnostics();
+}
+
+/// Robots whose controller (or its arguments) is not what their world gives, for the log.
+fn changed_controllers(loaded: &Loaded) -> Vec<(String, String, Vec<String>)> {
+    let scene = &loaded.checked.scene;
+    loaded
+        .compiled
+        .rig
+        .robots
+        .iter()
+        .filter(|robot| {
+            scene.string(robot.node, "controller") != robot.controller
+                || scene.strings(robot.node, "controllerArgs") != robot.controller_args
+        })
+        .map(|robot| {
+            (
+                robot.name.clone(),
+                robot.controller.clone(),
+                robot.controller_args.clone(),
+            )
+        })
+        .collect()
 }

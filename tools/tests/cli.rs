@@ -66,14 +66,14 @@ fn errors_exit_1_with_file_line_col_caret_and_hint() {
 
 #[test]
 fn lenient_mode_turns_unknown_nodes_into_warnings() {
-    let input = b"#VRML_SIM R2023b utf8\nRectangleArena { floorSize 1 1 }\n";
+    let input = b"#VRML_SIM R2023b utf8\nOilBarrel { height 1 }\n";
     let strict = run_with_stdin(&["check", "-"], input);
     assert_eq!(strict.status.code(), Some(1));
     let lenient = run_with_stdin(&["check", "--lenient", "-"], input);
     let stderr = String::from_utf8_lossy(&lenient.stderr);
     assert_eq!(lenient.status.code(), Some(0), "{stderr}");
     assert!(
-        stderr.contains("warning: Skipped unknown 'RectangleArena' node or PROTO."),
+        stderr.contains("warning: Skipped unknown 'OilBarrel' node or PROTO."),
         "{stderr}"
     );
 }

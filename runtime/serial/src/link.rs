@@ -52,7 +52,7 @@ pub fn open_serial(path: &str, baud: u32) -> io::Result<Box<dyn serialport::Seri
 pub struct Pty {
     master: std::fs::File,
     /// Held open so that the master never reads end-of-file between two clients.
-    _slave: std::fs::File,
+    _slave: std::os::fd::OwnedFd,
     slave_path: String,
     timeout: Option<Duration>,
 }
@@ -61,46 +61,21 @@ pub struct Pty {
 impl Pty {
     /// Opens a new pseudo-terminal in raw mode (no echo, no line editing, no CR/LF mapping).
     pub fn open() -> io::Result<Pty> {
-        use std::os::fd::FromRawFd;
-        // SAFETY: plain POSIX calls on descriptors this function owns; each result is checked.
-        unsafe {
-            let master = libc::posix_openpt(libc::O_RDWR | libc::O_NOCTTY);
-            if master < 0 {
-                return Err(io::Error::last_os_error());
-            }
-            let master_file = std::fs::File::from_raw_fd(master);
-            if libc::grantpt(master) != 0 || libc::unlockpt(master) != 0 {
-                return Err(io::Error::last_os_error());
-            }
-            let mut name = [0 as libc::c_char; 256];
-            if libc::ptsname_r(master, name.as_mut_ptr(), name.len()) != 0 {
-                return Err(io::Error::last_os_error());
-            }
-            let slave_path = std::ffi::CStr::from_ptr(name.as_ptr())
-                .to_string_lossy()
-                .into_owned();
-            let c_path = std::ffi::CString::new(slave_path.clone())
-                .map_err(|_| io::Error::other("pty name holds a NUL"))?;
-            let slave = libc::open(c_path.as_ptr(), libc::O_RDWR | libc::O_NOCTTY);
-            if slave < 0 {
-                return Err(io::Error::last_os_error());
-            }
-            let slave_file = std::fs::File::from_raw_fd(slave);
-            let mut termios: libc::termios = std::mem::zeroed();
-            if libc::tcgetattr(slave, &mut termios) != 0 {
-                return Err(io::Error::last_os_error());
-            }
-            libc::cfmakeraw(&mut termios);
-            if libc::tcsetattr(slave, libc::TCSANOW, &termios) != 0 {
-                return Err(io::Error::last_os_error());
-            }
-            Ok(Pty {
-                master: master_file,
-                _slave: slave_file,
-                slave_path,
-                timeout: None,
-            })
-        }
+        use nix::sys::termios::{cfmakeraw, tcgetattr, tcsetattr, SetArg};
+        let pair = nix::pty::openpty(None, None).map_err(io::Error::from)?;
+        let mut termios = tcgetattr(&pair.slave).map_err(io::Error::from)?;
+        cfmakeraw(&mut termios);
+        tcsetattr(&pair.slave, SetArg::TCSANOW, &termios).map_err(io::Error::from)?;
+        let slave_path = nix::unistd::ttyname(&pair.slave)
+            .map_err(io::Error::from)?
+            .to_string_lossy()
+            .into_owned();
+        Ok(Pty {
+            master: std::fs::File::from(pair.master),
+            _slave: pair.slave,
+            slave_path,
+            timeout: None,
+        })
     }
 
     /// The path a client opens as its serial port.
@@ -112,19 +87,16 @@ impl Pty {
 #[cfg(unix)]
 impl Read for Pty {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
-        use std::os::fd::AsRawFd;
+        use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
+        use std::os::fd::AsFd;
         if let Some(timeout) = self.timeout {
-            let mut poll = libc::pollfd {
-                fd: self.master.as_raw_fd(),
-                events: libc::POLLIN,
-                revents: 0,
-            };
             let millis = timeout.as_millis().clamp(1, i32::MAX as u128) as i32;
-            // SAFETY: one valid pollfd for the duration of the call.
-            let ready = unsafe { libc::poll(&mut poll, 1, millis) };
-            if ready < 0 {
-                return Err(io::Error::last_os_error());
-            }
+            let mut fds = [PollFd::new(self.master.as_fd(), PollFlags::POLLIN)];
+            let ready = poll(
+                &mut fds,
+                PollTimeout::try_from(millis).unwrap_or(PollTimeout::MAX),
+            )
+            .map_err(io::Error::from)?;
             if ready == 0 {
                 return Err(io::ErrorKind::TimedOut.into());
             }
@@ -149,5 +121,36 @@ impl Link for Pty {
     fn set_timeout(&mut self, timeout: Option<Duration>) -> io::Result<()> {
         self.timeout = timeout;
         Ok(())
+    }
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pty_is_raw_and_its_reads_time_out() {
+        let mut pty = Pty::open().unwrap();
+        let mut slave = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(pty.slave_path())
+            .unwrap();
+        pty.set_timeout(Some(Duration::from_millis(30))).unwrap();
+        let mut buffer = [0u8; 16];
+        let error = pty.read(&mut buffer).unwrap_err();
+        assert_eq!(error.kind(), io::ErrorKind::TimedOut);
+        // Raw: carriage returns and newlines pass unchanged, nothing is echoed.
+        slave.write_all(b"D,1\r\n").unwrap();
+        let n = pty.read(&mut buffer).unwrap();
+        assert_eq!(&buffer[..n], b"D,1\r\n");
+        pty.write_all(b"d\r\n").unwrap();
+        let n = slave.read(&mut buffer).unwrap();
+        assert_eq!(&buffer[..n], b"d\r\n");
+        assert_eq!(
+            pty.read(&mut buffer).unwrap_err().kind(),
+            io::ErrorKind::TimedOut,
+            "no echo"
+        );
     }
 }

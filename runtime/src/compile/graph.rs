@@ -337,6 +337,9 @@ impl RenderGraph {
 
 /// Reads a Material node (or its absence) into a [`Material`].
 pub(crate) fn material_of(scene: &Scene, appearance: Option<NodeId>) -> Material {
+    if let Some(pbr) = appearance.filter(|&a| scene.type_name(a) == "PBRAppearance") {
+        return pbr_material(scene, pbr);
+    }
     let Some(material) = appearance.and_then(|a| scene.child(a, "material")) else {
         return Material::UNLIT;
     };
@@ -348,6 +351,26 @@ pub(crate) fn material_of(scene: &Scene, appearance: Option<NodeId>) -> Material
         shininess: scene.float(material, "shininess"),
         transparency: scene.float(material, "transparency"),
         ir_reflectance: scene.float(material, "irReflectance"),
+        unlit: false,
+    }
+}
+
+/// Webots' PBRAppearance as a VRML material (the catalogue's PBRAppearance doc): the base
+/// colour is diffuse, the emission scaled by its intensity, the surface as shiny as it is
+/// smooth but without specular colour, and its infra-red reflectance is the base colour's red
+/// component, since Webots' infra-red distance sensors respond to red.
+fn pbr_material(scene: &Scene, pbr: NodeId) -> Material {
+    let base = scene.vec3(pbr, "baseColor");
+    let emissive = scene.vec3(pbr, "emissiveColor");
+    let intensity = scene.float(pbr, "emissiveIntensity");
+    Material {
+        diffuse: base,
+        ambient_intensity: 0.2,
+        specular: [0.0; 3],
+        emissive: emissive.map(|c| c * intensity),
+        shininess: 1.0 - scene.float(pbr, "roughness"),
+        transparency: scene.float(pbr, "transparency"),
+        ir_reflectance: base[0],
         unlit: false,
     }
 }

@@ -10,7 +10,8 @@ pub mod plan;
 pub mod rig;
 pub mod triangulate;
 
-use glam::DVec3;
+use glam::{DMat3, DVec3};
+use regatta_schema::webots::{Authoring, Objects};
 use regatta_schema::{NodeId, Scene, Value};
 
 use crate::geometry::{axis_angle, Frame};
@@ -81,6 +82,7 @@ pub fn compile(scene: &Scene) -> Compiled {
         materials: Vec::new(),
         landmarks: Vec::new(),
         group: None,
+        body: Authoring::World,
     };
     let root = scene.root_rotation();
     let root_frame = Frame {
@@ -91,6 +93,7 @@ pub fn compile(scene: &Scene) -> Compiled {
         compiler.walk(node, &root_frame, Owner::Static, 0);
     }
     index_static(&mut compiler.graph);
+    find_floors(&mut compiler.graph, &mut compiler.rig);
     let settings = world_settings(scene);
     let plan = Plan::new(&compiler.graph, &compiler.rig);
     Compiled {
@@ -129,6 +132,31 @@ struct Compiler<'s> {
     landmarks: Vec<Landmark>,
     /// The group the walk is inside.
     group: Option<GroupId>,
+    /// Who wrote the children being walked (their parent's body), for the turns between
+    /// axis conventions.
+    body: Authoring,
+}
+
+/// A frame turned by an axis-angle rotation (`None`: unchanged).
+fn turned(frame: &Frame, turn: Option<[f64; 4]>) -> Frame {
+    match turn {
+        Some(r) => frame.then(&Frame {
+            linear: axis_angle(DVec3::new(r[0], r[1], r[2]), r[3]),
+            translation: DVec3::ZERO,
+        }),
+        None => *frame,
+    }
+}
+
+/// For nodes whose axes carry meaning (robots, cameras, cylinder-like geometry): the rotation
+/// from regatta's frame for them (y up, +x forward) to the frame a world in FLU writes them in.
+fn flu_to_regatta(scene: &Scene, body: Authoring) -> Option<[f64; 4]> {
+    (body == Authoring::World && scene.objects == Objects::Flu).then_some([
+        1.0,
+        0.0,
+        0.0,
+        std::f64::consts::FRAC_PI_2,
+    ])
 }
 
 const MAX_WALK_DEPTH: usize = 256;
@@ -138,6 +166,17 @@ impl Compiler<'_> {
         if depth > MAX_WALK_DEPTH {
             return;
         }
+        let scene = self.scene;
+        let axes = scene.node(node).axes;
+        let frame = &turned(frame, scene.turn(self.body, axes.own));
+        let outer_body = std::mem::replace(&mut self.body, axes.body);
+        self.walk_axes(node, frame, owner, depth);
+        self.body = outer_body;
+    }
+
+    /// [`Compiler::walk`] once the frame is in the node's own axes; `self.body` is the axes of
+    /// its children.
+    fn walk_axes(&mut self, node: NodeId, frame: &Frame, owner: Owner, depth: usize) {
         let scene = self.scene;
         if owner == Owner::Static && scene.node(node).proto_names.iter().any(|n| n == "Buoy") {
             let first = self.graph.primitives.len();
@@ -172,6 +211,7 @@ impl Compiler<'_> {
 
     fn walk_inner(&mut self, node: NodeId, frame: &Frame, owner: Owner, depth: usize) {
         let scene = self.scene;
+        let axes = scene.node(node).axes;
         match scene.type_name(node) {
             "Transform" | "Solid" => {
                 let local = Frame::vrml(
@@ -189,7 +229,7 @@ impl Compiler<'_> {
                         DVec3::ZERO
                     },
                 );
-                let frame = frame.then(&local);
+                let frame = turned(&frame.then(&local), scene.turn(axes.own, axes.body));
                 let outer = self.enter_group(node, &frame, owner, None);
                 for &child in scene.children(node, "children") {
                     self.walk(child, &frame, owner, depth + 1);
@@ -197,9 +237,31 @@ impl Compiler<'_> {
                 self.group = outer;
             }
             "Group" | "Anchor" | "Billboard" | "Collision" => {
+                let frame = &turned(frame, scene.turn(axes.own, axes.body));
                 let outer = self.enter_group(node, frame, owner, None);
                 for &child in scene.children(node, "children") {
                     self.walk(child, frame, owner, depth + 1);
+                }
+                self.group = outer;
+            }
+            "Robot" => {
+                // A generic Webots robot: no drive regatta simulates, so its parts stay where
+                // they are, as obstacles.
+                self.warnings.push(format!(
+                    "robot '{}' is a generic Webots Robot with no drive regatta simulates (only the DifferentialWheels robots and the Khepera1, Khepera2 and E-puck stand-ins move); its shapes stay in place",
+                    scene.string(node, "name")
+                ));
+                let local = Frame::vrml(
+                    DVec3::from_array(scene.vec3(node, "translation")),
+                    scene.rotation(node, "rotation"),
+                    DVec3::from_array(scene.vec3(node, "scale")),
+                    [0.0, 0.0, 1.0, 0.0],
+                    DVec3::ZERO,
+                );
+                let frame = turned(&frame.then(&local), scene.turn(axes.own, axes.body));
+                let outer = self.enter_group(node, &frame, owner, None);
+                for &child in scene.children(node, "children") {
+                    self.walk(child, &frame, owner, depth + 1);
                 }
                 self.group = outer;
             }
@@ -214,16 +276,36 @@ impl Compiler<'_> {
                     self.group = outer;
                 }
             }
-            "Shape" => self.shape(node, frame, owner),
+            "Shape" => {
+                // Webots' FLU geometry: cylinders, cones and elevation grids along z.
+                let frame = match scene.child(node, "geometry").map(|g| scene.type_name(g)) {
+                    Some("Cylinder" | "Cone" | "ElevationGrid") => {
+                        turned(frame, flu_to_regatta(scene, axes.body))
+                    }
+                    _ => *frame,
+                };
+                self.shape(node, &frame, owner)
+            }
             "PointLight" | "DirectionalLight" | "SpotLight" => self.light(node, frame, owner),
             "Viewpoint" if owner == Owner::Static && self.graph.viewpoint.is_none() => {
-                let local = Frame::vrml(
+                let mut local = Frame::vrml(
                     DVec3::from_array(scene.vec3(node, "position")),
                     scene.rotation(node, "orientation"),
                     DVec3::ONE,
                     [0.0, 0.0, 1.0, 0.0],
                     DVec3::ZERO,
                 );
+                if flu_to_regatta(scene, axes.body).is_some() {
+                    // FLU viewpoints look along +x with +z up; VRML's along -z with +y up.
+                    local = local.then(&Frame {
+                        linear: DMat3::from_cols(
+                            DVec3::new(0.0, -1.0, 0.0),
+                            DVec3::new(0.0, 0.0, 1.0),
+                            DVec3::new(-1.0, 0.0, 0.0),
+                        ),
+                        translation: DVec3::ZERO,
+                    });
+                }
                 let description = scene.string(node, "description");
                 self.graph.viewpoint = Some(Viewpoint {
                     name: if description.is_empty() {
@@ -236,13 +318,15 @@ impl Compiler<'_> {
                 });
             }
             "DifferentialWheels" => self.robot(node, frame, owner, depth),
-            "DistanceSensor" | "LightSensor" | "PanoramicTurret" | "LinearCamera" => match owner {
-                Owner::Robot(robot) => self.device(node, frame, robot),
-                Owner::Static => self.warnings.push(format!(
-                    "a {} outside any robot is ignored",
-                    scene.type_name(node)
-                )),
-            },
+            "DistanceSensor" | "LightSensor" | "PanoramicTurret" | "LinearCamera" | "Camera" => {
+                match owner {
+                    Owner::Robot(robot) => self.device(node, frame, robot),
+                    Owner::Static => self.warnings.push(format!(
+                        "a {} outside any robot is ignored",
+                        scene.type_name(node)
+                    )),
+                }
+            }
             _ => {}
         }
     }
@@ -268,7 +352,11 @@ impl Compiler<'_> {
     }
 
     fn material(&mut self, appearance: Option<NodeId>) -> usize {
-        let key = appearance.and_then(|a| self.scene.child(a, "material"));
+        // A VRML Appearance shares its Material; a PBRAppearance is its own material.
+        let key = appearance.and_then(|a| match self.scene.type_name(a) {
+            "PBRAppearance" => Some(a),
+            _ => self.scene.child(a, "material"),
+        });
         if let Some(&(_, index)) = self.materials.iter().find(|(k, _)| *k == key) {
             return index;
         }
@@ -353,13 +441,23 @@ impl Compiler<'_> {
                 .push(format!("robot '{name}' inside another robot is ignored"));
             return;
         }
-        let robot_frame = frame.then(&Frame::vrml(
+        let axes = scene.node(node).axes;
+        // The robot's own frame, its children's (its body's axes), and regatta's robot frame
+        // (y up, +x forward) in which the rig places devices.
+        let own = frame.then(&Frame::vrml(
             DVec3::from_array(scene.vec3(node, "translation")),
             scene.rotation(node, "rotation"),
             DVec3::ONE,
             [0.0, 0.0, 1.0, 0.0],
             DVec3::ZERO,
         ));
+        let body = turned(&own, scene.turn(axes.own, axes.body));
+        let to_regatta = flu_to_regatta(scene, axes.body);
+        let robot_frame = turned(&body, to_regatta);
+        let children_frame = turned(
+            &Frame::IDENTITY,
+            to_regatta.map(|[x, y, z, a]| [x, y, z, -a]),
+        );
         let forward = robot_frame.apply_vector(DVec3::X);
         let up = robot_frame.apply_vector(DVec3::Y).normalize_or_zero();
         if up.y < 0.999 {
@@ -392,6 +490,7 @@ impl Compiler<'_> {
             body_height: scene.float(node, "bodyHeight"),
             controller: scene.string(node, "controller").to_owned(),
             controller_args: scene.strings(node, "controllerArgs").to_vec(),
+            floors: Vec::new(),
             network: scene.child(node, "network").map(|network| {
                 let panoramic = scene
                     .child(node, "turret")
@@ -412,7 +511,7 @@ impl Compiler<'_> {
         let outer = self.enter_group(node, &start_frame, Owner::Static, Some(index));
         // Attached parts: frames relative to the robot.
         for &child in scene.children(node, "children") {
-            self.walk(child, &Frame::IDENTITY, Owner::Robot(index), depth + 1);
+            self.walk(child, &children_frame, Owner::Robot(index), depth + 1);
         }
         self.group = outer;
         if let Some(turret) = scene.child(node, "turret") {
@@ -454,8 +553,64 @@ impl Compiler<'_> {
                 };
                 self.rig.robots[robot].light_sensors.push(rig);
             }
+            "Camera" => self.camera(node, frame, robot),
             _ => self.turret(node, robot),
         }
+    }
+
+    /// A Webots Camera on a robot: one pixel high, it is the K213 linear camera turret (as
+    /// Webots' khepera_k213.wbt builds it); otherwise a 2-D camera.
+    fn camera(&mut self, node: NodeId, frame: &Frame, robot: usize) {
+        let scene = self.scene;
+        // Webots cameras look along -z before R2022a, along +x (z up) from then.
+        let look = match (scene.node(node).axes.body, scene.objects) {
+            (Authoring::World, Objects::Flu) => Some([1.0, 0.0, 0.0, std::f64::consts::FRAC_PI_2]),
+            (Authoring::World, Objects::Legacy) => {
+                Some([0.0, 1.0, 0.0, std::f64::consts::FRAC_PI_2])
+            }
+            _ => None,
+        };
+        let local = Frame::vrml(
+            DVec3::from_array(scene.vec3(node, "translation")),
+            scene.rotation(node, "rotation"),
+            DVec3::ONE,
+            [0.0, 0.0, 1.0, 0.0],
+            DVec3::ZERO,
+        );
+        let device = turned(&frame.then(&local), look);
+        let name = scene.string(node, "name").to_owned();
+        let robot_name = self.rig.robots[robot].name.clone();
+        let width = scene.int(node, "width").max(1) as usize;
+        let height = scene.int(node, "height").max(1) as usize;
+        let forward = device.apply_vector(DVec3::X).normalize_or(DVec3::X);
+        if forward.y.abs() > 1e-6 || forward.x < 1.0 - 1e-6 {
+            self.warnings.push(format!(
+                "camera '{name}' of robot '{robot_name}' does not look straight ahead; it is simulated looking along the robot's heading"
+            ));
+        }
+        if height == 1 {
+            if self.rig.robots[robot].turret.is_some() {
+                self.warnings.push(format!(
+                    "robot '{robot_name}' has two turrets; camera '{name}' is left out"
+                ));
+                return;
+            }
+            self.rig.robots[robot].turret = Some(TurretRig::Linear(LinearCameraRig {
+                name,
+                height: device.translation.y,
+                pixels: width,
+                field_of_view: scene.float(node, "fieldOfView"),
+                // The K213's pixels are about 2° high (catalogue LinearCamera).
+                vertical_field_of_view: 0.0349,
+                samples: 1,
+                bits: 8,
+                period: scene.float(node, "samplingPeriod"),
+            }));
+            return;
+        }
+        self.warnings.push(format!(
+            "camera '{name}' of robot '{robot_name}' ({width}×{height}) is a 2-D camera, which regatta does not simulate yet; a controller cannot read it"
+        ));
     }
 
     fn turret(&mut self, node: NodeId, robot: usize) {
@@ -510,6 +665,54 @@ impl Compiler<'_> {
             }),
         };
         self.rig.robots[robot].turret = Some(turret);
+    }
+}
+
+/// The floors each robot stands on: thin static primitives under its start whose top is at
+/// the height it stands at. Webots worlds leave robots a little above or below their floor
+/// (where physics let them settle): a floor top within 1 cm below the robot's origin or 2 mm
+/// above it is the floor, and the robot is set on it.
+fn find_floors(graph: &mut RenderGraph, rig: &mut SensorRig) {
+    const BELOW: f64 = 0.01;
+    const ABOVE: f64 = 0.002;
+    const THIN: f64 = 0.05;
+    for robot in &mut rig.robots {
+        let near = |b: &crate::geometry::Aabb| {
+            b.max.y >= robot.floor_y - BELOW
+                && b.max.y <= robot.floor_y + ABOVE
+                && b.max.y - b.min.y <= THIN
+        };
+        let under = |b: &crate::geometry::Aabb| {
+            (b.min.x..=b.max.x).contains(&robot.start.x)
+                && (b.min.z..=b.max.z).contains(&robot.start.z)
+        };
+        let statics = || {
+            graph
+                .primitives
+                .iter()
+                .filter(|p| p.owner == Owner::Static)
+                .map(|p| p.bounds)
+        };
+        // The highest floor under the robot is the one it stands on.
+        let Some(top) = statics()
+            .filter(|b| near(b) && under(b))
+            .map(|b| b.max.y)
+            .max_by(f64::total_cmp)
+        else {
+            continue;
+        };
+        robot.floors = statics()
+            .filter(|b| (b.max.y - top).abs() <= 1e-9 && b.max.y - b.min.y <= THIN)
+            .map(|b| [b.min.x, b.min.z, b.max.x, b.max.z])
+            .collect();
+        robot.floor_y = top;
+    }
+    // The robots' groups sit where the simulation puts them.
+    for group in &mut graph.groups {
+        if let Some(robot) = group.robot {
+            let robot = &rig.robots[robot];
+            group.frame = robot.start.frame(robot.floor_y);
+        }
     }
 }
 

@@ -200,6 +200,9 @@ pub struct RobotRig {
     pub body_height: f64,
     pub controller: String,
     pub controller_args: Vec<String>,
+    /// Horizontal extents (x0, z0, x1, z1) of the floors the robot starts on; leaving all of
+    /// them is falling off the world. Empty: no floor under it, nothing is checked.
+    pub floors: Vec<[f64; 4]>,
     /// The `network` field's NeuralNetwork, read and checked (`None`: the field is NULL).
     pub network: Option<Result<crate::neural::NetworkSpec, crate::neural::NetworkError>>,
     pub distance_sensors: Vec<DistanceSensorRig>,

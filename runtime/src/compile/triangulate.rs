@@ -1,8 +1,8 @@
 //! Triangulation of IndexedFaceSet and ElevationGrid into [`Mesh`]es.
 //!
-//! Faces are projected onto the plane of their Newell normal and ear-clipped, so concave and
-//! mildly non-planar faces triangulate correctly; a face that will not clip (self-crossing)
-//! falls back to a fan, so no input is lost. Invalid indices are skipped.
+//! Faces are projected onto the plane of their Newell normal and cut by the `earcut` crate
+//! (Mapbox's ear-cutting algorithm), so concave and mildly non-planar faces triangulate
+//! correctly and small self-crossings are cured. Invalid indices are skipped.
 
 use glam::{DVec2, DVec3};
 use regatta_schema::{NodeId, Scene, Value};
@@ -129,7 +129,10 @@ fn face_color(
     sum.map(|s| s / n)
 }
 
-/// Ear-clips one polygon (vertex indices into `points`) into `out`.
+/// Triangulates one polygon (vertex indices into `points`) into `out`: projected onto the
+/// plane of its Newell normal, then cut by `earcut` (Mapbox's algorithm, which also cures
+/// small self-intersections). Each triangle is turned to the polygon's own winding, so `ccw`
+/// decides the facing as it does for triangles given directly.
 pub fn triangulate_polygon(points: &[DVec3], polygon: &[u32], ccw: bool, out: &mut Vec<[u32; 3]>) {
     let push = |out: &mut Vec<[u32; 3]>, a: u32, b: u32, c: u32| {
         out.push(if ccw { [a, b, c] } else { [a, c, b] });
@@ -138,7 +141,7 @@ pub fn triangulate_polygon(points: &[DVec3], polygon: &[u32], ccw: bool, out: &m
         push(out, polygon[0], polygon[1], polygon[2]);
         return;
     }
-    // Newell normal, then a 2-D basis in its plane.
+    // Newell normal, then a 2-D basis in its plane in which the polygon winds positively.
     let mut normal = DVec3::ZERO;
     for i in 0..polygon.len() {
         let a = points[polygon[i] as usize];
@@ -155,58 +158,23 @@ pub fn triangulate_polygon(points: &[DVec3], polygon: &[u32], ccw: bool, out: &m
     let normal = normal.normalize();
     let u = normal.any_orthonormal_vector();
     let v = normal.cross(u);
-    let flat: Vec<DVec2> = polygon
+    let flat: Vec<[f64; 2]> = polygon
         .iter()
         .map(|&i| {
             let p = points[i as usize];
-            DVec2::new(p.dot(u), p.dot(v))
+            [p.dot(u), p.dot(v)]
         })
         .collect();
-    let mut remaining: Vec<usize> = (0..polygon.len()).collect();
-    let cross = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a);
-    let mut guard = 0;
-    while remaining.len() > 3 && guard < polygon.len() * polygon.len() {
-        guard += 1;
-        let n = remaining.len();
-        let mut clipped = false;
-        for k in 0..n {
-            let (ia, ib, ic) = (
-                remaining[(k + n - 1) % n],
-                remaining[k],
-                remaining[(k + 1) % n],
-            );
-            let (a, b, c) = (flat[ia], flat[ib], flat[ic]);
-            if cross(a, b, c) <= 0.0 {
-                continue; // reflex or flat corner
-            }
-            let contains_other = remaining.iter().any(|&j| {
-                if j == ia || j == ib || j == ic {
-                    return false;
-                }
-                let p = flat[j];
-                cross(a, b, p) >= 0.0 && cross(b, c, p) >= 0.0 && cross(c, a, p) >= 0.0
-            });
-            if contains_other {
-                continue;
-            }
-            push(out, polygon[ia], polygon[ib], polygon[ic]);
-            remaining.remove(k);
-            clipped = true;
-            break;
-        }
-        if !clipped {
-            break;
-        }
-    }
-    if remaining.len() >= 3 {
-        // What is left (3 vertices, or a self-crossing rest) becomes a fan.
-        for k in 1..remaining.len() - 1 {
-            push(
-                out,
-                polygon[remaining[0]],
-                polygon[remaining[k]],
-                polygon[remaining[k + 1]],
-            );
+    let mut corners: Vec<u32> = Vec::new();
+    earcut::Earcut::new().earcut(flat.iter().copied(), &[] as &[u32], &mut corners);
+    for t in corners.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|k| k as usize);
+        let area = DVec2::from(flat[b]) - DVec2::from(flat[a]);
+        let area = area.perp_dot(DVec2::from(flat[c]) - DVec2::from(flat[a]));
+        if area >= 0.0 {
+            push(out, polygon[a], polygon[b], polygon[c]);
+        } else {
+            push(out, polygon[a], polygon[c], polygon[b]);
         }
     }
 }
@@ -259,18 +227,19 @@ pub fn elevation_grid(scene: &Scene, node: NodeId) -> Mesh {
 mod tests {
     use super::*;
 
+    /// Each triangle's (b − a) × (c − a).
+    fn crosses<'a>(
+        points: &'a [DVec3],
+        triangles: &'a [[u32; 3]],
+    ) -> impl Iterator<Item = DVec3> + 'a {
+        triangles.iter().map(|t| {
+            let [a, b, c] = t.map(|i| points[i as usize]);
+            (b - a).cross(c - a)
+        })
+    }
+
     fn area(points: &[DVec3], triangles: &[[u32; 3]]) -> f64 {
-        triangles
-            .iter()
-            .map(|t| {
-                let (a, b, c) = (
-                    points[t[0] as usize],
-                    points[t[1] as usize],
-                    points[t[2] as usize],
-                );
-                (b - a).cross(c - a).length() / 2.0
-            })
-            .sum()
+        crosses(points, triangles).map(|c| c.length() / 2.0).sum()
     }
 
     #[test]
@@ -284,5 +253,60 @@ mod tests {
         triangulate_polygon(&pts, &[0, 1, 2, 3, 4, 5], true, &mut out);
         assert_eq!(out.len(), 4);
         assert!((area(&pts, &out) - 3.0).abs() < 1e-12);
+    }
+
+    /// Each triangle's turn about +y (twice its signed area seen along y).
+    fn windings(points: &[DVec3], triangles: &[[u32; 3]]) -> Vec<f64> {
+        crosses(points, triangles).map(|c| c.y).collect()
+    }
+
+    #[test]
+    fn triangles_keep_the_faces_winding_and_ccw_flips_it() {
+        // A concave "comb" in the y = 0 plane, wound clockwise seen from +y, then reversed.
+        let outline = [
+            [0., 0.],
+            [0., 3.],
+            [1., 3.],
+            [1., 1.],
+            [2., 1.],
+            [2., 3.],
+            [3., 3.],
+            [3., 0.],
+        ];
+        let pts: Vec<DVec3> = outline
+            .iter()
+            .map(|p| DVec3::new(p[0], 0.0, p[1]))
+            .collect();
+        let order: Vec<u32> = (0..8).collect();
+        let reversed: Vec<u32> = (0..8).rev().collect();
+        for (polygon, sign) in [(&order, 1.0), (&reversed, -1.0)] {
+            let mut out = Vec::new();
+            triangulate_polygon(&pts, polygon, true, &mut out);
+            assert_eq!(out.len(), 6);
+            assert!((area(&pts, &out) - 7.0).abs() < 1e-12);
+            // Seen from +y, x × z points down: a polygon listed clockwise from above has a
+            // Newell normal along +y, and so do its triangles.
+            let turn: Vec<f64> = windings(&pts, &out);
+            assert!(turn.iter().all(|w| w * sign > 0.0), "{turn:?}");
+            let mut flipped = Vec::new();
+            triangulate_polygon(&pts, polygon, false, &mut flipped);
+            let turn: Vec<f64> = windings(&pts, &flipped);
+            assert!(turn.iter().all(|w| w * sign < 0.0), "{turn:?}");
+        }
+    }
+
+    #[test]
+    fn degenerate_faces_give_nothing_and_never_panic() {
+        let pts: Vec<DVec3> = (0..5).map(|i| DVec3::new(i as f64, 0.0, 0.0)).collect();
+        let mut out = Vec::new();
+        triangulate_polygon(&pts, &[0, 1, 2, 3, 4], true, &mut out);
+        assert!(out.is_empty());
+        // A bow tie crosses itself: whatever comes out lies on its points.
+        let tie: Vec<DVec3> = [[0., 0.], [2., 2.], [2., 0.], [0., 2.]]
+            .iter()
+            .map(|p| DVec3::new(p[0], 0.0, p[1]))
+            .collect();
+        triangulate_polygon(&tie, &[0, 1, 2, 3], true, &mut out);
+        assert!(out.iter().flatten().all(|&i| i < 4));
     }
 }

@@ -94,6 +94,14 @@ pub struct Visits {
     inside: Vec<bool>,
 }
 
+impl Visits {
+    /// The radius of the disc a robot's centre enters to visit a landmark of `radius`: the
+    /// landmark's radius plus two body diameters.
+    pub fn disc_radius(radius: f64, body_radius: f64) -> f64 {
+        radius + 4.0 * body_radius
+    }
+}
+
 /// The Panoramic turret of a simulated robot.
 pub struct PanoramicState {
     pub model: Panoramic,
@@ -141,6 +149,15 @@ pub struct RobotState {
     pub last_controller_error: Option<String>,
     pub contacts: Contacts,
     pub visits: Visits,
+    /// Where and when the robot left every floor (it stays there, fallen off the world).
+    pub fell: Option<Fall>,
+}
+
+/// A robot leaving its floor: simulated time (s) and position (m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fall {
+    pub time: f64,
+    pub pose: Pose2,
 }
 
 impl RobotState {
@@ -265,6 +282,7 @@ impl<'c> Simulation<'c> {
                     times: Vec::new(),
                     inside: vec![false; landmarks],
                 },
+                fell: None,
             });
         }
         let mut simulation = Simulation {
@@ -369,7 +387,33 @@ impl<'c> Simulation<'c> {
         self.move_robots();
         self.steps += 1;
         self.time = self.steps as f64 * self.time_step;
+        self.track_falls();
         self.track_visits();
+    }
+
+    /// A robot whose centre has left every floor it started on has fallen off the world: the
+    /// event is kept, and the robot stays where it fell.
+    fn track_falls(&mut self) {
+        for (robot, rig) in self.robots.iter_mut().zip(&self.compiled.rig.robots) {
+            if let Some(fall) = robot.fell {
+                robot.pose = fall.pose;
+                continue;
+            }
+            if rig.floors.is_empty() {
+                continue;
+            }
+            let (x, z) = (robot.pose.x, robot.pose.z);
+            let on_floor = rig
+                .floors
+                .iter()
+                .any(|f| (f[0]..=f[2]).contains(&x) && (f[1]..=f[3]).contains(&z));
+            if !on_floor {
+                robot.fell = Some(Fall {
+                    time: self.time,
+                    pose: robot.pose,
+                });
+            }
+        }
     }
 
     /// Takes a robot's built-in controller away, so that something outside drives it.
@@ -717,7 +761,7 @@ impl<'c> Simulation<'c> {
                     robot.pose.z - landmark.center.y,
                 )
                 .length();
-                let inside = distance <= landmark.radius + 4.0 * rig.body_radius;
+                let inside = distance <= Visits::disc_radius(landmark.radius, rig.body_radius);
                 if inside && !robot.visits.inside[k] {
                     robot.visits.sequence.push(k);
                     robot.visits.times.push(self.time);

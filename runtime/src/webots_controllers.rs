@@ -1,0 +1,106 @@
+//! Webots controller names, as worlds written for Webots give them, and what regatta runs for
+//! each: the ones whose documented behaviour a built-in controller has map to it; robots
+//! driven from outside Webots (`<extern>`, and the Khepera serial-protocol bridges `pipe` and
+//! `tcpip`) are driven by `regatta serve`; the rest are refused with their name.
+
+/// What regatta does with a controller name a world gives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Resolution {
+    /// A built-in controller, and why it stands for the name (empty when it is the same).
+    Builtin(&'static str, &'static str),
+    /// The robot is driven from outside the simulator (`regatta serve`, or the Python module).
+    External(&'static str),
+    /// No built-in controller does what this one does.
+    Unknown,
+}
+
+/// The controller a DifferentialWheels robot runs when lenient mode replaces one regatta
+/// does not have: the Khepera's and e-puck's default in Webots is obstacle avoidance.
+pub const LENIENT_DEFAULT: &str = "braitenberg";
+
+/// (Webots name, regatta controller, documented behaviour): the table in the README.
+pub const MAPPED: &[(&str, &str, &str)] = &[
+    (
+        "braitenberg",
+        "braitenberg",
+        "Braitenberg obstacle avoidance (Webots' default for the Khepera I and II)",
+    ),
+    (
+        "e-puck_avoid_obstacles",
+        "braitenberg",
+        "the e-puck's default: obstacle avoidance with its proximity sensors",
+    ),
+    (
+        "e-puck_avoid_collisions",
+        "braitenberg",
+        "obstacle avoidance with the proximity sensors",
+    ),
+    (
+        "obstacle_avoidance",
+        "braitenberg",
+        "obstacle avoidance with the proximity sensors",
+    ),
+    (
+        "avoid_obstacles",
+        "braitenberg",
+        "obstacle avoidance with the proximity sensors",
+    ),
+    (
+        "void",
+        "none",
+        "Webots' empty controller: the robot stands still",
+    ),
+    ("<none>", "none", "no controller: the robot stands still"),
+];
+
+/// (Webots name, how the robot is driven from outside).
+pub const EXTERNAL: &[(&str, &str)] = &[
+    ("<extern>", "an extern controller connects to the simulator"),
+    (
+        "pipe",
+        "a program sends Khepera serial-protocol commands through a pipe",
+    ),
+    (
+        "tcpip",
+        "a program sends Khepera serial-protocol commands over TCP/IP",
+    ),
+];
+
+/// Resolves a controller name: regatta's own names first, then Webots' names.
+pub fn resolve(name: &str) -> Resolution {
+    if name.is_empty() {
+        return Resolution::Builtin("none", "");
+    }
+    // regatta's own names (and their aliases): the registry's.
+    if let Some(own) = crate::controllers::find(name) {
+        return Resolution::Builtin(own.name, "");
+    }
+    if let Some((_, builtin, why)) = MAPPED.iter().find(|(n, _, _)| *n == name) {
+        return Resolution::Builtin(builtin, why);
+    }
+    if let Some((_, how)) = EXTERNAL.iter().find(|(n, _)| *n == name) {
+        return Resolution::External(how);
+    }
+    Resolution::Unknown
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn webots_names() {
+        assert_eq!(resolve("regatta"), Resolution::Builtin("regatta", ""));
+        assert!(matches!(
+            resolve("e-puck_avoid_obstacles"),
+            Resolution::Builtin("braitenberg", _)
+        ));
+        assert!(matches!(resolve("<extern>"), Resolution::External(_)));
+        assert!(matches!(resolve("pipe"), Resolution::External(_)));
+        assert_eq!(resolve("khepera_gripper"), Resolution::Unknown);
+        // Every mapped name resolves to a controller regatta builds.
+        for (_, builtin, _) in MAPPED {
+            assert!(crate::controllers::build(builtin, &[]).is_ok());
+        }
+    }
+}
