@@ -8,6 +8,7 @@
 // Channel loops (`for k in 0..3`) read as the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+pub mod broad;
 pub mod check;
 pub mod compile;
 pub mod controllers;

@@ -588,10 +588,9 @@ impl<W: Write + Seek> Recorder<W> {
                 self.cdr.bool(robot.contacts.is_touching());
                 self.cdr.u64(robot.contacts.events);
                 let touching = robot.contacts.touching();
-                self.cdr
-                    .u32(touching.iter().filter(|&&touched| touched).count() as u32);
-                for (name, _) in self.obstacle_names.iter().zip(touching).filter(|(_, &t)| t) {
-                    self.cdr.string(name);
+                self.cdr.u32(touching.len() as u32);
+                for &obstacle in touching {
+                    self.cdr.string(&self.obstacle_names[obstacle as usize]);
                 }
                 self.write(contacts, ns(t))?;
             }

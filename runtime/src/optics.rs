@@ -43,6 +43,24 @@ pub enum View {
     Rays(Prepared),
 }
 
+/// A frame to render from, and for whom: a viewer's own [`View`], or one viewer of a frame
+/// that every robot of a step shares.
+#[derive(Clone, Copy)]
+pub enum ViewOf<'v> {
+    Columns(&'v ColumnFrame, Option<usize>),
+    Rays(&'v Prepared),
+}
+
+impl View {
+    /// This view, for the viewer it was made for.
+    pub fn of(&self) -> ViewOf<'_> {
+        match self {
+            View::Columns(frame) => ViewOf::Columns(frame, frame.viewer),
+            View::Rays(prepared) => ViewOf::Rays(prepared),
+        }
+    }
+}
+
 impl<'g> Renderer<'g> {
     /// The plan's renderer, or ray casting when `force_rays` (the reference).
     pub fn new(graph: &'g RenderGraph, plan: &Plan, force_rays: bool) -> Renderer<'g> {
@@ -67,6 +85,19 @@ impl<'g> Renderer<'g> {
         }
     }
 
+    /// Places the world for every viewer of a step at once, into `shared` (its buffers
+    /// reused): the column renderer's frame. The ray caster prepares per viewer
+    /// ([`Renderer::view`]) and leaves `shared` empty.
+    pub fn prepare_shared(&self, plan: &Plan, poses: &Poses, shared: &mut Option<ColumnFrame>) {
+        match self {
+            Renderer::Columns(scene) => {
+                let frame = shared.get_or_insert_with(|| scene.empty_frame());
+                scene.prepare_into(plan, poses, frame);
+            }
+            Renderer::Rays(_) => *shared = None,
+        }
+    }
+
     /// Mean luminance over each pixel window of a strip (exact optics). `stride` applies to
     /// the column renderer (see [`ColumnScene::integrate`]).
     #[allow(clippy::too_many_arguments)]
@@ -80,11 +111,26 @@ impl<'g> Renderer<'g> {
         stride: usize,
         out: &mut [f64],
     ) {
+        self.integrate_of(view.of(), eye, heading, strip, samples, stride, out)
+    }
+
+    /// [`Renderer::integrate`] from any frame (see [`ViewOf`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn integrate_of(
+        &self,
+        view: ViewOf,
+        eye: DVec3,
+        heading: f64,
+        strip: &Strip,
+        samples: usize,
+        stride: usize,
+        out: &mut [f64],
+    ) {
         match (self, view) {
-            (Renderer::Columns(scene), View::Columns(frame)) => {
-                scene.integrate(frame, eye, heading, strip, samples, stride, out)
+            (Renderer::Columns(scene), ViewOf::Columns(frame, viewer)) => {
+                scene.integrate_for(frame, viewer, eye, heading, strip, samples, stride, out)
             }
-            (Renderer::Rays(caster), View::Rays(frame)) => {
+            (Renderer::Rays(caster), ViewOf::Rays(frame)) => {
                 let n = samples.max(1);
                 let half_band = libm::atan(strip.tan_half_band);
                 for (pixel, pixel_out) in out.iter_mut().enumerate().take(strip.centers.len()) {
@@ -116,7 +162,7 @@ impl<'g> Renderer<'g> {
     #[allow(clippy::too_many_arguments)]
     fn flat_column(
         &self,
-        view: &View,
+        view: ViewOf,
         look: Option<&Look>,
         eye: DVec3,
         heading: f64,
@@ -125,10 +171,10 @@ impl<'g> Renderer<'g> {
         out: &mut [[f64; 3]],
     ) {
         match (self, view, look) {
-            (Renderer::Columns(scene), View::Columns(frame), Some(look)) => {
+            (Renderer::Columns(scene), ViewOf::Columns(frame, _), Some(look)) => {
                 scene.sample_column(frame, look, look.direction(alpha), alpha, tans, out);
             }
-            (Renderer::Rays(caster), View::Rays(frame), _) => {
+            (Renderer::Rays(caster), ViewOf::Rays(frame), _) => {
                 let world = heading + alpha;
                 let (cw, sw) = (libm::cos(world), libm::sin(world));
                 for (t, rgb) in tans.iter().zip(out.iter_mut()) {
@@ -140,10 +186,10 @@ impl<'g> Renderer<'g> {
     }
 
     /// The per-eye precomputation of the column renderer.
-    fn look(&self, view: &View, eye: DVec3, heading: f64) -> Option<Look> {
+    fn look(&self, view: ViewOf, eye: DVec3, heading: f64) -> Option<Look> {
         match (self, view) {
-            (Renderer::Columns(scene), View::Columns(frame)) => {
-                Some(scene.look(frame, eye, heading))
+            (Renderer::Columns(scene), ViewOf::Columns(frame, viewer)) => {
+                Some(scene.look_for(frame, viewer, eye, heading))
             }
             _ => None,
         }
@@ -173,7 +219,8 @@ pub struct RetinaOutput {
 /// A Panoramic turret ready to update: strips precomputed, I_bda calibrated per filter.
 pub struct Panoramic {
     pub rig: PanoramicRig,
-    strip: Strip,
+    /// The retina's strip, the same for every turret: shared.
+    strip: std::sync::Arc<Strip>,
     settings: FilterSettings,
     i_bda: Vec<(FilterKind, f64)>,
     /// The enabled filters, built for the retina's length, in the order of `i_bda`.
@@ -183,7 +230,6 @@ pub struct Panoramic {
 
 impl Panoramic {
     pub fn new(rig: &PanoramicRig) -> Panoramic {
-        let centers = (0..PIXELS).map(retina::pixel_azimuth).collect();
         let settings = FilterSettings {
             filters: rig.filters,
             lambda: rig.lambda,
@@ -209,7 +255,7 @@ impl Panoramic {
             .collect();
         Panoramic {
             rig: rig.clone(),
-            strip: Strip::new(centers, PIXEL_WIDTH, HALF_BAND),
+            strip: retina_strip(),
             settings,
             i_bda,
             filters,
@@ -231,11 +277,23 @@ impl Panoramic {
         floor_y: f64,
         out: &mut RetinaOutput,
     ) {
+        self.update_of(renderer, view.of(), pose, floor_y, out)
+    }
+
+    /// [`Panoramic::update`] from any frame (see [`ViewOf`]).
+    pub fn update_of(
+        &mut self,
+        renderer: &Renderer,
+        view: ViewOf,
+        pose: Pose2,
+        floor_y: f64,
+        out: &mut RetinaOutput,
+    ) {
         let eye = DVec3::new(pose.x, floor_y + self.rig.height, pose.z);
         out.flat_views.clear();
         out.warped.clear();
         match self.rig.optics {
-            Optics::Exact => renderer.integrate(
+            Optics::Exact => renderer.integrate_of(
                 view,
                 eye,
                 pose.heading,
@@ -306,6 +364,17 @@ impl Panoramic {
     }
 }
 
+/// The EDI retina's strip, built once and shared by every Panoramic turret.
+fn retina_strip() -> std::sync::Arc<Strip> {
+    static STRIP: std::sync::OnceLock<std::sync::Arc<Strip>> = std::sync::OnceLock::new();
+    STRIP
+        .get_or_init(|| {
+            let centers = (0..PIXELS).map(retina::pixel_azimuth).collect();
+            std::sync::Arc::new(Strip::new(centers, PIXEL_WIDTH, HALF_BAND))
+        })
+        .clone()
+}
+
 /// The two flat views of paper optics: the left one centred at +60°, the right at −60°.
 pub const VIEW_CENTERS: [f64; 2] = [VIEW_HALF_WIDTH, -VIEW_HALF_WIDTH];
 
@@ -362,7 +431,7 @@ pub fn quantize_channel(channel: f64) -> f64 {
 #[allow(clippy::too_many_arguments)]
 fn paper(
     renderer: &Renderer,
-    view: &View,
+    view: ViewOf,
     eye: DVec3,
     heading: f64,
     samples: usize,
@@ -482,8 +551,20 @@ impl LinearCamera {
         floor_y: f64,
         out: &mut LinearCameraOutput,
     ) {
+        self.update_of(renderer, view.of(), pose, floor_y, out)
+    }
+
+    /// [`LinearCamera::update`] from any frame (see [`ViewOf`]).
+    pub fn update_of(
+        &mut self,
+        renderer: &Renderer,
+        view: ViewOf,
+        pose: Pose2,
+        floor_y: f64,
+        out: &mut LinearCameraOutput,
+    ) {
         let eye = DVec3::new(pose.x, floor_y + self.rig.height, pose.z);
-        renderer.integrate(
+        renderer.integrate_of(
             view,
             eye,
             pose.heading,

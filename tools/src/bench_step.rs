@@ -26,6 +26,33 @@ pub struct Args {
     /// rendering its vision devices; the other configurations are CPU-only).
     #[arg(long, value_enum, default_value_t)]
     renderer: crate::vision::RendererKind,
+    /// Generated swarms of these sizes instead of the world (10 robots/m², regatta
+    /// controller, Panoramic turrets, N/10 light buoys): cost per step against N.
+    #[arg(long, value_delimiter = ',')]
+    robots: Vec<usize>,
+    /// Swarms: no turrets (IR proximity and ambient light only).
+    #[arg(long)]
+    ir_only: bool,
+    /// Swarms: buoys in each world instead of N/10 (the arena grows to hold them).
+    #[arg(long)]
+    buoys: Option<usize>,
+    /// Threads that sense and control (swarms: 1 unless given; the world's configurations:
+    /// every core for the parallel worlds unless given).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Swarms: simulate this many seconds per size and time them, instead of `--millis`.
+    #[arg(long)]
+    seconds: Option<f64>,
+    /// Swarms: seed of the placements.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Swarms: directory for swarm.csv and swarm.png (swarm-ir.* with `--ir-only`).
+    #[arg(long, default_value = "out/bench")]
+    out: PathBuf,
+    /// Swarms: only write each generated world to this directory (swarm-N.wbt), to run or
+    /// inspect it.
+    #[arg(long, value_name = "DIR")]
+    write_worlds: Option<PathBuf>,
 }
 
 /// Steps per second of a world over about `millis` ms; `everything` refreshes the sensors no
@@ -55,6 +82,114 @@ fn load(path: &std::path::Path) -> anyhow::Result<Compiled> {
 }
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    let threads = match args.threads {
+        Some(0) => bail!("--threads must be at least 1"),
+        Some(threads) => threads,
+        None if args.robots.is_empty() => return world_configurations(args),
+        None => 1,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("cannot start the thread pool")?;
+    pool.install(|| match args.robots.is_empty() {
+        true => world_configurations(args),
+        false => swarms(args, threads),
+    })
+}
+
+/// `--robots`: generated swarms of each size.
+fn swarms(args: Args, threads: usize) -> anyhow::Result<Outcome> {
+    use crate::bench_swarm::{measure, Budget, SwarmSpec};
+    if args.robots.contains(&0) {
+        bail!("--robots: every size must be at least 1");
+    }
+    let spec = |robots: usize| SwarmSpec {
+        robots,
+        buoys: args.buoys,
+        ir_only: args.ir_only,
+        seed: args.seed,
+    };
+    if let Some(directory) = &args.write_worlds {
+        std::fs::create_dir_all(directory)
+            .with_context(|| format!("cannot create {}", directory.display()))?;
+        for &robots in &args.robots {
+            let path = directory.join(format!(
+                "swarm-{robots}{}.wbt",
+                if args.ir_only { "-ir" } else { "" }
+            ));
+            std::fs::write(&path, crate::bench_swarm::swarm_world(&spec(robots)))
+                .with_context(|| format!("cannot write {}", path.display()))?;
+            println!("wrote {}", path.display());
+        }
+        return Ok(Outcome::Clean);
+    }
+    if args.memory_child {
+        // Peak memory of building and stepping one swarm (a fresh process per size).
+        let row = measure(
+            &spec(args.robots[0]),
+            args.seconds.map_or(
+                Budget::Wall(std::time::Duration::from_millis(args.millis)),
+                Budget::Simulated,
+            ),
+        )?;
+        let peak = crate::bench::peak_resident_bytes().unwrap_or(0);
+        println!("{peak} {}", row.steps);
+        return Ok(Outcome::Clean);
+    }
+    let budget = args.seconds.map_or(
+        Budget::Wall(std::time::Duration::from_millis(args.millis)),
+        Budget::Simulated,
+    );
+    let mut rows = Vec::new();
+    let exe = std::env::current_exe()?;
+    for &robots in &args.robots {
+        let mut row = measure(&spec(robots), budget)?;
+        // The child runs a short version: memory peaks once every buffer has grown.
+        let mut child = std::process::Command::new(&exe);
+        child.args([
+            "bench",
+            "step",
+            "--memory-child",
+            "--millis",
+            "200",
+            "--threads",
+            &threads.to_string(),
+            "--seed",
+            &args.seed.to_string(),
+            "--robots",
+            &robots.to_string(),
+        ]);
+        if args.ir_only {
+            child.arg("--ir-only");
+        }
+        if let Some(buoys) = args.buoys {
+            child.args(["--buoys", &buoys.to_string()]);
+        }
+        let output = child.output()?;
+        row.peak_bytes = String::from_utf8_lossy(&output.stdout)
+            .split_whitespace()
+            .next()
+            .and_then(|s| s.parse().ok());
+        eprintln!(
+            "{robots} robots: {:.1} steps/s ({} steps in {:.2} s)",
+            row.steps_per_second(),
+            row.steps,
+            row.seconds
+        );
+        rows.push(row);
+    }
+    crate::bench_swarm::print_table(&rows, threads, args.ir_only);
+    if let Some((slope, from, to)) = crate::bench_swarm::fitted_exponent(&rows) {
+        println!("fitted exponent {from}→{to}: cost per step ∝ N^{slope:.2}");
+    }
+    let (csv, png) = crate::bench_swarm::write_outputs(&args.out, &rows, threads, args.ir_only)?;
+    println!("wrote {} and {}", csv.display(), png.display());
+    Ok(Outcome::Clean)
+}
+
+/// The world as written, and its variants.
+fn world_configurations(args: Args) -> anyhow::Result<Outcome> {
     if args.memory_child {
         let compiled = load(&args.world)?;
         let mut simulation = Simulation::new(&compiled, None)?;

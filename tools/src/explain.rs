@@ -94,72 +94,67 @@ pub fn explain(name: &str, loaded: &crate::world::Loaded) -> String {
     let sky = graph.background.sky;
     let _ = writeln!(out, "  background sky {} {} {}", sky[0], sky[1], sky[2]);
     let _ = writeln!(out, "\nsensor rig: {} robot(s)", rig.robots.len());
-    for robot in &rig.robots {
-        let _ = writeln!(
-            out,
-            "  {} at x {:.3} z {:.3}, heading {:.1}°: wheels r {} axle {}, body r {}, controller \"{}\"{}",
-            robot.name,
-            robot.start.x,
-            robot.start.z,
-            robot.start.heading.to_degrees(),
-            mm(robot.wheel_radius),
-            mm(robot.axle_length),
-            mm(robot.body_radius),
-            robot.controller,
-            if robot.controller_args.is_empty() { String::new() } else { format!(" {:?}", robot.controller_args) }
-        );
-        if let Some(ir) = robot.distance_sensors.first() {
+    // Robots alike but for their name and place are described once, as a group: a swarm's
+    // rig stays readable.
+    let mut groups: Vec<(String, String, Vec<usize>)> = Vec::new();
+    let mut by_description: std::collections::HashMap<String, usize> = Default::default();
+    for (index, robot) in rig.robots.iter().enumerate() {
+        let kind = robot_kind(&loaded.checked.scene, robot);
+        let description = robot_description(robot);
+        let key = format!("{kind}\n{description}");
+        match by_description.get(&key) {
+            Some(&group) => groups[group].2.push(index),
+            None => {
+                by_description.insert(key, groups.len());
+                groups.push((kind, description, vec![index]));
+            }
+        }
+    }
+    for (kind, description, members) in &groups {
+        let (first, rest) = description.split_once('\n').unwrap_or((description, ""));
+        if let [only] = members[..] {
+            let robot = &rig.robots[only];
             let _ = writeln!(
                 out,
-                "    {} IR proximity sensors: {} rays over {:.0}°, range {}, every {} ms",
-                robot.distance_sensors.len(),
-                ir.rays,
-                ir.aperture.to_degrees(),
-                mm(ir.range),
-                ir.period * 1000.0
+                "  {} at x {:.3} z {:.3}, heading {:.1}°: {first}",
+                robot.name,
+                robot.start.x,
+                robot.start.z,
+                robot.start.heading.to_degrees(),
             );
-        }
-        if !robot.light_sensors.is_empty() {
+        } else {
+            let robots: Vec<_> = members.iter().map(|&i| &rig.robots[i]).collect();
+            let span = |value: &dyn Fn(&&regatta_runtime::compile::rig::RobotRig) -> f64| {
+                robots
+                    .iter()
+                    .map(value)
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                        (lo.min(v), hi.max(v))
+                    })
+            };
+            let (x0, x1) = span(&|r| r.start.x);
+            let (z0, z1) = span(&|r| r.start.z);
+            let names = if robots.len() > 4 {
+                format!(
+                    "{}, {}, … {}",
+                    robots[0].name,
+                    robots[1].name,
+                    robots[robots.len() - 1].name
+                )
+            } else {
+                robots
+                    .iter()
+                    .map(|r| r.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
             let _ = writeln!(
                 out,
-                "    {} ambient light sensors",
-                robot.light_sensors.len()
+                "  {} × {kind} ({names}) within x {x0:.3}…{x1:.3} z {z0:.3}…{z1:.3}: {first}",
+                robots.len(),
             );
         }
-        match &robot.turret {
-            Some(TurretRig::Panoramic(p)) => {
-                let filters: Vec<&str> = p.filters.iter().map(|k| k.name()).collect();
-                let _ = writeln!(
-                    out,
-                    "    PanoramicTurret \"{}\" at {}: {} optics, samples {}, stride {}, filters [{}], λ {}, bandpass λ {}/{}, {} bits, I_bda {}, region of interest {}…{}",
-                    p.name,
-                    mm(p.height),
-                    if p.optics == Optics::Paper { "paper" } else { "exact" },
-                    p.samples,
-                    p.stride,
-                    filters.join(", "),
-                    p.lambda,
-                    p.bandpass.0,
-                    p.bandpass.1,
-                    p.bits,
-                    p.i_bda.map_or("calibrated".to_owned(), |v| v.to_string()),
-                    p.roi.0,
-                    p.roi.1
-                );
-            }
-            Some(TurretRig::Linear(c)) => {
-                let _ = writeln!(
-                    out,
-                    "    LinearCamera \"{}\" at {}: {} pixels over {:.1}°, {} bits",
-                    c.name,
-                    mm(c.height),
-                    c.pixels,
-                    c.field_of_view.to_degrees(),
-                    c.bits
-                );
-            }
-            None => {}
-        }
+        out.push_str(rest);
     }
     let _ = writeln!(out, "\nplan");
     let renderer = match plan.renderer {
@@ -192,10 +187,33 @@ pub fn explain(name: &str, loaded: &crate::world::Loaded) -> String {
         let _ = writeln!(out, "  skipped: nothing");
     } else {
         let _ = writeln!(out, "  skipped:");
+        // Many things skipped for one reason (a swarm's switched-off lamps) make one line.
+        let mut reasons: Vec<(&str, Vec<&str>)> = Vec::new();
         for skipped in &plan.skipped {
-            let _ = writeln!(out, "    - {}: {}", skipped.what, skipped.why);
+            match reasons.iter_mut().find(|(why, _)| *why == skipped.why) {
+                Some((_, whats)) => whats.push(&skipped.what),
+                None => reasons.push((&skipped.why, vec![&skipped.what])),
+            }
+        }
+        for (why, whats) in reasons {
+            if whats.len() > 3 {
+                let _ = writeln!(
+                    out,
+                    "    - {} things ({}, {}, … {}): {why}",
+                    whats.len(),
+                    whats[0],
+                    whats[1],
+                    whats[whats.len() - 1]
+                );
+            } else {
+                for what in whats {
+                    let _ = writeln!(out, "    - {what}: {why}");
+                }
+            }
         }
     }
+    // Filters left off, robots with the same ones together.
+    let mut off_groups: Vec<(String, Vec<&str>)> = Vec::new();
     for robot in &rig.robots {
         if let Some(TurretRig::Panoramic(p)) = &robot.turret {
             let off: Vec<&str> = regatta_runtime::retina::FilterKind::ALL
@@ -203,15 +221,113 @@ pub fn explain(name: &str, loaded: &crate::world::Loaded) -> String {
                 .filter(|k| !p.filters.contains(**k))
                 .map(|k| k.name())
                 .collect();
-            if !off.is_empty() {
-                let _ = writeln!(
-                    out,
-                    "    - filters {} of {}: not enabled",
-                    off.join(", "),
-                    robot.name
-                );
+            if off.is_empty() {
+                continue;
+            }
+            let off = off.join(", ");
+            match off_groups.iter_mut().find(|(o, _)| *o == off) {
+                Some((_, names)) => names.push(&robot.name),
+                None => off_groups.push((off, vec![&robot.name])),
             }
         }
+    }
+    for (off, names) in off_groups {
+        let whose = match names[..] {
+            [one] => one.to_owned(),
+            [first, .., last] => format!("{} robots ({first} … {last})", names.len()),
+            [] => continue,
+        };
+        let _ = writeln!(out, "    - filters {off} of {whose}: not enabled");
+    }
+    out
+}
+
+/// What a robot is, for grouping: its PROTO (or node type) and what its turret is.
+fn robot_kind(
+    scene: &regatta_schema::Scene,
+    robot: &regatta_runtime::compile::rig::RobotRig,
+) -> String {
+    let node = scene.node(robot.node);
+    let name = node
+        .proto_names
+        .last()
+        .cloned()
+        .unwrap_or_else(|| scene.spec(robot.node).name.to_string());
+    match &robot.turret {
+        Some(TurretRig::Panoramic(_)) => format!("{name} with PanoramicTurret"),
+        Some(TurretRig::Linear(_)) => format!("{name} with LinearCamera"),
+        None => name,
+    }
+}
+
+/// Everything about a robot but its name and place: the rest of its first line, then its
+/// devices' lines.
+fn robot_description(robot: &regatta_runtime::compile::rig::RobotRig) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "wheels r {} axle {}, body r {}, controller \"{}\"{}",
+        mm(robot.wheel_radius),
+        mm(robot.axle_length),
+        mm(robot.body_radius),
+        robot.controller,
+        if robot.controller_args.is_empty() {
+            String::new()
+        } else {
+            format!(" {:?}", robot.controller_args)
+        }
+    );
+    if let Some(ir) = robot.distance_sensors.first() {
+        let _ = writeln!(
+            out,
+            "    {} IR proximity sensors: {} rays over {:.0}°, range {}, every {} ms",
+            robot.distance_sensors.len(),
+            ir.rays,
+            ir.aperture.to_degrees(),
+            mm(ir.range),
+            ir.period * 1000.0
+        );
+    }
+    if !robot.light_sensors.is_empty() {
+        let _ = writeln!(
+            out,
+            "    {} ambient light sensors",
+            robot.light_sensors.len()
+        );
+    }
+    match &robot.turret {
+        Some(TurretRig::Panoramic(p)) => {
+            let filters: Vec<&str> = p.filters.iter().map(|k| k.name()).collect();
+            let _ = writeln!(
+                out,
+                "    PanoramicTurret \"{}\" at {}: {} optics, samples {}, stride {}, filters [{}], λ {}, bandpass λ {}/{}, {} bits, I_bda {}, region of interest {}…{}",
+                p.name,
+                mm(p.height),
+                if p.optics == Optics::Paper { "paper" } else { "exact" },
+                p.samples,
+                p.stride,
+                filters.join(", "),
+                p.lambda,
+                p.bandpass.0,
+                p.bandpass.1,
+                p.bits,
+                p.i_bda.map_or("calibrated".to_owned(), |v| v.to_string()),
+                p.roi.0,
+                p.roi.1
+            );
+        }
+        Some(TurretRig::Linear(c)) => {
+            let _ = writeln!(
+                out,
+                "    LinearCamera \"{}\" at {}: {} pixels over {:.1}°, {} bits",
+                c.name,
+                mm(c.height),
+                c.pixels,
+                c.field_of_view.to_degrees(),
+                c.bits
+            );
+        }
+        None => {}
     }
     out
 }

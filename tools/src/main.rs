@@ -6,6 +6,7 @@ mod batch;
 mod bench;
 mod bench_retina;
 mod bench_step;
+mod bench_swarm;
 mod check;
 mod evolve;
 mod explain;

@@ -36,6 +36,10 @@ pub struct Args {
     /// What renders vision devices.
     #[arg(long, value_enum, default_value_t)]
     renderer: crate::vision::RendererKind,
+    /// Threads that sense and control the robots (default: every core). The log is the
+    /// same for any number.
+    #[arg(long)]
+    threads: Option<usize>,
     #[command(flatten)]
     controllers: crate::webots::ControllerOverride,
     /// Print the run as one JSON object (docs/run.schema.json) instead of text.
@@ -51,6 +55,18 @@ pub(crate) fn parse_fitness(text: &str) -> Result<regatta_evolve::Fitness, Strin
 }
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
+    match args.threads {
+        Some(0) => anyhow::bail!("--threads must be at least 1"),
+        Some(threads) => rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .context("cannot start the thread pool")?
+            .install(|| run_here(args, color)),
+        None => run_here(args, color),
+    }
+}
+
+fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
     let mut loaded = crate::world::load(&args.world, &args.options, color)?;
     crate::webots::refuse_unbuilt_robots(&loaded)?;
     crate::webots::resolve_controllers(

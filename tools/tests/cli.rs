@@ -278,6 +278,94 @@ fn logs_are_byte_identical_and_replay_verifies() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// A swarm with retinas logs the same bytes on 1 thread and on 4 (`RAYON_NUM_THREADS`), and
+/// with `--threads 2`; the bench writes the swarm it measures.
+#[test]
+fn a_swarm_logs_the_same_bytes_on_any_number_of_threads() {
+    let dir = temp_dir("threads");
+    let written = regatta()
+        .args(["bench", "step", "--robots", "30", "--write-worlds"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(
+        written.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&written.stderr)
+    );
+    let world = dir.join("swarm-30.wbt");
+    let run = |name: &str, threads: Option<&str>, flag: Option<&str>| {
+        let log = dir.join(name);
+        let mut command = regatta();
+        command
+            .args(["run", "--steps", "40", "--log"])
+            .arg(&log)
+            .arg(&world);
+        if let Some(threads) = threads {
+            command.env("RAYON_NUM_THREADS", threads);
+        }
+        if let Some(flag) = flag {
+            command.args(["--threads", flag]);
+        }
+        let output = command.output().unwrap();
+        assert_eq!(
+            output.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        std::fs::read(log).unwrap()
+    };
+    let one = run("one.mcap", Some("1"), None);
+    assert!(one.len() > 10_000);
+    assert!(
+        one == run("four.mcap", Some("4"), None),
+        "1 and 4 threads differ"
+    );
+    assert!(
+        one == run("two.mcap", None, Some("2")),
+        "--threads 2 differs"
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// `bench step --robots` measures generated swarms: a table, a CSV and a PNG.
+#[test]
+fn bench_step_measures_swarms_and_plots_them() {
+    let dir = temp_dir("bench-swarm");
+    let output = regatta()
+        .args([
+            "bench",
+            "step",
+            "--robots",
+            "1,12",
+            "--ir-only",
+            "--millis",
+            "20",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{text}{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        text.contains("robot-steps/s") && text.contains("fitted exponent 1→12"),
+        "{text}"
+    );
+    let csv = std::fs::read_to_string(dir.join("swarm-ir.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 3, "{csv}");
+    let png = std::fs::read(dir.join("swarm-ir.png")).unwrap();
+    assert!(png.starts_with(b"\x89PNG"));
+    std::fs::remove_dir_all(dir).ok();
+}
+
 #[test]
 fn exported_csv_has_a_header_and_a_row_per_pose() {
     let dir = temp_dir("export");

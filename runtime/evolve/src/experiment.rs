@@ -405,12 +405,11 @@ impl Observer {
                         steps: contacts.steps,
                         time_s: contacts.steps as f64 * simulation.time_step,
                         longest_s: contacts.longest,
-                        with: names
+                        with: contacts
+                            .per_obstacle
                             .iter()
-                            .zip(&contacts.per_obstacle)
-                            .filter(|(_, &n)| n > 0)
-                            .map(|(name, &n)| ObstacleContacts {
-                                obstacle: name.clone(),
+                            .map(|&(obstacle, n)| ObstacleContacts {
+                                obstacle: names[obstacle as usize].clone(),
                                 contacts: n,
                             })
                             .collect(),

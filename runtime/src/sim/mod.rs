@@ -3,6 +3,7 @@
 //! kinematics and collisions run. All randomness comes from the run's seed, one stream per
 //! robot and per sensor; robots are visited in file order; nothing depends on wall time.
 
+mod broad_phase;
 pub mod kinematics;
 pub mod noise;
 pub mod sensors;
@@ -16,10 +17,11 @@ use crate::controllers;
 use crate::khepera::{
     Controller, Khepera, KheperaError, LedAction, LinearCameraTurret, PanoramicTurret, Senses,
 };
-use crate::optics::{LinearCamera, LinearCameraOutput, Panoramic, Renderer, RetinaOutput};
+use crate::optics::{LinearCamera, LinearCameraOutput, Panoramic, Renderer, RetinaOutput, ViewOf};
 use crate::render::Poses;
 use crate::retina::FilterKind;
 use crate::vision::{VisionBackend, VisionError, VisionRequest, WorldInstance};
+use broad_phase::BroadPhase;
 use noise::{kind, Stream};
 use world2d::{Footprint, Slab};
 
@@ -66,20 +68,40 @@ pub struct Contacts {
     /// Longest unbroken contact (s).
     pub longest: f64,
     current: f64,
-    /// Contact events per obstacle (static obstacles, then robots).
-    pub per_obstacle: Vec<u64>,
-    touching: Vec<bool>,
+    /// Contact events per obstacle, for the obstacles ever touched, by obstacle (static
+    /// obstacles are numbered first, then robots): kept sparse, so that a swarm's table grows
+    /// with its contacts, not with the square of its size.
+    pub per_obstacle: Vec<(u32, u64)>,
+    /// The obstacles touched at the end of the last step, ascending.
+    touching: Vec<u32>,
 }
 
 impl Contacts {
     /// Whether the robot ended the last step touching something.
     pub fn is_touching(&self) -> bool {
-        self.touching.iter().any(|&t| t)
+        !self.touching.is_empty()
     }
 
-    /// What it ended the last step touching, per obstacle (in
-    /// [`Simulation::obstacle_names`] order).
-    pub fn touching(&self) -> &[bool] {
+    /// Contact events with one obstacle (static obstacles first, then robots).
+    pub fn events_with(&self, obstacle: usize) -> u64 {
+        self.per_obstacle
+            .binary_search_by_key(&(obstacle as u32), |&(k, _)| k)
+            .map_or(0, |i| self.per_obstacle[i].1)
+    }
+
+    fn count_event(&mut self, obstacle: u32) {
+        match self
+            .per_obstacle
+            .binary_search_by_key(&obstacle, |&(k, _)| k)
+        {
+            Ok(i) => self.per_obstacle[i].1 += 1,
+            Err(i) => self.per_obstacle.insert(i, (obstacle, 1)),
+        }
+    }
+
+    /// The obstacles it ended the last step touching, ascending (indices into
+    /// [`Simulation::obstacle_names`]).
+    pub fn touching(&self) -> &[u32] {
         &self.touching
     }
 }
@@ -91,7 +113,8 @@ pub struct Visits {
     pub sequence: Vec<usize>,
     /// When each entry of `sequence` happened (simulated s, the end of the step).
     pub times: Vec<f64>,
-    inside: Vec<bool>,
+    /// The landmarks whose visit disc holds the robot now, ascending.
+    inside: Vec<u32>,
 }
 
 impl Visits {
@@ -149,6 +172,14 @@ pub struct RobotState {
     pub last_controller_error: Option<String>,
     pub contacts: Contacts,
     pub visits: Visits,
+    /// Working lists, kept from step to step (the robot's own, so that robots can be sensed
+    /// side by side): static obstacles and robots near enough for the IR sensors, obstacles
+    /// touched in this step.
+    nearby: Vec<u32>,
+    nearby_robots: Vec<u32>,
+    touched: Vec<u32>,
+    /// A batched backend is to render this robot's vision device in this step.
+    vision_requested: bool,
     /// Where and when the robot left every floor (it stays there, fallen off the world).
     pub fell: Option<Fall>,
 }
@@ -161,6 +192,16 @@ pub struct Fall {
 }
 
 impl RobotState {
+    /// Whether its vision device is read and due at `t` (without moving its due time).
+    fn vision_due(&self, t: f64) -> bool {
+        let next = match (&self.panoramic, &self.linear_camera) {
+            (Some(turret), _) => (turret.due, turret.model.rig.period),
+            (None, Some(camera)) => (camera.due, camera.model.rig.period),
+            (None, None) => return false,
+        };
+        self.senses.vision && (next.1 <= 0.0 || t + 1e-12 >= next.0)
+    }
+
     /// The encoder counters (pulses), as the robot reports them.
     pub fn counters(&self, rig: &RobotRig) -> (i32, i32) {
         let pulses = |travel: f64, offset: i64| {
@@ -184,6 +225,8 @@ pub struct Simulation<'c> {
     pub vision_error: Option<VisionError>,
     vision_buffers: Vec<Vec<f64>>,
     pub slab: Slab,
+    /// Grids over the floor: what pairs bodies without testing every pair.
+    broad: BroadPhase,
     pub robots: Vec<RobotState>,
     /// Simulated time (s) and steps done.
     pub time: f64,
@@ -194,6 +237,40 @@ pub struct Simulation<'c> {
     pub always_sensed: Senses,
     /// Buffers a step fills and the next reuses: stepping allocates nothing once warm.
     scratch: StepScratch,
+    /// Wall time spent in each phase, when profiling (`regatta bench step`); never read by
+    /// the simulation itself, so it changes no result.
+    profile: Option<PhaseTimes>,
+}
+
+/// Wall time spent in each phase of the steps run while profiling.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// Sensors: IR, ambient light, vision.
+    pub sense: std::time::Duration,
+    /// Controllers.
+    pub control: std::time::Duration,
+    /// Wheels moved along their arcs.
+    pub kinematics: std::time::Duration,
+    /// Bodies pushed apart, contacts and visits counted.
+    pub collisions: std::time::Duration,
+}
+
+/// Times a phase when profiling.
+struct PhaseClock(Option<std::time::Instant>);
+
+impl PhaseClock {
+    fn start(on: bool) -> PhaseClock {
+        PhaseClock(on.then(std::time::Instant::now))
+    }
+
+    /// Adds the time since the last lap to `slot` and starts the next lap.
+    fn lap(&mut self, slot: Option<&mut std::time::Duration>) {
+        if let (Some(started), Some(slot)) = (self.0, slot) {
+            let now = std::time::Instant::now();
+            *slot += now - started;
+            self.0 = Some(now);
+        }
+    }
 }
 
 /// A step's working buffers.
@@ -205,10 +282,18 @@ struct StepScratch {
     lights: Vec<crate::render::WorldLight>,
     lights_move: bool,
     requests: Vec<VisionRequest>,
-    /// One robot's obstacles its IR sensors could see.
-    nearby: Vec<u32>,
     speeds: Vec<(f64, f64)>,
-    touched: Vec<Vec<bool>>,
+    /// Collision candidates of one robot.
+    candidates: Vec<u32>,
+    /// How far each robot was pushed since the robots' grid was filed (an upper bound).
+    drift: Vec<f64>,
+    /// One robot's landmarks inside at the last step.
+    was_inside: Vec<u32>,
+    /// Where each robot was before the sub-step, and which go back there.
+    before: Vec<DVec2>,
+    marked: Vec<bool>,
+    /// The world placed once for every viewer of the step (column renderer).
+    frame: Option<crate::render::column::ColumnFrame>,
 }
 
 impl<'c> Simulation<'c> {
@@ -222,8 +307,7 @@ impl<'c> Simulation<'c> {
         let slab = Slab::new(&compiled.graph, &compiled.rig);
         let renderer = (compiled.plan.renderer != crate::compile::plan::RendererChoice::None)
             .then(|| Renderer::new(&compiled.graph, &compiled.plan, false));
-        let landmarks = compiled.landmarks.len();
-        let obstacles = slab.obstacles.len() + compiled.rig.robots.len();
+        let broad = BroadPhase::new(compiled, &slab);
         let mut robots = Vec::with_capacity(compiled.rig.robots.len());
         for (index, rig) in compiled.rig.robots.iter().enumerate() {
             let controller =
@@ -272,16 +356,22 @@ impl<'c> Simulation<'c> {
                 controller: Some(controller),
                 controller_errors: 0,
                 last_controller_error: None,
+                // Room for a few contacts and visits at once: a step allocates only when a
+                // record outgrows it (amortised doubling), never as routine.
                 contacts: Contacts {
-                    per_obstacle: vec![0; obstacles],
-                    touching: vec![false; obstacles],
+                    per_obstacle: Vec::with_capacity(8),
+                    touching: Vec::with_capacity(8),
                     ..Contacts::default()
                 },
                 visits: Visits {
-                    sequence: Vec::new(),
-                    times: Vec::new(),
-                    inside: vec![false; landmarks],
+                    sequence: Vec::with_capacity(64),
+                    times: Vec::with_capacity(64),
+                    inside: Vec::with_capacity(4),
                 },
+                nearby: Vec::with_capacity(16),
+                nearby_robots: Vec::with_capacity(32),
+                touched: Vec::with_capacity(8),
+                vision_requested: false,
                 fell: None,
             });
         }
@@ -292,6 +382,7 @@ impl<'c> Simulation<'c> {
             vision_error: None,
             vision_buffers: Vec::new(),
             slab,
+            broad,
             robots,
             time: 0.0,
             steps: 0,
@@ -299,6 +390,7 @@ impl<'c> Simulation<'c> {
             seed,
             always_sensed: Senses::NONE,
             scratch: StepScratch::default(),
+            profile: None,
         };
         let plan = &compiled.plan;
         simulation.scratch.lights_move = plan
@@ -321,6 +413,16 @@ impl<'c> Simulation<'c> {
     /// records. Other robots' readings and noise streams do not change.
     pub fn sense_everything(&mut self) {
         self.always_sensed = Senses::ALL;
+    }
+
+    /// Starts (or stops) adding up the wall time of each phase of the steps that follow.
+    pub fn set_profiling(&mut self, on: bool) {
+        self.profile = on.then(PhaseTimes::default);
+    }
+
+    /// The wall time of each phase since profiling started.
+    pub fn phase_times(&self) -> Option<PhaseTimes> {
+        self.profile
     }
 
     /// Replaces a robot's controller (a library user's own).
@@ -362,16 +464,19 @@ impl<'c> Simulation<'c> {
                 camera.sensed = vision;
             }
         }
+        let mut clock = PhaseClock::start(self.profile.is_some());
         self.update_sensors(t);
+        clock.lap(self.profile.as_mut().map(|p| &mut p.sense));
     }
 
     /// The second half of a step: runs the built-in controllers, moves the robots and
     /// advances time.
     pub fn act(&mut self) {
+        let mut clock = PhaseClock::start(self.profile.is_some());
         let rigs = &self.compiled.rig.robots;
-        for (index, robot) in self.robots.iter_mut().enumerate() {
+        let control = |index: usize, robot: &mut RobotState| {
             let Some(mut controller) = robot.controller.take() else {
-                continue;
+                return;
             };
             let mut io = SimulatedKhepera {
                 robot,
@@ -383,12 +488,26 @@ impl<'c> Simulation<'c> {
                 robot.last_controller_error = Some(error.to_string());
             }
             robot.controller = Some(controller);
+        };
+        // Each controller drives its own robot only: side by side, the same results.
+        if parallel(&self.robots) {
+            use rayon::prelude::*;
+            self.robots
+                .par_iter_mut()
+                .enumerate()
+                .for_each(|(index, robot)| control(index, robot));
+        } else {
+            for (index, robot) in self.robots.iter_mut().enumerate() {
+                control(index, robot);
+            }
         }
-        self.move_robots();
+        clock.lap(self.profile.as_mut().map(|p| &mut p.control));
+        self.move_robots(&mut clock);
         self.steps += 1;
         self.time = self.steps as f64 * self.time_step;
         self.track_falls();
         self.track_visits();
+        clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));
     }
 
     /// A robot whose centre has left every floor it started on has fallen off the world: the
@@ -451,7 +570,6 @@ impl<'c> Simulation<'c> {
             lights,
             lights_move,
             requests,
-            nearby,
             ..
         } = scratch;
         poses.poses.clear();
@@ -479,101 +597,58 @@ impl<'c> Simulation<'c> {
         {
             *lights = crate::render::world_lights(&compiled.graph, &compiled.plan, poses);
         }
-        let lights = &*lights;
-        requests.clear();
-        for (index, robot) in self.robots.iter_mut().enumerate() {
-            let rig = &compiled.rig.robots[index];
-            let mut nearby_found = false;
-            let senses = robot.senses;
-            let proximity_sensors = if senses.proximity { 8 } else { 0 };
-            for (s, sensor) in rig
-                .distance_sensors
-                .iter()
+        // Where every robot is, once per step, for every robot's IR sensors.
+        if self.robots.len() > 1 && self.robots.iter().any(|r| r.senses.proximity) {
+            self.broad.file_robots(placements.len(), |i| {
+                DVec2::new(placements[i].x, placements[i].z)
+            });
+        }
+        let renderer = self.renderer.as_ref().filter(|_| self.vision.is_none());
+        // The world placed once, for every robot's vision device, when one is due.
+        let frame = &mut scratch.frame;
+        match renderer {
+            Some(renderer) if self.robots.iter().any(|r| r.vision_due(t)) => {
+                renderer.prepare_shared(&compiled.plan, poses, frame)
+            }
+            _ => {}
+        }
+        let shared = SenseShared {
+            compiled,
+            slab: &self.slab,
+            broad: &self.broad,
+            placements,
+            lights,
+            poses,
+            renderer,
+            frame: frame.as_ref(),
+            batched: self.vision.is_some(),
+            t,
+        };
+        // Each robot reads only what is shared and writes only itself: side by side when
+        // there is enough work, and the same results either way.
+        if parallel(&self.robots) {
+            use rayon::prelude::*;
+            self.robots
+                .par_iter_mut()
                 .enumerate()
-                .take(proximity_sensors)
-            {
-                if due(&mut robot.ir_due[s], t, sensor.period) {
-                    if !nearby_found {
-                        sensors::nearby_obstacles(
-                            &self.slab,
-                            &placements[index],
-                            &rig.distance_sensors,
-                            nearby,
-                        );
-                        nearby_found = true;
-                    }
-                    robot.updated.proximity = true;
-                    robot.proximity[s] = sensors::proximity(
-                        &self.slab,
-                        nearby,
-                        placements,
-                        index,
-                        &compiled.rig.robots,
-                        sensor,
-                        &mut robot.ir_streams[s],
-                    );
-                }
-            }
-            let ambient_sensors = if senses.ambient { 8 } else { 0 };
-            for (s, sensor) in rig.light_sensors.iter().enumerate().take(ambient_sensors) {
-                if due(&mut robot.ambient_due[s], t, sensor.period) {
-                    robot.updated.ambient = true;
-                    robot.ambient[s] = sensors::ambient(
-                        lights,
-                        &self.slab,
-                        placements,
-                        index,
-                        sensor,
-                        &mut robot.ambient_streams[s],
-                    );
-                }
-            }
-            if !senses.vision {
-                continue;
-            }
-            if self.vision.is_some() {
-                let due_now = match (&mut robot.panoramic, &mut robot.linear_camera) {
-                    (Some(turret), _) => due(&mut turret.due, t, turret.model.rig.period),
-                    (None, Some(camera)) => due(&mut camera.due, t, camera.model.rig.period),
-                    (None, None) => false,
-                };
-                if due_now {
-                    requests.push(VisionRequest {
-                        instance: 0,
-                        robot: index,
-                    });
-                }
-                continue;
-            }
-            if let Some(renderer) = &self.renderer {
-                if let Some(turret) = &mut robot.panoramic {
-                    if due(&mut turret.due, t, turret.model.rig.period) {
-                        robot.updated.vision = true;
-                        let view = renderer.view(&compiled.plan, poses, index);
-                        turret.model.update(
-                            renderer,
-                            &view,
-                            robot.pose,
-                            rig.floor_y,
-                            &mut turret.output,
-                        );
-                    }
-                }
-                if let Some(camera) = &mut robot.linear_camera {
-                    if due(&mut camera.due, t, camera.model.rig.period) {
-                        robot.updated.vision = true;
-                        let view = renderer.view(&compiled.plan, poses, index);
-                        camera.model.update(
-                            renderer,
-                            &view,
-                            robot.pose,
-                            rig.floor_y,
-                            &mut camera.output,
-                        );
-                    }
-                }
+                .with_max_len(1)
+                .for_each(|(index, robot)| shared.sense(index, robot));
+        } else {
+            for (index, robot) in self.robots.iter_mut().enumerate() {
+                shared.sense(index, robot);
             }
         }
+        requests.clear();
+        if !shared.batched {
+            return;
+        }
+        requests.extend(
+            self.robots
+                .iter()
+                .enumerate()
+                .filter(|(_, r)| r.vision_requested)
+                .map(|(robot, _)| VisionRequest { instance: 0, robot }),
+        );
         if requests.is_empty() || self.vision_error.is_some() {
             return;
         }
@@ -596,11 +671,10 @@ impl<'c> Simulation<'c> {
         }
     }
 
-    fn move_robots(&mut self) {
+    fn move_robots(&mut self, clock: &mut PhaseClock) {
         let dt = self.time_step;
         let rigs = &self.compiled.rig.robots;
         let mut speeds = std::mem::take(&mut self.scratch.speeds);
-        let mut touched = std::mem::take(&mut self.scratch.touched);
         // Wheel speeds (m/s) of every robot for this step.
         speeds.clear();
         speeds.extend(self.robots.iter_mut().zip(rigs).map(|(robot, rig)| {
@@ -625,28 +699,38 @@ impl<'c> Simulation<'c> {
             .unwrap_or(1)
             .clamp(1, MAX_SUB_STEPS);
         let h = dt / sub_steps as f64;
-        touched.resize_with(self.robots.len(), Vec::new);
-        for row in &mut touched {
-            row.clear();
-            row.resize(self.slab.obstacles.len() + rigs.len(), false);
+        for robot in &mut self.robots {
+            robot.touched.clear();
         }
         for _ in 0..sub_steps {
+            self.scratch.before.clear();
+            self.scratch
+                .before
+                .extend(self.robots.iter().map(|r| DVec2::new(r.pose.x, r.pose.z)));
             for ((robot, rig), &(left, right)) in self.robots.iter_mut().zip(rigs).zip(&speeds) {
                 robot.pose = kinematics::advance(robot.pose, left, right, rig.axle_length, h);
                 robot.travel.0 += left * h;
                 robot.travel.1 += right * h;
             }
-            self.resolve_collisions(&mut touched);
+            clock.lap(self.profile.as_mut().map(|p| &mut p.kinematics));
+            if self.resolve_collisions() {
+                self.settle();
+            }
+            clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));
         }
-        for (robot, touched) in self.robots.iter_mut().zip(&touched) {
-            let contacts = &mut robot.contacts;
-            let any = touched.iter().any(|&t| t);
-            for (k, &now) in touched.iter().enumerate() {
-                if now && !contacts.touching[k] {
-                    contacts.per_obstacle[k] += 1;
+        for robot in &mut self.robots {
+            robot.touched.sort_unstable();
+            robot.touched.dedup();
+            let RobotState {
+                contacts, touched, ..
+            } = robot;
+            let any = !touched.is_empty();
+            for &k in touched.iter() {
+                if contacts.touching.binary_search(&k).is_err() {
+                    contacts.count_event(k);
                 }
             }
-            let was = contacts.touching.iter().any(|&t| t);
+            let was = !contacts.touching.is_empty();
             if any && !was {
                 contacts.events += 1;
             }
@@ -661,44 +745,101 @@ impl<'c> Simulation<'c> {
             contacts.touching.clone_from(touched);
         }
         self.scratch.speeds = speeds;
-        self.scratch.touched = touched;
     }
 
-    /// Pushes bodies out of obstacles and out of each other.
-    fn resolve_collisions(&mut self, touched: &mut [Vec<bool>]) {
+    /// Pushes bodies out of obstacles and out of each other: up to 3 passes, each robot
+    /// against each static obstacle in order, then each pair of robots in order, every push
+    /// seen by the tests after it. The grids only leave out pairs that cannot touch, so the
+    /// pushes are those of testing every pair.
+    fn resolve_collisions(&mut self) -> bool {
         let rigs = &self.compiled.rig.robots;
         let statics = self.slab.obstacles.len();
-        for _ in 0..3 {
+        let mut candidates = std::mem::take(&mut self.scratch.candidates);
+        let mut drift = std::mem::take(&mut self.scratch.drift);
+        let max_radius = self.broad.max_radius;
+        let mut unsettled = false;
+        for pass in 0..PASSES {
             // A pass that pushes nothing leaves the next one nothing new to find.
             let mut pushed = false;
             for (index, robot) in self.robots.iter_mut().enumerate() {
                 let rig = &rigs[index];
                 let (floor, top) = (rig.floor_y, rig.floor_y + rig.body_height);
-                for (k, obstacle) in self.slab.obstacles.iter().enumerate() {
+                let reach = rig.body_radius + 1e-6;
+                // Candidates from where the robot is; asked again if pushes carry it further
+                // than SLACK from there.
+                let mut anchor = DVec2::new(robot.pose.x, robot.pose.z);
+                let (lo, hi) = broad_phase::square(anchor, reach + SLACK);
+                self.broad.statics.query(lo, hi, &mut candidates);
+                let mut next = 0;
+                while let Some(&k) = candidates.get(next) {
+                    next += 1;
+                    let center = DVec2::new(robot.pose.x, robot.pose.z);
+                    if center.distance(anchor) > SLACK {
+                        anchor = center;
+                        let (lo, hi) = broad_phase::square(anchor, reach + SLACK);
+                        self.broad.statics.query(lo, hi, &mut candidates);
+                        next = candidates.partition_point(|&c| c < k);
+                        continue;
+                    }
+                    let obstacle = &self.slab.obstacles[k as usize];
                     if obstacle.y1 <= floor + 1e-6 || obstacle.y0 >= top {
                         continue;
                     }
-                    let center = DVec2::new(robot.pose.x, robot.pose.z);
                     if let Some((depth, normal)) =
                         obstacle.shape.penetration(center, rig.body_radius)
                     {
                         let moved = center + normal * depth;
                         robot.pose.x = moved.x;
                         robot.pose.z = moved.y;
-                        touched[index][k] = true;
+                        robot.touched.push(k);
                         pushed = true;
                     } else if obstacle
                         .shape
                         .penetration(center, rig.body_radius + 1e-6)
                         .is_some()
                     {
-                        touched[index][k] = true;
+                        robot.touched.push(k);
                     }
                 }
             }
-            for a in 0..self.robots.len() {
-                for b in a + 1..self.robots.len() {
-                    let (ra, rb) = (rigs[a].body_radius, rigs[b].body_radius);
+            let count = self.robots.len();
+            if count > 1 {
+                let robots = &self.robots;
+                self.broad
+                    .file_robots(count, |i| DVec2::new(robots[i].pose.x, robots[i].pose.z));
+                drift.clear();
+                drift.resize(count, 0.0);
+            }
+            // The largest drift of any robot since the grid was filed.
+            let mut max_drift = 0.0f64;
+            for a in 0..count.saturating_sub(1) {
+                let ra = rigs[a].body_radius;
+                // Candidates b > a whose filed centre is near enough that they might touch a,
+                // allowing for SLACK of motion of a, or of anyone, before they are asked again.
+                let (mut anchor, mut drift_then) = (
+                    DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z),
+                    max_drift,
+                );
+                let query = |anchor: DVec2, drift_then: f64, out: &mut Vec<u32>| {
+                    let (lo, hi) =
+                        broad_phase::square(anchor, ra + max_radius + drift_then + SLACK);
+                    self.broad.robots.query(lo, hi, out);
+                };
+                query(anchor, drift_then, &mut candidates);
+                let mut next = candidates.partition_point(|&c| c as usize <= a);
+                let mut moved = 0.0;
+                while let Some(&b) = candidates.get(next) {
+                    next += 1;
+                    let b = b as usize;
+                    if moved + (max_drift - drift_then) > SLACK {
+                        anchor = DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z);
+                        drift_then = max_drift;
+                        moved = 0.0;
+                        query(anchor, drift_then, &mut candidates);
+                        next = candidates.partition_point(|&c| (c as usize) < b);
+                        continue;
+                    }
+                    let rb = rigs[b].body_radius;
                     let ca = DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z);
                     let cb = DVec2::new(self.robots[b].pose.x, self.robots[b].pose.z);
                     if let Some((depth, normal)) = (Footprint::Circle {
@@ -712,16 +853,97 @@ impl<'c> Simulation<'c> {
                         self.robots[a].pose.z += half.y;
                         self.robots[b].pose.x -= half.x;
                         self.robots[b].pose.z -= half.y;
-                        touched[a][statics + b] = true;
-                        touched[b][statics + a] = true;
+                        self.robots[a].touched.push((statics + b) as u32);
+                        self.robots[b].touched.push((statics + a) as u32);
                         pushed = true;
+                        // Bounds on how far each has gone since the grid was filed.
+                        let step = half.length() * (1.0 + 1e-9);
+                        drift[a] += step;
+                        drift[b] += step;
+                        moved += step;
+                        max_drift = max_drift.max(drift[a]).max(drift[b]);
                     }
                 }
+                let _ = anchor;
             }
             if !pushed {
                 break;
             }
+            // The last pass still pushed: what it left may overlap (a pressing crowd).
+            unsettled = pass + 1 == PASSES;
         }
+        self.scratch.candidates = candidates;
+        self.scratch.drift = drift;
+        unsettled
+    }
+
+    /// After the passes of a crowd: every robot still overlapping something beyond the
+    /// tolerance goes back to where it was before this sub-step (where nothing overlapped),
+    /// until nothing does. Blocked robots stay put; the others keep their motion.
+    fn settle(&mut self) {
+        let rigs = &self.compiled.rig.robots;
+        let mut candidates = std::mem::take(&mut self.scratch.candidates);
+        let mut marked = std::mem::take(&mut self.scratch.marked);
+        let max_radius = self.broad.max_radius;
+        for _ in 0..=self.robots.len() {
+            marked.clear();
+            marked.resize(self.robots.len(), false);
+            let mut any = false;
+            for (index, robot) in self.robots.iter().enumerate() {
+                let rig = &rigs[index];
+                let (floor, top) = (rig.floor_y, rig.floor_y + rig.body_height);
+                let center = DVec2::new(robot.pose.x, robot.pose.z);
+                let (lo, hi) = broad_phase::square(center, rig.body_radius);
+                self.broad.statics.query(lo, hi, &mut candidates);
+                let in_wall = candidates.iter().any(|&k| {
+                    let obstacle = &self.slab.obstacles[k as usize];
+                    !(obstacle.y1 <= floor + 1e-6 || obstacle.y0 >= top)
+                        && obstacle
+                            .shape
+                            .penetration(center, rig.body_radius)
+                            .is_some_and(|(depth, _)| depth > PENETRATION_TOLERANCE)
+                });
+                if in_wall {
+                    marked[index] = true;
+                    any = true;
+                }
+            }
+            let robots = &self.robots;
+            self.broad.file_robots(robots.len(), |i| {
+                DVec2::new(robots[i].pose.x, robots[i].pose.z)
+            });
+            for a in 0..robots.len() {
+                let ca = DVec2::new(robots[a].pose.x, robots[a].pose.z);
+                let ra = rigs[a].body_radius;
+                let (lo, hi) = broad_phase::square(ca, ra + max_radius);
+                self.broad.robots.query(lo, hi, &mut candidates);
+                for &b in candidates.iter().filter(|&&b| b as usize > a) {
+                    let b = b as usize;
+                    let cb = DVec2::new(robots[b].pose.x, robots[b].pose.z);
+                    if ca.distance(cb) < ra + rigs[b].body_radius - PENETRATION_TOLERANCE {
+                        marked[a] = true;
+                        marked[b] = true;
+                        any = true;
+                    }
+                }
+            }
+            if !any {
+                break;
+            }
+            for ((robot, &back), before) in self
+                .robots
+                .iter_mut()
+                .zip(&marked)
+                .zip(&self.scratch.before)
+            {
+                if back {
+                    robot.pose.x = before.x;
+                    robot.pose.z = before.y;
+                }
+            }
+        }
+        self.scratch.candidates = candidates;
+        self.scratch.marked = marked;
     }
 
     /// A name for everything a robot can touch, in [`Contacts::per_obstacle`] order: a buoy's
@@ -754,19 +976,174 @@ impl<'c> Simulation<'c> {
     /// Counts entries into each landmark's visit disc (its radius plus two body diameters).
     fn track_visits(&mut self) {
         let compiled = self.compiled;
+        let mut candidates = std::mem::take(&mut self.scratch.candidates);
+        let mut was = std::mem::take(&mut self.scratch.was_inside);
+        let time = self.time;
         for (robot, rig) in self.robots.iter_mut().zip(&compiled.rig.robots) {
-            for (k, landmark) in compiled.landmarks.iter().enumerate() {
+            let center = DVec2::new(robot.pose.x, robot.pose.z);
+            if compiled.landmarks.len() <= FEW_LANDMARKS {
+                // A few: each tested, as the grid would hand them (ascending).
+                candidates.clear();
+                candidates.extend(0..compiled.landmarks.len() as u32);
+            } else {
+                self.broad.landmarks.query(center, center, &mut candidates);
+            }
+            let visits = &mut robot.visits;
+            was.clear();
+            was.extend_from_slice(&visits.inside);
+            visits.inside.clear();
+            for &k in &candidates {
+                let landmark = &compiled.landmarks[k as usize];
                 let distance = DVec2::new(
                     robot.pose.x - landmark.center.x,
                     robot.pose.z - landmark.center.y,
                 )
                 .length();
-                let inside = distance <= Visits::disc_radius(landmark.radius, rig.body_radius);
-                if inside && !robot.visits.inside[k] {
-                    robot.visits.sequence.push(k);
-                    robot.visits.times.push(self.time);
+                if distance <= Visits::disc_radius(landmark.radius, rig.body_radius) {
+                    if was.binary_search(&k).is_err() {
+                        visits.sequence.push(k as usize);
+                        visits.times.push(time);
+                    }
+                    visits.inside.push(k);
                 }
-                robot.visits.inside[k] = inside;
+            }
+        }
+        self.scratch.was_inside = was;
+        self.scratch.candidates = candidates;
+    }
+}
+
+/// Whether robots are sensed and controlled side by side: with more than one thread and
+/// enough robots to share (a few robots cost less than handing them out).
+fn parallel(robots: &[RobotState]) -> bool {
+    robots.len() >= 8 && rayon::current_num_threads() > 1
+}
+
+/// Below this many landmarks, each is tested rather than looked up in the grid.
+const FEW_LANDMARKS: usize = 8;
+
+/// Collision passes in one sub-step, at most.
+const PASSES: usize = 3;
+
+/// How far a robot may move before its collision candidates are asked again (m).
+const SLACK: f64 = 0.005;
+
+/// What every robot's sensing reads in a step, shared and never written while robots sense:
+/// so robots can be sensed side by side, each writing only its own state.
+struct SenseShared<'s, 'c> {
+    compiled: &'c Compiled,
+    slab: &'s Slab,
+    broad: &'s BroadPhase,
+    placements: &'s [crate::compile::rig::Placement],
+    lights: &'s [crate::render::WorldLight],
+    poses: &'s Poses,
+    /// The CPU renderer, unless a batched backend renders vision.
+    renderer: Option<&'s Renderer<'c>>,
+    /// The step's frame, when the renderer shares one between viewers.
+    frame: Option<&'s crate::render::column::ColumnFrame>,
+    batched: bool,
+    t: f64,
+}
+
+impl SenseShared<'_, '_> {
+    /// Refreshes one robot's due sensors.
+    fn sense(&self, index: usize, robot: &mut RobotState) {
+        let (compiled, t) = (self.compiled, self.t);
+        let rig = &compiled.rig.robots[index];
+        let senses = robot.senses;
+        robot.vision_requested = false;
+        let proximity_sensors = if senses.proximity { 8 } else { 0 };
+        let mut nearby_found = false;
+        for (s, sensor) in rig
+            .distance_sensors
+            .iter()
+            .enumerate()
+            .take(proximity_sensors)
+        {
+            if !due(&mut robot.ir_due[s], t, sensor.period) {
+                continue;
+            }
+            if !nearby_found {
+                let placement = &self.placements[index];
+                sensors::nearby_obstacles(
+                    self.slab,
+                    &self.broad.statics,
+                    placement,
+                    &rig.distance_sensors,
+                    &mut robot.nearby,
+                );
+                robot.nearby_robots.clear();
+                if self.placements.len() > 1 {
+                    let reach = sensors::ir_reach(&rig.distance_sensors) + self.broad.max_radius;
+                    let (lo, hi) = broad_phase::square(DVec2::new(placement.x, placement.z), reach);
+                    self.broad.robots.query(lo, hi, &mut robot.nearby_robots);
+                }
+                nearby_found = true;
+            }
+            robot.updated.proximity = true;
+            robot.proximity[s] = sensors::proximity(
+                self.slab,
+                &robot.nearby,
+                &robot.nearby_robots,
+                self.placements,
+                index,
+                &compiled.rig.robots,
+                sensor,
+                &mut robot.ir_streams[s],
+            );
+        }
+        let ambient_sensors = if senses.ambient { 8 } else { 0 };
+        for (s, sensor) in rig.light_sensors.iter().enumerate().take(ambient_sensors) {
+            if due(&mut robot.ambient_due[s], t, sensor.period) {
+                robot.updated.ambient = true;
+                robot.ambient[s] = sensors::ambient(
+                    self.lights,
+                    self.slab,
+                    &self.broad.statics,
+                    self.placements,
+                    index,
+                    sensor,
+                    &mut robot.ambient_streams[s],
+                );
+            }
+        }
+        if !senses.vision {
+            return;
+        }
+        if self.batched {
+            robot.vision_requested = match (&mut robot.panoramic, &mut robot.linear_camera) {
+                (Some(turret), _) => due(&mut turret.due, t, turret.model.rig.period),
+                (None, Some(camera)) => due(&mut camera.due, t, camera.model.rig.period),
+                (None, None) => false,
+            };
+            return;
+        }
+        let Some(renderer) = self.renderer else {
+            return;
+        };
+        // The shared frame, or a viewer's own (the ray caster's).
+        let own;
+        let view = match self.frame {
+            Some(frame) => ViewOf::Columns(frame, Some(index)),
+            None => {
+                own = renderer.view(&compiled.plan, self.poses, index);
+                own.of()
+            }
+        };
+        if let Some(turret) = &mut robot.panoramic {
+            if due(&mut turret.due, t, turret.model.rig.period) {
+                robot.updated.vision = true;
+                turret
+                    .model
+                    .update_of(renderer, view, robot.pose, rig.floor_y, &mut turret.output);
+            }
+        }
+        if let Some(camera) = &mut robot.linear_camera {
+            if due(&mut camera.due, t, camera.model.rig.period) {
+                robot.updated.vision = true;
+                camera
+                    .model
+                    .update_of(renderer, view, robot.pose, rig.floor_y, &mut camera.output);
             }
         }
     }

@@ -21,6 +21,7 @@ use glam::{DVec2, DVec3};
 
 use super::noise::Stream;
 use super::world2d::{Footprint, Slab};
+use crate::broad::Grid;
 use crate::compile::graph::LightKind;
 use crate::compile::rig::{DistanceSensorRig, LightSensorRig, Placement, RobotRig};
 use crate::render::{light_at, WorldLight};
@@ -46,37 +47,46 @@ pub fn lookup(table: &[[f64; 3]], x: f64) -> (f64, f64) {
     (last[1], last[2])
 }
 
-/// The slab's obstacles that any of a robot's IR sensors could see: those within the
-/// farthest sensor's offset plus its range of the robot's centre (a superset of what each
-/// sensor's own test keeps, by the triangle inequality), into `nearby`.
-pub fn nearby_obstacles(
-    slab: &Slab,
-    placement: &Placement,
-    sensors: &[DistanceSensorRig],
-    nearby: &mut Vec<u32>,
-) {
-    nearby.clear();
+/// How far from a robot's centre any of its IR sensors reaches: the farthest sensor's offset
+/// plus its range (widened for rounding).
+pub fn ir_reach(sensors: &[DistanceSensorRig]) -> f64 {
     let reach = sensors
         .iter()
         .map(|s| DVec2::new(s.position.x, s.position.z).length() + s.range)
         .fold(0.0f64, f64::max);
-    let reach = reach * (1.0 + 1e-9) + 1e-9;
+    reach * (1.0 + 1e-9) + 1e-9
+}
+
+/// The slab's obstacles that any of a robot's IR sensors could see: those within
+/// [`ir_reach`] of the robot's centre (a superset of what each sensor's own test keeps, by the
+/// triangle inequality), ascending, into `nearby`; `grid` files the slab's obstacles.
+pub fn nearby_obstacles(
+    slab: &Slab,
+    grid: &Grid,
+    placement: &Placement,
+    sensors: &[DistanceSensorRig],
+    nearby: &mut Vec<u32>,
+) {
+    let reach = ir_reach(sensors);
     let center = DVec2::new(placement.x, placement.z);
-    nearby.extend(
-        slab.obstacles
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| o.shape.distance(center) <= reach)
-            .map(|(index, _)| index as u32),
-    );
+    if slab.obstacles.len() <= 16 {
+        // A few: each tested (the same list the grid would give).
+        nearby.clear();
+        nearby.extend(0..slab.obstacles.len() as u32);
+    } else {
+        grid.query(center - reach, center + reach, nearby);
+    }
+    nearby.retain(|&index| slab.obstacles[index as usize].shape.distance(center) <= reach);
 }
 
 /// One proximity reading, 0…1023; `nearby` lists the obstacles worth testing (see
-/// [`nearby_obstacles`]).
+/// [`nearby_obstacles`]) and `robots` the other robots that may be within reach, ascending (a
+/// superset of those within [`ir_reach`] plus their body radius).
 #[allow(clippy::too_many_arguments)]
 pub fn proximity(
     slab: &Slab,
     nearby: &[u32],
+    robots: &[u32],
     placements: &[Placement],
     robot: usize,
     rigs: &[RobotRig],
@@ -114,7 +124,13 @@ pub fn proximity(
             && height <= place.floor_y + rigs[other].body_height
             && DVec2::new(place.x, place.z).distance(origin2) <= reach + rigs[other].body_radius
     };
-    if count == 0 && !placements.iter().enumerate().any(|(o, p)| robot_near(o, p)) {
+    let candidates_near = || {
+        robots
+            .iter()
+            .map(|&o| (o as usize, &placements[o as usize]))
+            .filter(|&(o, p)| robot_near(o, p))
+    };
+    if count == 0 && candidates_near().next().is_none() {
         // Every ray misses: the same sums with no ray traced.
         return sample(sensor, stream, |_| None);
     }
@@ -140,10 +156,7 @@ pub fn proximity(
                 }
             }
         }
-        for (other, place) in placements.iter().enumerate() {
-            if !robot_near(other, place) {
-                continue;
-            }
+        for (other, place) in candidates_near() {
             let body = Footprint::Circle {
                 center: DVec2::new(place.x, place.z),
                 radius: rigs[other].body_radius,
@@ -190,11 +203,12 @@ fn sample(
     to_reading(reading)
 }
 
-/// One ambient light reading, 0…1023.
+/// One ambient light reading, 0…1023; `grid` files the slab's obstacles.
 #[allow(clippy::too_many_arguments)]
 pub fn ambient(
     lights: &[WorldLight],
     slab: &Slab,
+    grid: &Grid,
     placements: &[Placement],
     robot: usize,
     sensor: &LightSensorRig,
@@ -213,7 +227,7 @@ pub fn ambient(
         if sensor.occlusion {
             if let LightKind::Point { location, .. } | LightKind::Spot { location, .. } = light.kind
             {
-                if blocked(slab, position, location) {
+                if blocked(slab, grid, position, location) {
                     continue;
                 }
             }
@@ -236,8 +250,9 @@ fn to_reading(x: f64) -> u16 {
     whole + (clamped - whole as f64 >= 0.5) as u16
 }
 
-/// Whether an obstacle at the sensor's height stands between the sensor and a light.
-fn blocked(slab: &Slab, from: DVec3, to: DVec3) -> bool {
+/// Whether an obstacle at the sensor's height stands between the sensor and a light (the
+/// grid offers the obstacles along the way).
+fn blocked(slab: &Slab, grid: &Grid, from: DVec3, to: DVec3) -> bool {
     let origin = DVec2::new(from.x, from.z);
     let offset = DVec2::new(to.x - from.x, to.z - from.z);
     let distance = offset.length();
@@ -245,7 +260,8 @@ fn blocked(slab: &Slab, from: DVec3, to: DVec3) -> bool {
         return false;
     }
     let direction = offset / distance;
-    slab.obstacles.iter().any(|o| {
+    grid.any_on_segment(origin, origin + offset, |index| {
+        let o = &slab.obstacles[index as usize];
         from.y >= o.y0
             && from.y <= o.y1
             && o.shape

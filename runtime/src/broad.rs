@@ -1,0 +1,322 @@
+//! The broad phase: a uniform grid over the floor plane (x, z) that answers "which items may
+//! be near this box or this segment" without testing every item. Items are boxes (a
+//! footprint's bounds, or a point); each is filed in every cell its box overlaps. Queries
+//! return candidates only: callers keep their exact tests, so a grid changes what is tested,
+//! never what is found.
+//!
+//! The grid is rebuilt in O(items + cells) by a counting pass into buffers that are kept,
+//! so refreshing it every step allocates nothing once warm. Candidates come back sorted by
+//! item index, so callers visit them in the same order as a full scan would. Nothing here
+//! knows about robots or scenes.
+
+use glam::DVec2;
+
+/// Fewest cells a grid may have before it coarsens (see [`Grid::reshape`]).
+const MIN_CELL_BUDGET: usize = 1024;
+
+/// A uniform grid of square cells over a rectangle; items outside it are filed in the edge
+/// cells (still found, only less selectively).
+#[derive(Clone, Debug, Default)]
+pub struct Grid {
+    origin: DVec2,
+    inverse_cell: f64,
+    columns: usize,
+    rows: usize,
+    /// `starts[c]..starts[c + 1]` indexes `entries` for cell `c` (row-major).
+    starts: Vec<u32>,
+    entries: Vec<u32>,
+    /// Each item's cell range (first column, first row, last column, last row).
+    spans: Vec<[u32; 4]>,
+    /// Counting buffer of the rebuild.
+    cursor: Vec<u32>,
+}
+
+impl Grid {
+    /// An empty grid over `[min, max]` with cells of about `cell` (m), for about `items`
+    /// items.
+    pub fn new(min: DVec2, max: DVec2, cell: f64, items: usize) -> Grid {
+        let mut grid = Grid::default();
+        grid.reshape(min, max, cell, items);
+        grid
+    }
+
+    /// Sets the grid's rectangle and cell size (items must be filed again). Cells are
+    /// doubled in size until there are at most max(1024, 4 × `items`) of them: memory follows
+    /// the items, not the region.
+    pub fn reshape(&mut self, min: DVec2, max: DVec2, cell: f64, items: usize) {
+        let budget = MIN_CELL_BUDGET.max(items.saturating_mul(4));
+        let (min, max) = if min.is_finite() && max.is_finite() && max.cmpge(min).all() {
+            (min, max)
+        } else {
+            (DVec2::ZERO, DVec2::ZERO)
+        };
+        let extent = (max - min).max(DVec2::splat(1e-9));
+        let mut cell = if cell.is_finite() && cell > 0.0 {
+            cell
+        } else {
+            extent.max_element()
+        };
+        // Coarsen until the cell count is bounded.
+        let count =
+            |cell: f64| ((extent.x / cell).ceil().max(1.0)) * ((extent.y / cell).ceil().max(1.0));
+        while count(cell) > budget as f64 {
+            cell *= 2.0;
+        }
+        self.origin = min;
+        self.inverse_cell = 1.0 / cell;
+        self.columns = (extent.x / cell).ceil().max(1.0) as usize;
+        self.rows = (extent.y / cell).ceil().max(1.0) as usize;
+        self.starts.clear();
+        self.starts.resize(self.columns * self.rows + 1, 0);
+        self.entries.clear();
+        self.spans.clear();
+    }
+
+    /// The cell column (or row) of a coordinate, clamped to the grid.
+    #[inline]
+    fn index(&self, value: f64, origin: f64, limit: usize) -> u32 {
+        let x = (value - origin) * self.inverse_cell;
+        // NaN and everything below go to 0, everything beyond to the last.
+        if x >= 1.0 {
+            (x as usize).min(limit - 1) as u32
+        } else {
+            0
+        }
+    }
+
+    #[inline]
+    fn span(&self, min: DVec2, max: DVec2) -> [u32; 4] {
+        [
+            self.index(min.x, self.origin.x, self.columns),
+            self.index(min.y, self.origin.y, self.rows),
+            self.index(max.x, self.origin.x, self.columns),
+            self.index(max.y, self.origin.y, self.rows),
+        ]
+    }
+
+    /// Files every item anew: `bounds(i)` is item `i`'s box (min, max).
+    pub fn rebuild(&mut self, items: usize, mut bounds: impl FnMut(usize) -> (DVec2, DVec2)) {
+        self.spans.clear();
+        for item in 0..items {
+            let (min, max) = bounds(item);
+            let span = self.span(min, max);
+            self.spans.push(span);
+        }
+        let cells = self.columns * self.rows;
+        self.starts.clear();
+        self.starts.resize(cells + 1, 0);
+        for span in &self.spans {
+            for row in span[1]..=span[3] {
+                for column in span[0]..=span[2] {
+                    self.starts[row as usize * self.columns + column as usize + 1] += 1;
+                }
+            }
+        }
+        for c in 0..cells {
+            self.starts[c + 1] += self.starts[c];
+        }
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.starts[..cells]);
+        self.entries.clear();
+        self.entries.resize(self.starts[cells] as usize, 0);
+        // Items in ascending order: each cell's list is sorted.
+        for (item, span) in self.spans.iter().enumerate() {
+            for row in span[1]..=span[3] {
+                for column in span[0]..=span[2] {
+                    let cell = row as usize * self.columns + column as usize;
+                    self.entries[self.cursor[cell] as usize] = item as u32;
+                    self.cursor[cell] += 1;
+                }
+            }
+        }
+    }
+
+    /// The items whose boxes may meet the box `[min, max]`, each once, ascending, into `out`.
+    pub fn query(&self, min: DVec2, max: DVec2, out: &mut Vec<u32>) {
+        out.clear();
+        if self.spans.is_empty() {
+            return;
+        }
+        let [c0, r0, c1, r1] = self.span(min, max);
+        let mut sorted = true;
+        for row in r0..=r1 {
+            for column in c0..=c1 {
+                let cell = row as usize * self.columns + column as usize;
+                let (start, end) = (self.starts[cell] as usize, self.starts[cell + 1] as usize);
+                for &item in &self.entries[start..end] {
+                    // An item in several cells is reported from the first of them in range.
+                    let span = &self.spans[item as usize];
+                    if span[0].max(c0) == column && span[1].max(r0) == row {
+                        sorted &= out.last().is_none_or(|&last| last < item);
+                        out.push(item);
+                    }
+                }
+            }
+        }
+        if !sorted {
+            out.sort_unstable();
+        }
+    }
+
+    /// The items whose boxes may meet the segment from `a` to `b`, each once, ascending, into
+    /// `out`: the cells the segment passes through, walked in order.
+    pub fn query_segment(&self, a: DVec2, b: DVec2, out: &mut Vec<u32>) {
+        out.clear();
+        self.any_on_segment(a, b, |item| {
+            out.push(item);
+            false
+        });
+        out.sort_unstable();
+        out.dedup();
+    }
+
+    /// Whether `hit` holds for some item whose box may meet the segment from `a` to `b`
+    /// (items may be offered more than once, in no particular order; the walk stops at the
+    /// first hit).
+    pub fn any_on_segment(&self, a: DVec2, b: DVec2, mut hit: impl FnMut(u32) -> bool) -> bool {
+        if self.spans.is_empty() {
+            return false;
+        }
+        let inside = |p: DVec2| {
+            let q = (p - self.origin) * self.inverse_cell;
+            q.x >= 0.0 && q.y >= 0.0 && q.x < self.columns as f64 && q.y < self.rows as f64
+        };
+        let mut cell_hit = |column: i64, row: i64| {
+            let cell = row as usize * self.columns + column as usize;
+            let (start, end) = (self.starts[cell] as usize, self.starts[cell + 1] as usize);
+            self.entries[start..end].iter().any(|&item| hit(item))
+        };
+        if !(inside(a) && inside(b)) {
+            // An end beyond the grid: its edge cells hold everything out there.
+            let [c0, r0, c1, r1] = self.span(a.min(b), a.max(b));
+            return (r0..=r1)
+                .any(|row| (c0..=c1).any(|column| cell_hit(column as i64, row as i64)));
+        }
+        // Cells along the segment (Amanatides–Woo), each with its neighbours, so that
+        // rounding at a cell boundary loses nothing.
+        let (mut column, mut row) = (
+            self.index(a.x, self.origin.x, self.columns) as i64,
+            self.index(a.y, self.origin.y, self.rows) as i64,
+        );
+        let (end_column, end_row) = (
+            self.index(b.x, self.origin.x, self.columns) as i64,
+            self.index(b.y, self.origin.y, self.rows) as i64,
+        );
+        let d = b - a;
+        let cell = 1.0 / self.inverse_cell;
+        let step_x: i64 = if d.x > 0.0 { 1 } else { -1 };
+        let step_z: i64 = if d.y > 0.0 { 1 } else { -1 };
+        let boundary = |i: i64, step: i64, origin: f64| {
+            origin + (i + if step > 0 { 1 } else { 0 }) as f64 * cell
+        };
+        let mut t_x = if d.x != 0.0 {
+            (boundary(column, step_x, self.origin.x) - a.x) / d.x
+        } else {
+            f64::INFINITY
+        };
+        let mut t_z = if d.y != 0.0 {
+            (boundary(row, step_z, self.origin.y) - a.y) / d.y
+        } else {
+            f64::INFINITY
+        };
+        let delta_x = if d.x != 0.0 {
+            cell / d.x.abs()
+        } else {
+            f64::INFINITY
+        };
+        let delta_z = if d.y != 0.0 {
+            cell / d.y.abs()
+        } else {
+            f64::INFINITY
+        };
+        let (rows, columns) = (self.rows as i64, self.columns as i64);
+        let limit = self.columns + self.rows + 2;
+        for _ in 0..limit {
+            for r in (row - 1).max(0)..=(row + 1).min(rows - 1) {
+                for c in (column - 1).max(0)..=(column + 1).min(columns - 1) {
+                    if cell_hit(c, r) {
+                        return true;
+                    }
+                }
+            }
+            if column == end_column && row == end_row {
+                break;
+            }
+            if t_x < t_z {
+                column += step_x;
+                t_x += delta_x;
+            } else {
+                row += step_z;
+                t_z += delta_z;
+            }
+            if column < 0 || row < 0 || column >= columns || row >= rows {
+                break;
+            }
+        }
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn boxes() -> Vec<(DVec2, DVec2)> {
+        let mut out = Vec::new();
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..300 {
+            let c = DVec2::new(next() * 12.0 - 1.0, next() * 12.0 - 1.0);
+            let h = DVec2::new(next() * next() * 3.0, next() * 0.2);
+            out.push((c - h, c + h));
+        }
+        out
+    }
+
+    fn meets(a: (DVec2, DVec2), b: (DVec2, DVec2)) -> bool {
+        a.0.cmple(b.1).all() && b.0.cmple(a.1).all()
+    }
+
+    #[test]
+    fn box_queries_find_every_overlap_once_in_order() {
+        let items = boxes();
+        let mut grid = Grid::new(DVec2::ZERO, DVec2::splat(10.0), 0.7, 300);
+        grid.rebuild(items.len(), |i| items[i]);
+        let mut out = Vec::new();
+        for query in boxes().iter().take(100) {
+            grid.query(query.0, query.1, &mut out);
+            assert!(out.windows(2).all(|w| w[0] < w[1]), "ascending, once each");
+            for (i, item) in items.iter().enumerate() {
+                if meets(*item, *query) {
+                    assert!(out.contains(&(i as u32)), "{i} missed");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn segment_queries_find_every_box_the_segment_crosses() {
+        let items = boxes();
+        let mut grid = Grid::new(DVec2::ZERO, DVec2::splat(10.0), 0.5, 300);
+        grid.rebuild(items.len(), |i| items[i]);
+        let mut out = Vec::new();
+        for (a, b) in boxes().iter().map(|q| (q.0, q.1 + DVec2::new(-2.0, 4.0))) {
+            grid.query_segment(a, b, &mut out);
+            for (i, item) in items.iter().enumerate() {
+                // Sampled along the segment: a box holding a sample point must be found.
+                let hit = (0..=200).any(|k| {
+                    let p = a + (b - a) * (k as f64 / 200.0);
+                    meets(*item, (p, p))
+                });
+                if hit {
+                    assert!(out.contains(&(i as u32)), "{i} missed");
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,496 @@
+//! Photodiode integration: one column's segments composited front to back and integrated
+//! exactly in angle over the elevation band (`Band`, `Free`), and the piecewise-linear model of
+//! the band's mean across azimuth integrated over each photodiode's window (`Raster`). The
+//! small numerical helpers they share live here too.
+
+use glam::{DVec2, DVec3};
+
+use super::ColumnFrame;
+
+/// The part of a column an object covers.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Segment {
+    pub(super) depth: f64,
+    /// tan-elevation interval.
+    pub(super) t0: f64,
+    pub(super) t1: f64,
+    /// The look's object (ties in depth go by it) and the primitive it shows.
+    pub(super) object: u32,
+    pub(super) primitive: u32,
+    pub(super) face: Face,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Face {
+    /// A vertical face with this horizontal normal.
+    Side(DVec2),
+    /// A horizontal face at height `y`, facing up or down.
+    Cap { y: f64, up: bool },
+}
+
+/// Integrates linear pieces of a function of azimuth over contiguous pixel windows of equal
+/// width, pixel 0 starting at `origin` and azimuth falling with the index.
+pub(super) struct Raster<'a> {
+    pub(super) origin: f64,
+    pub(super) inverse_width: f64,
+    pub(super) width: f64,
+    pub(super) out: &'a mut [f64],
+}
+
+impl Raster<'_> {
+    /// Adds the mean over each pixel window of `value + slope·(α − x0)` on `[x0, x1]`.
+    #[inline]
+    pub(super) fn add(&mut self, x0: f64, x1: f64, value: f64, slope: f64) {
+        // In pixel units u = (origin − α)/width, pixel i covering [i, i + 1].
+        let (u0, u1) = (
+            (self.origin - x1) * self.inverse_width,
+            (self.origin - x0) * self.inverse_width,
+        );
+        if u1 <= u0 {
+            return;
+        }
+        let pixels = self.out.len();
+        // α = origin − u·width, so the line is value + slope_u·(u1 − u), slope_u = slope·width.
+        let slope_u = slope * self.width;
+        let first = index_below(u0, pixels);
+        // ⌈u1⌉ without a libm call: u1 > 0 here (u1 > u0, and a piece left of the strip
+        // ends at u1 ≤ 0 only when empty below).
+        let whole = index_below(u1, pixels);
+        let last = (whole + (u1 > whole as f64) as usize).min(pixels);
+        if first >= last {
+            return;
+        }
+        // Windows the piece covers whole take the line's value at their centre; the one or
+        // two it covers in part, the mean over the part times its share.
+        let partial = |i: usize| {
+            let i = i as f64;
+            let (a, b) = (larger(u0, i), smaller(u1, i + 1.0));
+            if b > a {
+                (b - a) * (value + slope_u * (u1 - 0.5 * (a + b)))
+            } else {
+                0.0
+            }
+        };
+        self.out[first] += partial(first);
+        if last - first == 1 {
+            return;
+        }
+        self.out[last - 1] += partial(last - 1);
+        // Each centre from its index (one signed conversion, exact): a running `center += 1`
+        // would chain every pixel's add behind the last one's.
+        let base = (first + 1) as i64;
+        for (k, out) in self.out[first + 1..last - 1].iter_mut().enumerate() {
+            let center = (base + k as i64) as f64 + 0.5;
+            *out += value + slope_u * (u1 - center);
+        }
+    }
+}
+
+/// Odd polynomial atan for |t| ≲ 0.2 (exact to ~1e-10 within the retina's band); plain
+/// `libm::atan` beyond.
+#[inline]
+pub(super) fn band_atan(t: f64) -> f64 {
+    if t.abs() > 0.2 {
+        return libm::atan(t);
+    }
+    // Reciprocals as constants: multiplications, no division on the hot path.
+    const C3: f64 = 1.0 / 3.0;
+    const C5: f64 = 1.0 / 5.0;
+    const C7: f64 = 1.0 / 7.0;
+    const C9: f64 = 1.0 / 9.0;
+    const C11: f64 = 1.0 / 11.0;
+    let t2 = t * t;
+    t * (1.0 - t2 * (C3 - t2 * (C5 - t2 * (C7 - t2 * (C9 - t2 * C11)))))
+}
+
+/// `(cos, sin)` of `base + delta` from those of `base`, for small `delta` (|δ| ≤ a pixel).
+#[inline]
+pub(super) fn rotate_small(cos_base: f64, sin_base: f64, delta: f64) -> (f64, f64) {
+    const HALF: f64 = 0.5;
+    const TWELFTH: f64 = 1.0 / 12.0;
+    const THIRTIETH: f64 = 1.0 / 30.0;
+    const SIXTH: f64 = 1.0 / 6.0;
+    const TWENTIETH: f64 = 1.0 / 20.0;
+    const FORTY_SECOND: f64 = 1.0 / 42.0;
+    let d2 = delta * delta;
+    let c = 1.0 - d2 * HALF * (1.0 - d2 * TWELFTH * (1.0 - d2 * THIRTIETH));
+    let s = delta * (1.0 - d2 * SIXTH * (1.0 - d2 * TWENTIETH * (1.0 - d2 * FORTY_SECOND)));
+    (cos_base * c - sin_base * s, sin_base * c + cos_base * s)
+}
+
+/// `(x.round().max(0.0) as usize).min(limit)` without a call to the C library's `round`
+/// (which the baseline x86-64 target has no instruction for): halves round up, negatives and
+/// NaN give 0.
+#[inline]
+pub(super) fn nearest_index(x: f64, limit: usize) -> usize {
+    let whole = index_below(x, limit);
+    (whole + (x - whole as f64 >= 0.5) as usize).min(limit)
+}
+
+/// `(x.max(0.0) as usize).min(limit)`, `x` truncated: clamped in floating point first, so one
+/// signed conversion does (an unsigned one costs a dozen instructions on x86-64). NaN gives 0.
+#[inline(always)]
+pub(super) fn index_below(x: f64, limit: usize) -> usize {
+    let top = limit as f64;
+    let clamped = if x > 0.0 { smaller(x, top) } else { 0.0 };
+    clamped as i64 as usize
+}
+
+/// The larger of two numbers, by one compare: `f64::max` also settles NaN, at a cost on the
+/// hot paths, and none arises there (finite geometry; a NaN here picks `b`).
+#[inline(always)]
+pub(super) fn larger(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// The smaller of two numbers, by one compare (see [`larger`]).
+#[inline(always)]
+pub(super) fn smaller(a: f64, b: f64) -> f64 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// Most segments one column keeps; beyond, the farthest are dropped (they are the most
+/// likely hidden).
+pub(super) const MAX_SEGMENTS: usize = 32;
+
+/// A column's segments on the stack, with their order by depth kept on insertion (indices
+/// move, not segments).
+pub(super) struct Segments {
+    pub(super) items: [Segment; MAX_SEGMENTS],
+    /// Indices into `items`, front to back.
+    pub(super) order: [u8; MAX_SEGMENTS],
+    pub(super) len: usize,
+}
+
+impl Segments {
+    pub(super) fn new() -> Segments {
+        Segments {
+            items: [Segment {
+                depth: 0.0,
+                t0: 0.0,
+                t1: 0.0,
+                object: 0,
+                primitive: 0,
+                face: Face::Cap { y: 0.0, up: true },
+            }; MAX_SEGMENTS],
+            order: [0; MAX_SEGMENTS],
+            len: 0,
+        }
+    }
+
+    #[inline]
+    pub(super) fn insert(&mut self, segment: Segment) {
+        let mut i = self.len;
+        while i > 0 && {
+            let before = &self.items[self.order[i - 1] as usize];
+            before.depth > segment.depth
+                || (before.depth == segment.depth && before.object > segment.object)
+        } {
+            i -= 1;
+        }
+        if i >= MAX_SEGMENTS {
+            return;
+        }
+        // When full, the farthest segment's slot takes the new one.
+        let slot = if self.len < MAX_SEGMENTS {
+            self.len
+        } else {
+            self.order[MAX_SEGMENTS - 1] as usize
+        };
+        let end = self.len.min(MAX_SEGMENTS - 1);
+        self.order.copy_within(i..end, i + 1);
+        self.order[i] = slot as u8;
+        self.items[slot] = segment;
+        self.len = (self.len + 1).min(MAX_SEGMENTS);
+    }
+
+    /// The segments front to back.
+    pub(super) fn iter(&self) -> impl Iterator<Item = &Segment> {
+        self.order[..self.len]
+            .iter()
+            .map(|&slot| &self.items[slot as usize])
+    }
+}
+
+/// Per-column buffers, allocated once per strip.
+pub(super) struct Scratch {
+    pub(super) segments: Segments,
+    pub(super) lit: LitSegments,
+    pub(super) free: Free,
+}
+
+/// Where [`ColumnScene::collect_segments`] puts a column's segments.
+pub(super) trait SegmentSink {
+    fn insert(&mut self, segment: Segment);
+}
+
+impl SegmentSink for Segments {
+    #[inline(always)]
+    fn insert(&mut self, segment: Segment) {
+        Segments::insert(self, segment)
+    }
+}
+
+/// A segment whose face's luminance is known (fast shading).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Lit {
+    pub(super) depth: f64,
+    pub(super) t0: f64,
+    pub(super) t1: f64,
+    pub(super) luminance: f64,
+}
+
+impl Extent for Lit {
+    #[inline]
+    fn extent(&self) -> (f64, f64) {
+        (self.t0, self.t1)
+    }
+}
+
+impl Extent for Segment {
+    #[inline]
+    fn extent(&self) -> (f64, f64) {
+        (self.t0, self.t1)
+    }
+}
+
+/// A column's lit segments on the stack, sorted front to back on insertion. Segments come in
+/// object order, so equal depths keep object order, as in [`Segments`].
+pub(super) struct LitSegments {
+    pub(super) items: [Lit; MAX_SEGMENTS],
+    pub(super) len: usize,
+}
+
+impl LitSegments {
+    pub(super) fn new() -> LitSegments {
+        LitSegments {
+            items: [Lit::default(); MAX_SEGMENTS],
+            len: 0,
+        }
+    }
+
+    #[inline]
+    pub(super) fn insert(&mut self, segment: Lit) {
+        let mut i = self.len;
+        if i == MAX_SEGMENTS {
+            // Full: the farthest goes, unless the new one is farther still.
+            if self.items[i - 1].depth <= segment.depth {
+                return;
+            }
+            i -= 1;
+        } else {
+            self.len += 1;
+        }
+        // Shifted one by one: a few moves, no call to memmove.
+        while i > 0 && self.items[i - 1].depth > segment.depth {
+            self.items[i] = self.items[i - 1];
+            i -= 1;
+        }
+        self.items[i] = segment;
+    }
+
+    pub(super) fn as_slice(&self) -> &[Lit] {
+        &self.items[..self.len]
+    }
+}
+
+/// Lights each segment as it comes, from its object's fast shading.
+pub(super) struct LitSink<'a> {
+    pub(super) lit: &'a mut LitSegments,
+    pub(super) frame: &'a ColumnFrame,
+}
+
+impl SegmentSink for LitSink<'_> {
+    #[inline(always)]
+    fn insert(&mut self, segment: Segment) {
+        let Some(fast) = self.frame.fast_shade(segment.primitive) else {
+            return;
+        };
+        let luminance = match segment.face {
+            Face::Side(n) => fast.luminance(DVec3::new(n.x, 0.0, n.y)),
+            Face::Cap { up: true, .. } => fast.up_luminance,
+            Face::Cap { up: false, .. } => fast.down_luminance,
+        };
+        self.lit.insert(Lit {
+            depth: segment.depth,
+            t0: segment.t0,
+            t1: segment.t1,
+            luminance,
+        });
+    }
+}
+
+/// A segment's tan-elevation interval.
+pub(super) trait Extent {
+    fn extent(&self) -> (f64, f64);
+}
+
+/// The elevation band of a column and what lies beyond every object.
+pub(super) struct Band {
+    pub(super) tan_half: f64,
+    /// The band's angle, 2·atan(tan_half).
+    pub(super) band: f64,
+    pub(super) sky: f64,
+    pub(super) ground: f64,
+}
+
+impl Band {
+    /// Mean luminance over the band of segments sorted front to back, integrated exactly in
+    /// angle; `luminance(segment, middle, covered)` gives a face's luminance from the visible
+    /// parts' angle-weighted tan-elevation sum and their angle.
+    #[inline]
+    pub(super) fn composite<'s, S: Extent + 's>(
+        &self,
+        segments: impl IntoIterator<Item = &'s S>,
+        free: &mut Free,
+        mut luminance: impl FnMut(&S, f64, f64) -> f64,
+    ) -> f64 {
+        let Band {
+            tan_half,
+            band,
+            sky,
+            ground,
+        } = *self;
+        free.reset(-tan_half, tan_half);
+        // The band's edges and the horizon are where most pieces start or end: their angles
+        // are known (band_atan is odd, band = 2·band_atan(T)).
+        let half_band = 0.5 * band;
+        let angle = |x: f64| {
+            if x == tan_half {
+                half_band
+            } else if x == -tan_half {
+                -half_band
+            } else if x == 0.0 {
+                0.0
+            } else {
+                band_atan(x)
+            }
+        };
+        let mut sum = 0.0;
+        for segment in segments {
+            if free.is_empty() {
+                break;
+            }
+            let (t0, t1) = segment.extent();
+            let (a, b) = (larger(t0, -tan_half), smaller(t1, tan_half));
+            if a >= b {
+                continue;
+            }
+            let mut covered = 0.0;
+            let mut middle = 0.0;
+            free.take(a, b, |x0, x1| {
+                let weight = angle(x1) - angle(x0);
+                middle += 0.5 * (x0 + x1) * weight;
+                covered += weight;
+            });
+            if covered > 0.0 {
+                // One radiance per visible part of a face, at its weighted middle.
+                sum += luminance(segment, middle, covered) * covered;
+            }
+        }
+        for &(x0, x1) in free.as_slice() {
+            // Sky above the horizon, ground (if any) below.
+            let (a0, a1) = (angle(x0), angle(x1));
+            if x0 >= 0.0 {
+                sum += sky * (a1 - a0);
+            } else if x1 <= 0.0 {
+                sum += ground * (a1 - a0);
+            } else {
+                sum += ground * -a0 + sky * a1;
+            }
+        }
+        sum / band
+    }
+}
+
+/// Free (uncovered) tan-intervals of a band, sorted and disjoint, on the stack. Each segment
+/// splits at most one interval, so MAX_SEGMENTS + 1 always suffices.
+pub(super) struct Free {
+    pub(super) items: [(f64, f64); MAX_SEGMENTS + 1],
+    pub(super) len: usize,
+}
+
+impl Free {
+    pub(super) fn new(lo: f64, hi: f64) -> Free {
+        let mut items = [(0.0, 0.0); MAX_SEGMENTS + 1];
+        items[0] = (lo, hi);
+        Free { items, len: 1 }
+    }
+
+    pub(super) fn reset(&mut self, lo: f64, hi: f64) {
+        self.items[0] = (lo, hi);
+        self.len = 1;
+    }
+
+    pub(super) fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    pub(super) fn as_slice(&self) -> &[(f64, f64)] {
+        &self.items[..self.len]
+    }
+
+    /// Removes `[a, b]`, calling `visit` on each free part it covered.
+    #[inline]
+    pub(super) fn take(&mut self, a: f64, b: f64, mut visit: impl FnMut(f64, f64)) {
+        // The intervals wholly below `a` are skipped by halving (a crowd's column leaves a
+        // long list: each robot further away peeks over the nearer ones).
+        let mut i = if self.len > 8 {
+            self.items[..self.len].partition_point(|&(_, x1)| x1 <= a)
+        } else {
+            0
+        };
+        while i < self.len {
+            let (x0, x1) = self.items[i];
+            if x1 <= a {
+                i += 1;
+                continue;
+            }
+            if x0 >= b {
+                break;
+            }
+            let (c0, c1) = (larger(x0, a), smaller(x1, b));
+            visit(c0, c1);
+            match (x0 < c0, c1 < x1) {
+                (true, true) => {
+                    // Split in two; the few intervals after it shift one by one (no memmove).
+                    if self.len < self.items.len() {
+                        let mut j = self.len;
+                        while j > i + 1 {
+                            self.items[j] = self.items[j - 1];
+                            j -= 1;
+                        }
+                        self.items[i] = (x0, c0);
+                        self.items[i + 1] = (c1, x1);
+                        self.len += 1;
+                    } else {
+                        self.items[i] = (x0, c0);
+                    }
+                    return;
+                }
+                (true, false) => {
+                    self.items[i] = (x0, c0);
+                    i += 1;
+                }
+                (false, true) => {
+                    self.items[i] = (c1, x1);
+                    return;
+                }
+                (false, false) => {
+                    for j in i..self.len - 1 {
+                        self.items[j] = self.items[j + 1];
+                    }
+                    self.len -= 1;
+                }
+            }
+        }
+    }
+}

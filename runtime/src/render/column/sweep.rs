@@ -1,0 +1,500 @@
+//! The sweep: what one eye sees, built once per update. Every object's azimuth interval and
+//! relative footprint (`Look`), the silhouette edges sorted once, and an angular sweep over
+//! them that keeps the objects whose intervals are open at the current azimuth, so that each
+//! region between edges is handed exactly the objects facing it without testing every object.
+
+use glam::{DVec2, DVec3};
+
+use super::footprint::Relative;
+use super::footprint::{azimuth_interval, corner_of, wrap, Interval, PendingEdge, Upright};
+use super::photodiode::rotate_small;
+use super::{ColumnFrame, ColumnScene, Strip};
+use crate::geometry::Footprint;
+
+/// An object as seen from one eye.
+#[derive(Clone, Copy, Debug)]
+pub struct EyeObject {
+    /// Its azimuth interval's edges in (−π, π] (infinite when it surrounds the eye).
+    pub(super) lo: f64,
+    pub(super) hi: f64,
+    /// Whether the interval passes ±π: it is `[lo, π] ∪ (−π, hi]`.
+    pub(super) wraps: bool,
+    pub(super) relative: Relative,
+    /// Heights relative to the eye.
+    pub(super) y0: f64,
+    pub(super) y1: f64,
+    pub(super) side: bool,
+    pub(super) top: bool,
+    pub(super) bottom: bool,
+    /// The primitive it shows (for its material).
+    pub(super) primitive: u32,
+}
+
+impl EyeObject {
+    /// Whether its azimuth interval holds `alpha` (in (−π, π]).
+    #[inline]
+    pub(super) fn holds(&self, alpha: f64) -> bool {
+        let (after_lo, before_hi) = (alpha >= self.lo, alpha <= self.hi);
+        if self.wraps {
+            after_lo | before_hi
+        } else {
+            after_lo & before_hi
+        }
+    }
+
+    /// Whether its azimuth interval meets the open interval `(a, b)` (within (−π, π]).
+    #[inline]
+    pub(super) fn meets(&self, a: f64, b: f64) -> bool {
+        let (after_lo, before_hi) = (self.lo < b, self.hi > a);
+        if self.wraps {
+            after_lo | before_hi
+        } else {
+            after_lo & before_hi
+        }
+    }
+}
+
+/// Everything about one eye, for one update.
+#[derive(Default)]
+pub struct Look {
+    pub(super) eye: DVec3,
+    pub(super) cos_h: f64,
+    pub(super) sin_h: f64,
+    pub(super) objects: Vec<EyeObject>,
+    /// Silhouette edges (relative azimuths), sorted; hidden ones left out.
+    pub(super) breaks: Vec<f64>,
+    /// Each static object's index among `objects`.
+    pub(super) static_slots: Vec<u32>,
+    /// Edges waiting for the hidden-edge test.
+    pub(super) edges: Vec<PendingEdge>,
+}
+
+impl Look {
+    /// The objects whose azimuth interval holds relative azimuth `alpha`, in object order.
+    pub fn facing(&self, alpha: f64, out: &mut Vec<u32>) {
+        out.clear();
+        out.extend(
+            self.objects
+                .iter()
+                .enumerate()
+                .filter(|(_, o)| o.holds(alpha))
+                .map(|(index, _)| index as u32),
+        );
+    }
+
+    /// The objects whose azimuth interval meets the open interval `(a, b)`, in object order:
+    /// every object tested (the sweep's answer, and cheaper for a few objects).
+    pub(super) fn facing_over(&self, a: f64, b: f64, out: &mut Vec<u32>) {
+        out.clear();
+        out.extend(
+            self.objects
+                .iter()
+                .enumerate()
+                .filter(|(_, o)| o.meets(a, b))
+                .map(|(index, _)| index as u32),
+        );
+    }
+
+    /// The world direction (x, z) of relative azimuth `alpha`, near `strip`'s pixel `pixel`:
+    /// the pixel centre's direction turned by the small remainder, no transcendental.
+    #[inline]
+    pub(super) fn turn(&self, strip: &Strip, pixel: usize, alpha: f64) -> DVec2 {
+        let (cos_c, sin_c) = strip.directions[pixel];
+        let (ca, sa) = rotate_small(cos_c, sin_c, alpha - strip.centers[pixel]);
+        // World direction of azimuth heading + alpha: (cos, −sin) in (x, z).
+        let (cw, sw) = (
+            self.cos_h * ca - self.sin_h * sa,
+            self.sin_h * ca + self.cos_h * sa,
+        );
+        DVec2::new(cw, -sw)
+    }
+
+    /// The world direction (x, z) of relative azimuth `alpha`.
+    pub fn direction(&self, alpha: f64) -> DVec2 {
+        let (ca, sa) = (libm::cos(alpha), libm::sin(alpha));
+        let (cw, sw) = (
+            self.cos_h * ca - self.sin_h * sa,
+            self.sin_h * ca + self.cos_h * sa,
+        );
+        DVec2::new(cw, -sw)
+    }
+}
+
+/// A closure over a frame's objects, typed so that it may keep references to them.
+fn typed<'f, F: FnMut(&'f Upright)>(_frame: &'f ColumnFrame, f: F) -> F {
+    f
+}
+
+/// Below this many objects (or edges), testing each is cheaper than keeping them in order.
+pub(super) const FEW: usize = 32;
+
+/// Sorts a few numbers ascending (insertion sort).
+fn sort_small(values: &mut [f64]) {
+    for i in 1..values.len() {
+        let value = values[i];
+        let mut j = i;
+        while j > 0 && values[j - 1] > value {
+            values[j] = values[j - 1];
+            j -= 1;
+        }
+        values[j] = value;
+    }
+}
+
+/// The angular sweep over one look: asked for the objects facing azimuth intervals `(a, b)`
+/// with `a` never decreasing, it keeps the objects whose intervals have opened and not yet
+/// closed, so each answer costs the objects open there, not every object. Its answers are
+/// exactly [`EyeObject::meets`]'s, in object order.
+#[derive(Default)]
+pub(super) struct Sweep {
+    /// Objects with an ordinary interval, by their interval's start.
+    order: Vec<u32>,
+    /// How many of `order` have opened.
+    opened: usize,
+    /// Objects open now (and those whose interval passes ±π, always), ascending.
+    open: Vec<u32>,
+    /// The last query's start.
+    last: f64,
+    /// Few objects: each query tests them all.
+    brute: bool,
+}
+
+impl Sweep {
+    /// Starts a sweep over `look` from the far left (−∞); `exhaustive` tests every object
+    /// at each query instead.
+    pub(super) fn start(&mut self, look: &Look, exhaustive: bool) {
+        self.order.clear();
+        self.open.clear();
+        self.brute = exhaustive || look.objects.len() <= FEW;
+        if self.brute {
+            return;
+        }
+        for (index, object) in look.objects.iter().enumerate() {
+            if object.wraps {
+                self.open.push(index as u32);
+            } else {
+                self.order.push(index as u32);
+            }
+        }
+        let objects = &look.objects;
+        self.order
+            .sort_unstable_by(|&x, &y| objects[x as usize].lo.total_cmp(&objects[y as usize].lo));
+        self.opened = 0;
+        self.last = f64::NEG_INFINITY;
+    }
+
+    /// The objects whose azimuth interval meets `(a, b)`, in object order, into `out`.
+    #[inline]
+    pub(super) fn facing_over(&mut self, look: &Look, a: f64, b: f64, out: &mut Vec<u32>) {
+        if self.brute {
+            return look.facing_over(a, b, out);
+        }
+        if a < self.last {
+            // Backwards (overlapping windows): start again.
+            self.start(look, false);
+        }
+        self.last = a;
+        let objects = &look.objects;
+        // Intervals that closed at or before `a` meet nothing from here on.
+        self.open.retain(|&i| {
+            let o = &objects[i as usize];
+            o.wraps || o.hi > a
+        });
+        while let Some(&next) = self.order.get(self.opened) {
+            if objects[next as usize].lo >= b {
+                break;
+            }
+            self.opened += 1;
+            if objects[next as usize].hi > a {
+                let at = self.open.partition_point(|&i| i < next);
+                self.open.insert(at, next);
+            }
+        }
+        out.clear();
+        out.extend(
+            self.open
+                .iter()
+                .copied()
+                .filter(|&i| objects[i as usize].meets(a, b)),
+        );
+    }
+}
+
+/// The azimuth sector a strip covers, as the rays bounding its complement: a robot part whose
+/// footprint lies wholly beyond both (behind the retina) faces no photodiode and is left out.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Sector {
+    /// Unit directions, in (x, −z), of the sector's ends: `lo` clockwise, `hi` anticlockwise.
+    lo: DVec2,
+    hi: DVec2,
+    /// Whether the part left out (from `hi` anticlockwise round to `lo`) is under half a turn.
+    narrow_back: bool,
+}
+
+impl Sector {
+    /// The sector `[lo, hi]` of relative azimuths seen from `heading`, widened a little.
+    pub(super) fn new(heading: f64, lo: f64, hi: f64) -> Option<Sector> {
+        let margin = 1e-6;
+        let (lo, hi) = (lo - margin, hi + margin);
+        // A full turn (or NaN) leaves nothing behind.
+        if (hi - lo).partial_cmp(&std::f64::consts::TAU) != Some(std::cmp::Ordering::Less) {
+            return None;
+        }
+        let at = |angle: f64| DVec2::new(libm::cos(heading + angle), libm::sin(heading + angle));
+        Some(Sector {
+            lo: at(lo),
+            hi: at(hi),
+            narrow_back: hi - lo > std::f64::consts::PI,
+        })
+    }
+
+    /// Whether a disc (centre relative to the eye, in (x, −z)) lies wholly outside the sector.
+    #[inline]
+    pub(super) fn excludes(&self, center: DVec2, radius: f64) -> bool {
+        // Beyond `hi` anticlockwise and before `lo`.
+        let (after_hi, before_lo) = (
+            self.hi.perp_dot(center) > 0.0,
+            center.perp_dot(self.lo) > 0.0,
+        );
+        let outside = if self.narrow_back {
+            after_hi && before_lo
+        } else {
+            after_hi || before_lo
+        };
+        if !outside {
+            return false;
+        }
+        // Clear of both bounding rays by the radius (with a margin for rounding).
+        let clear = radius * (1.0 + 1e-9) + 1e-9 * (1.0 + center.length());
+        let ray_distance = |ray: DVec2| {
+            if ray.dot(center) > 0.0 {
+                ray.perp_dot(center).abs()
+            } else {
+                center.length()
+            }
+        };
+        ray_distance(self.lo) > clear && ray_distance(self.hi) > clear
+    }
+}
+
+impl ColumnScene<'_> {
+    /// What depends on the eye alone: each object's azimuth interval and its footprint
+    /// relative to the eye, computed once per update.
+    pub fn look(&self, frame: &ColumnFrame, eye: DVec3, heading: f64) -> Look {
+        self.look_for(frame, frame.viewer, eye, heading)
+    }
+
+    /// [`ColumnScene::look`] for `viewer` in a frame shared by every viewer of a step.
+    pub fn look_for(
+        &self,
+        frame: &ColumnFrame,
+        viewer: Option<usize>,
+        eye: DVec3,
+        heading: f64,
+    ) -> Look {
+        let mut look = Look::default();
+        self.look_into(frame, viewer, eye, heading, None, &mut look);
+        look
+    }
+
+    /// [`ColumnScene::look`] into `look`, reusing its buffers, for `viewer`. With a `sector`,
+    /// robot parts wholly outside it are left out (they could face no photodiode).
+    pub(super) fn look_into(
+        &self,
+        frame: &ColumnFrame,
+        viewer: Option<usize>,
+        eye: DVec3,
+        heading: f64,
+        sector: Option<Sector>,
+        look: &mut Look,
+    ) {
+        let eye2 = DVec2::new(eye.x, eye.z);
+        let Look {
+            objects,
+            breaks,
+            edges,
+            static_slots,
+            ..
+        } = look;
+        objects.clear();
+        breaks.clear();
+        edges.clear();
+        static_slots.clear();
+        let statics = frame.statics.len();
+        // The previous object placed, its interval, and whether it was left out.
+        let mut previous: Option<(&Upright, Option<Interval>, bool)> = None;
+        // Static objects, then robot parts (each viewer's own as its turret sees them), by
+        // two plain loops: the per-object work is small, so the iteration shows.
+        let mut order = 0usize;
+        let mut place = typed(frame, |object| {
+            let order = {
+                order += 1;
+                order - 1
+            };
+            let index = objects.len();
+            // Static objects keep their order unless some may be left out.
+            if order < statics && sector.is_some() {
+                static_slots.push(index as u32);
+            }
+            // A lamp on its buoy has the buoy's footprint: its interval is the buoy's.
+            let shares_previous = |before: &Upright| match self.same_footprint.get(order) {
+                Some(&same) => same,
+                None => before.footprint == object.footprint,
+            };
+            let (interval, shared) = match previous {
+                Some((before, interval, left_out)) if shares_previous(before) => {
+                    if left_out {
+                        return;
+                    }
+                    (interval, true)
+                }
+                _ => {
+                    // Robot parts, and static objects no corner test names.
+                    let may_leave = order >= statics || self.cullable[order];
+                    if let Some(sector) = sector.filter(|_| may_leave) {
+                        let (center, radius) = object.footprint.bounding_circle();
+                        let offset = center - eye2;
+                        if sector.excludes(DVec2::new(offset.x, -offset.y), radius) {
+                            previous = Some((object, None, true));
+                            return;
+                        }
+                    }
+                    (azimuth_interval(object, eye2, heading), false)
+                }
+            };
+            previous = Some((object, interval, false));
+            // A shared round silhouette's edges are already in (a rectangle's may yet be
+            // hidden for one object and not for the other).
+            let edges_in = shared && interval.is_some_and(|i| i.corners.is_none());
+            if let Some(interval) = interval.filter(|_| !edges_in) {
+                // An interval may reach past ±π; its edges are where a column of (−π, π] meets
+                // them. An edge another object may hide waits until every object is placed.
+                let hiders = self.hiders.get(order).map_or(&[][..], Vec::as_slice);
+                for (angle, corner) in [
+                    (interval.lo, interval.corners.map(|c| c.0)),
+                    (interval.hi, interval.corners.map(|c| c.1)),
+                ] {
+                    match corner {
+                        Some(corner) if hiders.iter().any(|h| h.corner == corner) => {
+                            match corner_of(&object.footprint, corner as usize) {
+                                Some(point) => edges.push(PendingEdge {
+                                    angle: wrap(angle),
+                                    object: index as u32,
+                                    order: order as u32,
+                                    corner,
+                                    to_corner: point - eye2,
+                                }),
+                                None => breaks.push(wrap(angle)),
+                            }
+                        }
+                        _ => breaks.push(wrap(angle)),
+                    }
+                }
+            }
+            // Edges wrapped into (−π, π]: an interval through ±π wraps to lo > hi.
+            let (lo, hi) = interval.map_or((f64::NEG_INFINITY, f64::INFINITY), |i| {
+                (wrap(i.lo), wrap(i.hi))
+            });
+            let relative = match object.footprint {
+                Footprint::Circle { center, radius } => {
+                    let oc = eye2 - center;
+                    Relative::Circle {
+                        oc,
+                        c: oc.length_squared() - radius * radius,
+                        radius,
+                    }
+                }
+                Footprint::Rect {
+                    center,
+                    u,
+                    v,
+                    half_u,
+                    half_v,
+                } => {
+                    let oc = eye2 - center;
+                    Relative::Rect {
+                        pu: oc.dot(u),
+                        pv: oc.dot(v),
+                        u,
+                        v,
+                        half_u,
+                        half_v,
+                        axis_aligned: u == DVec2::X && v == DVec2::Y,
+                    }
+                }
+            };
+            objects.push(EyeObject {
+                lo,
+                hi,
+                wraps: lo > hi,
+                relative,
+                y0: object.y0 - eye.y,
+                y1: object.y1 - eye.y,
+                side: object.side,
+                top: object.top,
+                bottom: object.bottom,
+                primitive: object.primitive as u32,
+            });
+        });
+        for object in frame.statics.iter() {
+            place(object);
+        }
+        for ((other, own), &robot) in frame.others.iter().zip(&frame.own).zip(&frame.part_robot) {
+            let part = if Some(robot) == viewer { own } else { other };
+            if let Some(object) = part {
+                place(object);
+            }
+        }
+        for edge in edges.iter() {
+            if !self.edge_hidden(objects, static_slots, edge) {
+                breaks.push(edge.angle);
+            }
+        }
+        // Equal edges are merged below, so their order does not matter: insertion for the
+        // dozen edges of an arena, O(B log B) for a crowd.
+        if breaks.len() <= FEW {
+            sort_small(breaks);
+        } else {
+            breaks.sort_unstable_by(f64::total_cmp);
+        }
+        // Objects may share an edge: one is enough.
+        breaks.dedup();
+        look.eye = eye;
+        look.cos_h = libm::cos(heading);
+        look.sin_h = libm::sin(heading);
+    }
+
+    /// Whether a rectangle's silhouette edge is hidden where it stands: the sight line to
+    /// its corner passes through another object (a hider, see [`super::footprint::Hider`])
+    /// whose side covers the edge's whole elevation range. Then nothing of the rectangle shows
+    /// near that azimuth, the column integrand is as smooth there as on either side, and the
+    /// edge need not cut the strip (the end of one arena wall behind the next, at each
+    /// corner). Only static objects have hiders.
+    fn edge_hidden(&self, objects: &[EyeObject], slots: &[u32], edge: &PendingEdge) -> bool {
+        let hidden = &objects[edge.object as usize];
+        self.hiders[edge.order as usize]
+            .iter()
+            .filter(|h| h.corner == edge.corner)
+            .any(|h| {
+                // (A hider has a side: `corner_hiders` keeps no other. Objects that hide or
+                // are hidden are never left out; with nothing left out, order is slot.)
+                let slot = match slots.get(h.object as usize) {
+                    Some(&slot) => slot as usize,
+                    None => h.object as usize,
+                };
+                let hider = &objects[slot];
+                // Along the sight line in units of the corner's distance (the corner at 1):
+                // entered strictly before the corner, from outside, and its side there spans
+                // the edge's tan-elevations (and so any cap of the hidden object, which meets
+                // the edge at its height). Heights over distances compare as heights over
+                // these units: both sides share the distance.
+                let Some(entry) = hider.relative.entry(edge.to_corner) else {
+                    return false;
+                };
+                entry > 0.0
+                    && entry < 1.0 - 1e-9
+                    && hider.y0 / entry <= hidden.y0
+                    && hider.y1 / entry >= hidden.y1
+            })
+    }
+}

@@ -1,0 +1,109 @@
+//! The simulation's broad phase: three grids over the floor (static obstacles, landmarks'
+//! visit discs, robots' centres) that hand the exact tests — IR rays, light occlusion,
+//! collisions, contacts, visits — only the candidates that may pass them. The static grids
+//! are filed once; the robots' grid is filed again whenever robots have moved (O(N), no
+//! allocation once warm).
+
+use glam::DVec2;
+
+use super::world2d::Slab;
+use crate::broad::Grid;
+use crate::compile::Compiled;
+
+/// Relative and absolute margins that keep a candidate box on the safe side of rounding.
+const MARGIN: f64 = 1e-9;
+
+pub(super) struct BroadPhase {
+    pub statics: Grid,
+    pub landmarks: Grid,
+    pub robots: Grid,
+    /// The largest body radius (m).
+    pub max_radius: f64,
+}
+
+impl BroadPhase {
+    pub fn new(compiled: &Compiled, slab: &Slab) -> BroadPhase {
+        let rigs = &compiled.rig.robots;
+        let max_radius = rigs.iter().map(|r| r.body_radius).fold(0.0, f64::max);
+        let ir_reach = rigs
+            .iter()
+            .flat_map(|r| &r.distance_sensors)
+            .map(|s| DVec2::new(s.position.x, s.position.z).length() + s.range)
+            .fold(0.0, f64::max);
+        // A cell about as wide as what one robot's sensors and body reach: a query touches a
+        // few cells, and a cell holds a few robots at any density robots can stand.
+        let cell = (2.0 * max_radius + ir_reach).max(1e-3);
+        // The region: static obstacles, landmarks and robots' starts (anything beyond is filed
+        // in the edge cells).
+        let mut min = DVec2::splat(f64::INFINITY);
+        let mut max = DVec2::splat(f64::NEG_INFINITY);
+        let mut grow = |(a, b): (DVec2, DVec2)| {
+            min = min.min(a);
+            max = max.max(b);
+        };
+        for obstacle in &slab.obstacles {
+            grow(obstacle_box(&obstacle.shape));
+        }
+        for landmark in &compiled.landmarks {
+            grow(landmark_box(landmark, max_radius));
+        }
+        for rig in rigs {
+            let p = DVec2::new(rig.start.x, rig.start.z);
+            grow((p, p));
+        }
+        if !min.is_finite() {
+            (min, max) = (DVec2::ZERO, DVec2::ZERO);
+        }
+        let mut statics = Grid::new(min, max, cell, slab.obstacles.len());
+        statics.rebuild(slab.obstacles.len(), |i| {
+            obstacle_box(&slab.obstacles[i].shape)
+        });
+        let mut landmarks = Grid::new(min, max, cell, compiled.landmarks.len());
+        landmarks.rebuild(compiled.landmarks.len(), |i| {
+            landmark_box(&compiled.landmarks[i], max_radius)
+        });
+        let robots = Grid::new(min, max, cell, rigs.len());
+        BroadPhase {
+            statics,
+            landmarks,
+            robots,
+            max_radius,
+        }
+    }
+
+    /// Files the robots' centres.
+    pub fn file_robots(&mut self, count: usize, center: impl Fn(usize) -> DVec2) {
+        self.robots.rebuild(count, |i| {
+            let c = center(i);
+            (c, c)
+        });
+    }
+}
+
+/// The square of half side `reach` about `center`, widened for rounding.
+pub(super) fn square(center: DVec2, reach: f64) -> (DVec2, DVec2) {
+    let r = reach * (1.0 + MARGIN) + MARGIN;
+    (center - r, center + r)
+}
+
+fn obstacle_box(shape: &crate::geometry::Footprint) -> (DVec2, DVec2) {
+    match *shape {
+        crate::geometry::Footprint::Circle { center, radius } => square(center, radius),
+        crate::geometry::Footprint::Rect {
+            center,
+            u,
+            v,
+            half_u,
+            half_v,
+        } => {
+            let half = u.abs() * half_u + v.abs() * half_v;
+            let widen = half * MARGIN + MARGIN;
+            (center - half - widen, center + half + widen)
+        }
+    }
+}
+
+/// A landmark's visit disc (its radius plus two diameters of the largest body).
+fn landmark_box(landmark: &crate::compile::Landmark, max_radius: f64) -> (DVec2, DVec2) {
+    square(landmark.center, landmark.radius + 4.0 * max_radius)
+}

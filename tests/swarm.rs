@@ -1,0 +1,238 @@
+//! Swarms: the column renderer's sweep against the exhaustive reference on random crowded
+//! scenes (bit for bit), one simulation across thread counts, and a packed crowd that never
+//! overlaps beyond the documented tolerance.
+
+use glam::{DVec2, DVec3};
+use proptest::prelude::*;
+use regatta_runtime::compile::rig::TurretRig;
+use regatta_runtime::optics::{Panoramic, Renderer, RetinaOutput};
+use regatta_runtime::render::column::Strip;
+use regatta_runtime::retina::{pixel_azimuth, HALF_BAND, PIXELS, PIXEL_WIDTH};
+use regatta_runtime::sim::{Simulation, PENETRATION_TOLERANCE};
+use regatta_tests::{compile_text, start_poses};
+
+/// A crowded arena: robots anywhere (overlapping or not: only vision is tested), buoys, and
+/// turned boxes.
+fn crowd_world(
+    side: f64,
+    robots: &[(f64, f64, f64)],
+    buoys: &[(f64, f64)],
+    boxes: &[(f64, f64, f64)],
+    stride: u32,
+    samples: u32,
+) -> String {
+    let mut out = format!(
+        "#VRML_SIM R2023b utf8\nWorldInfo {{ coordinateSystem \"NUE\" }}\n\
+         DirectionalLight {{ direction 0.3 -1 0.2 intensity 0.6 ambientIntensity 0.2 }}\n\
+         Arena {{ size {side} {side} }}\n"
+    );
+    let at = |u: f64| (u - 0.5) * side * 0.96;
+    for &(x, z) in buoys {
+        out += &format!("Buoy {{ translation {} 0 {} }}\n", at(x), at(z));
+    }
+    for &(x, z, yaw) in boxes {
+        out += &format!(
+            "Transform {{ translation {} 0.02 {} rotation 0 1 0 {yaw} children [ Shape {{ \
+             appearance Appearance {{ material Material {{ diffuseColor 0.8 0.3 0.2 }} }} \
+             geometry Box {{ size 0.06 0.04 0.02 }} }} ] }}\n",
+            at(x),
+            at(z)
+        );
+    }
+    for (i, &(x, z, heading)) in robots.iter().enumerate() {
+        out += &format!(
+            "Khepera {{ translation {} 0 {} rotation 0 1 0 {heading} name \"r{i}\" \
+             turret PanoramicTurret {{ stride {stride} samples {samples} }} }}\n",
+            at(x),
+            at(z)
+        );
+    }
+    out
+}
+
+fn strip() -> Strip {
+    Strip::new(
+        (0..PIXELS).map(pixel_azimuth).collect(),
+        PIXEL_WIDTH,
+        HALF_BAND,
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// Every robot's photocurrents from the step's shared frame, through the sweep (and, past
+    /// a few dozen parts, with the parts behind it left out), are the exhaustive reference's
+    /// to the last bit, and so are the 6-bit outputs.
+    #[test]
+    fn the_sweep_renders_crowds_as_the_exhaustive_reference(
+        side in 0.3f64..1.6,
+        robots in prop::collection::vec((0.0f64..1.0, 0.0f64..1.0, -3.2f64..3.2), 2..60),
+        buoys in prop::collection::vec((0.0f64..1.0, 0.0f64..1.0), 0..6),
+        boxes in prop::collection::vec((0.0f64..1.0, 0.0f64..1.0, -3.2f64..3.2), 0..4),
+        stride in prop::sample::select(vec![1u32, 4, 16]),
+        samples in 1u32..3,
+    ) {
+        let compiled = compile_text(&crowd_world(side, &robots, &buoys, &boxes, stride, samples));
+        let renderer = Renderer::new(&compiled.graph, &compiled.plan, false);
+        let Renderer::Columns(scene) = &renderer else {
+            panic!("an upright crowd renders by columns");
+        };
+        let poses = start_poses(&compiled);
+        let mut shared = None;
+        renderer.prepare_shared(&compiled.plan, &poses, &mut shared);
+        let frame = shared.expect("the column renderer shares its frame");
+        let strip = strip();
+        for (index, rig) in compiled.rig.robots.iter().enumerate() {
+            let Some(TurretRig::Panoramic(turret)) = &rig.turret else {
+                continue;
+            };
+            let eye = DVec3::new(rig.start.x, rig.floor_y + turret.height, rig.start.z);
+            let (mut fast, mut reference) = (vec![0.0; PIXELS], vec![0.0; PIXELS]);
+            scene.integrate_for(&frame, Some(index), eye, rig.start.heading, &strip,
+                turret.samples, turret.stride, &mut fast);
+            scene.integrate_exhaustive(&frame, Some(index), eye, rig.start.heading, &strip,
+                turret.samples, turret.stride, &mut reference);
+            for (pixel, (a, b)) in fast.iter().zip(&reference).enumerate() {
+                prop_assert_eq!(a.to_bits(), b.to_bits(), "robot {} pixel {}: {} vs {}",
+                    index, pixel, a, b);
+            }
+            let mut model = Panoramic::new(turret);
+            let (mut out_fast, mut out_reference) = (RetinaOutput::default(), RetinaOutput::default());
+            model.accept(&fast, &mut out_fast);
+            model.accept(&reference, &mut out_reference);
+            prop_assert_eq!(&out_fast.digital, &out_reference.digital);
+        }
+    }
+}
+
+/// A generated swarm with retinas (the bench's kind of world, small).
+fn swarm_text(robots: usize, side: f64) -> String {
+    let per_row = (robots as f64).sqrt().ceil() as usize;
+    let cell = side / per_row as f64;
+    let mut out = format!(
+        "#VRML_SIM R2023b utf8\nWorldInfo {{ coordinateSystem \"NUE\" basicTimeStep 32 randomSeed 7 }}\n\
+         DirectionalLight {{ direction 0.3 -1 0.2 intensity 0.05 ambientIntensity 0.05 }}\n\
+         Arena {{ size {side} {side} }}\n\
+         Buoy {{ translation 0.03 0 0.02 irReflectance 1 }}\n"
+    );
+    for i in 0..robots {
+        let x = -side / 2.0 + ((i % per_row) as f64 + 0.5) * cell;
+        let z = -side / 2.0 + ((i / per_row) as f64 + 0.5) * cell;
+        out += &format!(
+            "Khepera {{ translation {x} 0 {z} rotation 0 1 0 {} name \"k{i}\" controller \"regatta\" \
+             turret PanoramicTurret {{ lambda 5 }} }}\n",
+            i as f64 * 0.9
+        );
+    }
+    out
+}
+
+/// What a run leaves that a log would record.
+fn fingerprint(simulation: &Simulation) -> Vec<String> {
+    simulation
+        .robots
+        .iter()
+        .map(|r| {
+            let digital = r
+                .panoramic
+                .as_ref()
+                .map(|p| format!("{:?}", p.output.digital))
+                .unwrap_or_default();
+            format!(
+                "{:?} {:?} {:?} {:?} {} {digital}",
+                (
+                    r.pose.x.to_bits(),
+                    r.pose.z.to_bits(),
+                    r.pose.heading.to_bits()
+                ),
+                r.proximity,
+                r.ambient,
+                r.command,
+                r.contacts.events
+            )
+        })
+        .collect()
+}
+
+/// Sensing and control side by side on 1, 2 or 4 threads give the same run, bit for bit.
+#[test]
+fn a_swarm_runs_the_same_on_any_number_of_threads() {
+    let compiled = compile_text(&swarm_text(24, 0.8));
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let mut simulation = Simulation::new(&compiled, None).unwrap();
+                simulation.sense_everything();
+                simulation.run(60);
+                fingerprint(&simulation)
+            })
+    };
+    let one = run(1);
+    assert_eq!(one, run(2));
+    assert_eq!(one, run(4));
+}
+
+/// A thousand robots packed into a small arena, driving into each other for 1000 steps: no
+/// two bodies, and no body and wall, overlap by more than the documented tolerance.
+#[test]
+fn a_packed_thousand_never_overlaps() {
+    let side = 2.0;
+    let per_row = 32;
+    let cell = side / per_row as f64;
+    let mut text = format!(
+        "#VRML_SIM R2023b utf8\nWorldInfo {{ coordinateSystem \"NUE\" basicTimeStep 32 }}\n\
+         Arena {{ size {side} {side} }}\n"
+    );
+    for i in 0..1000 {
+        let x = -side / 2.0 + ((i % per_row) as f64 + 0.5) * cell;
+        let z = -side / 2.0 + ((i / per_row) as f64 + 0.5) * cell;
+        // Fast and blind to each other half the time: they push.
+        let controller = if i % 2 == 0 { "braitenberg" } else { "none" };
+        text += &format!(
+            "Khepera {{ translation {x:.4} 0 {z:.4} rotation 0 1 0 {:.3} name \"p{i}\" \
+             controller \"{controller}\" controllerArgs \"bias=80\" }}\n",
+            (i * 37 % 628) as f64 / 100.0
+        );
+    }
+    let text = text.replace(
+        "controller \"none\" controllerArgs \"bias=80\"",
+        "controller \"none\"",
+    );
+    let compiled = compile_text(&text);
+    let mut simulation = Simulation::new(&compiled, None).unwrap();
+    let radius = compiled.rig.robots[0].body_radius;
+    let limit = side / 2.0 - radius + PENETRATION_TOLERANCE;
+    let mut worst = 0.0f64;
+    for step in 0..1000 {
+        simulation.step();
+        if step % 100 != 99 {
+            continue;
+        }
+        let centers: Vec<DVec2> = simulation
+            .robots
+            .iter()
+            .map(|r| DVec2::new(r.pose.x, r.pose.z))
+            .collect();
+        for (a, ca) in centers.iter().enumerate() {
+            worst = worst.max(ca.x.abs().max(ca.y.abs()) - (limit - PENETRATION_TOLERANCE));
+            for cb in &centers[a + 1..] {
+                worst = worst.max(2.0 * radius - ca.distance(*cb));
+            }
+        }
+    }
+    assert!(
+        worst <= PENETRATION_TOLERANCE,
+        "bodies overlap (each other or a wall) by {worst} m (tolerance {PENETRATION_TOLERANCE} m)"
+    );
+    // They did press on each other and on the walls.
+    let pressed = simulation
+        .robots
+        .iter()
+        .filter(|r| r.contacts.steps > 100)
+        .count();
+    assert!(pressed > 200, "{pressed} robots pressed for over 100 steps");
+}
