@@ -10,6 +10,7 @@
 
 pub mod broad;
 pub mod camera;
+pub mod check;
 pub mod compile;
 pub mod controllers;
 pub mod geometry;

@@ -3,11 +3,16 @@
 //! list separated like `PATH`). A folder may be a Webots installation (`webots://projects/…`
 //! resolves to `DIR/projects/…`) or a flat folder of PROTOs (`DIR/Name.proto`).
 //!
-//! The folders are trusted (the user named them); what a world's url makes of them is not: a
-//! path with `..`, an absolute path, or one that leaves the folder through a symbolic link is
-//! never opened.
+//! The folders are trusted (the user named them); what a world's url makes of them is not:
+//! each folder is a root of its own, and the path a url names inside it goes through
+//! [`FileAccess::resolve`], the one way from a url to a path for everything a world reads. So
+//! `..` out of the folder, absolute paths and symbolic links leading out are refused by the
+//! same rules (and the same tests, in `access.rs`) as a world's own EXTERNPROTO and Inline
+//! urls.
 
-use std::path::{Component, Path, PathBuf};
+use std::path::PathBuf;
+
+use crate::access::{FileAccess, Refusal};
 
 /// The environment variable that adds folders to the PROTO path.
 pub const ENV: &str = "REGATTA_PROTO_PATH";
@@ -21,50 +26,78 @@ pub fn from_flags_and_env(flags: &[PathBuf]) -> Vec<PathBuf> {
     dirs
 }
 
+/// What looking a `webots://` PROTO up in the PROTO path found.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Lookup {
+    /// The file, in the first folder that has it.
+    Found(PathBuf),
+    /// No folder has it.
+    Absent,
+    /// A folder has a file there, but reaching it breaks the file rules (a symbolic link out
+    /// of the folder): the url, as looked up, and the rule.
+    Refused(String, Refusal),
+}
+
 /// The file for the PROTO `name` that a `webots://` url names by `inside` (its path inside a
-/// Webots installation), in the first folder that has it.
-pub fn find(dirs: &[PathBuf], inside: &str, name: &str) -> Option<PathBuf> {
-    let relative = Path::new(inside);
-    let safe = relative
-        .components()
-        .all(|c| matches!(c, Component::Normal(_)));
+/// Webots installation), looked for as `DIR/inside` and then as `DIR/name.proto` in each
+/// folder in turn.
+pub fn find(dirs: &[PathBuf], inside: &str, name: &str) -> Lookup {
+    let mut refused = None;
     for dir in dirs {
-        let Ok(root) = dir.canonicalize() else {
+        let mut access = FileAccess::none();
+        let Ok(()) = access.allow(dir) else {
             continue;
         };
-        let mut candidates = Vec::new();
-        if safe {
-            candidates.push(root.join(relative));
-        }
-        candidates.push(root.join(format!("{name}.proto")));
-        for candidate in candidates {
-            // Inside the folder once links are followed, and a file.
-            match candidate.canonicalize() {
-                Ok(real) if real.starts_with(&root) && real.is_file() => return Some(real),
-                _ => {}
+        let root = access.roots()[0].clone();
+        for url in [inside.to_owned(), format!("{name}.proto")] {
+            match access.resolve(&url, Some(&root)) {
+                Ok(path) if path.is_file() => return Lookup::Found(path),
+                Ok(_) | Err(Refusal::Missing) => {}
+                Err(refusal @ Refusal::LinkOutsideRoot) => {
+                    refused.get_or_insert(Lookup::Refused(url, refusal));
+                }
+                // `..`, absolute: the url is not a path inside a Webots installation.
+                Err(_) => {}
             }
         }
     }
-    None
+    refused.unwrap_or(Lookup::Absent)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// The lookup order; confinement itself is `FileAccess`'s (tested in `access.rs`), and a
+    /// refusal it makes reaches the caller.
     #[test]
-    fn finds_by_path_then_by_name_and_never_leaves_the_folder() {
+    fn finds_by_path_then_by_name_through_file_access() {
         let dir = std::env::temp_dir().join(format!("regatta-proto-path-{}", std::process::id()));
-        let nested = dir.join("projects/robots/x/protos");
+        let nested = dir.join("webots/projects/robots/x/protos");
         std::fs::create_dir_all(&nested).unwrap();
         std::fs::write(nested.join("X.proto"), "PROTO X [] { Group {} }").unwrap();
-        std::fs::write(dir.join("Y.proto"), "PROTO Y [] { Group {} }").unwrap();
-        let dirs = vec![dir.clone()];
-        assert!(find(&dirs, "projects/robots/x/protos/X.proto", "X").is_some());
-        assert!(find(&dirs, "projects/elsewhere/Y.proto", "Y").is_some());
-        assert!(find(&dirs, "../../etc/passwd", "passwd").is_none());
-        assert!(find(&dirs, "/etc/passwd", "passwd").is_none());
-        assert!(find(&dirs, "projects/nothing/Z.proto", "Z").is_none());
+        std::fs::write(dir.join("webots/Y.proto"), "PROTO Y [] { Group {} }").unwrap();
+        std::fs::write(dir.join("outside.proto"), "PROTO Z [] { Group {} }").unwrap();
+        let dirs = vec![dir.join("missing"), dir.join("webots")];
+        assert!(matches!(
+            find(&dirs, "projects/robots/x/protos/X.proto", "X"),
+            Lookup::Found(p) if p.ends_with("X.proto")
+        ));
+        assert!(matches!(
+            find(&dirs, "projects/elsewhere/Y.proto", "Y"),
+            Lookup::Found(p) if p.ends_with("Y.proto")
+        ));
+        assert_eq!(find(&dirs, "../outside.proto", "outside"), Lookup::Absent);
+        assert_eq!(find(&dirs, "projects/nothing/Z.proto", "Z"), Lookup::Absent);
+        #[cfg(unix)]
+        {
+            std::os::unix::fs::symlink(dir.join("outside.proto"), dir.join("webots/L.proto"))
+                .unwrap();
+            assert_eq!(
+                find(&dirs, "projects/l/L.proto", "L"),
+                Lookup::Refused("L.proto".to_owned(), Refusal::LinkOutsideRoot)
+            );
+        }
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -25,9 +25,22 @@ fn run(world: &Path, extra: &[&str]) -> Output {
         .arg(world)
         .arg("--lenient")
         .args(duration)
+        .args(project_access(world))
         .args(extra)
         .output()
         .expect("regatta runs")
+}
+
+/// What a user gives a Webots project's world: its PROTOs live in `protos/` beside `worlds/`
+/// (`--allow-path ..`), and a world without robots is run on purpose (`--allow-empty`).
+fn project_access(world: &Path) -> Vec<String> {
+    let mut flags = vec!["--allow-empty".to_owned()];
+    let folder = world.parent().expect("a world is in a folder");
+    if folder.file_name().is_some_and(|n| n == "worlds") {
+        flags.push("--allow-path".to_owned());
+        flags.push(folder.parent().expect("a project").display().to_string());
+    }
+    flags
 }
 
 fn text(output: &Output) -> (String, String) {
@@ -96,6 +109,7 @@ fn khepera_and_epuck_worlds_run_with_every_robot_moving() {
                 .arg("run")
                 .arg(&world)
                 .args(["--lenient", "--steps", "0"])
+                .args(project_access(&world))
                 .output()
                 .expect("regatta runs");
             let start = positions(&text(&start).0);
@@ -449,5 +463,60 @@ fn an_extern_epuck_is_driven_by_serve() {
         poses.lines().nth(1).unwrap().split(',').nth(2),
         last.split(',').nth(2)
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--proto-path` (and `REGATTA_PROTO_PATH`) finds `webots://` PROTOs in a folder under the
+/// same file rules as the world's own urls: a link out of the folder is refused and named.
+#[test]
+fn proto_path_lookups_obey_the_file_rules() {
+    let dir = std::env::temp_dir().join(format!("regatta-proto-path-cli-{}", std::process::id()));
+    let webots = dir.join("webots");
+    let protos = webots.join("projects/objects/misc/protos");
+    std::fs::create_dir_all(&protos).unwrap();
+    std::fs::create_dir_all(dir.join("world")).unwrap();
+    std::fs::write(
+        protos.join("Crate.proto"),
+        "#VRML_SIM R2023b utf8\n# template language: javascript\nPROTO Crate [ field SFFloat side 0.1 ] {\n  Shape { geometry Box { size %<= fields.side.value >% %<= fields.side.value >% %<= fields.side.value * 2 >% } }\n}\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("secret.proto"),
+        "#VRML_SIM R2023b utf8\nPROTO Secret [] { Group {} }\n",
+    )
+    .unwrap();
+    let world = dir.join("world/w.wbt");
+    std::fs::write(
+        &world,
+        "#VRML_SIM R2023b utf8\nEXTERNPROTO \"webots://projects/objects/misc/protos/Crate.proto\"\nEXTERNPROTO \"webots://projects/objects/misc/protos/Secret.proto\"\nCrate { side 0.2 }\nSecret { }\n",
+    )
+    .unwrap();
+    let check = |env: bool| {
+        let mut command = regatta();
+        command.arg("check").arg(&world).arg("--lenient");
+        if env {
+            command.env("REGATTA_PROTO_PATH", &webots);
+        } else {
+            command.arg("--proto-path").arg(&webots);
+        }
+        command.output().expect("regatta runs")
+    };
+    let output = check(false);
+    let (_, stderr) = text(&output);
+    assert!(!stderr.contains("Crate"), "{stderr}");
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink(dir.join("secret.proto"), webots.join("Secret.proto")).unwrap();
+        for env in [false, true] {
+            let output = check(env);
+            let (_, stderr) = text(&output);
+            assert!(!output.status.success(), "{stderr}");
+            assert!(
+                stderr.contains("symbolic link to a place outside"),
+                "{stderr}"
+            );
+            assert!(!stderr.contains("Crate"), "{stderr}");
+        }
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -99,8 +99,26 @@ impl Experiment {
         lenient: bool,
         overrides: &[Override],
     ) -> Result<Experiment, LoadError> {
+        if path.as_os_str() == "-" {
+            // Standard input: a world with no folder, which reads no file.
+            let bytes = regatta_parser::source::read_bytes(
+                std::io::stdin().lock(),
+                regatta_parser::source::MAX_FILE_SIZE,
+            )
+            .map_err(|error| {
+                LoadError::Read(regatta_parser::SourceError::Io {
+                    path: path.to_owned(),
+                    source: std::io::Error::other(error.to_string()),
+                })
+            })?;
+            let source = regatta_parser::SourceText::from_bytes("<stdin>".to_owned(), bytes);
+            return Experiment::from_text(&source.name, &source.text, None, lenient, overrides);
+        }
         let source = regatta_parser::SourceText::read(path)?;
-        let base = path.parent().map(Path::to_owned).unwrap_or_default();
+        let base = match path.parent() {
+            Some(parent) if !parent.as_os_str().is_empty() => parent.to_owned(),
+            _ => PathBuf::from("."),
+        };
         Experiment::from_text(&source.name, &source.text, Some(base), lenient, overrides)
     }
 
@@ -114,17 +132,22 @@ impl Experiment {
         overrides: &[Override],
     ) -> Result<Experiment, LoadError> {
         let text = apply_overrides(text, overrides)?;
+        // The world reads files under its own folder only (see regatta_schema::access).
+        let base_dir = base_dir.and_then(|dir| dir.canonicalize().ok());
+        let mut access = regatta_schema::FileAccess::none();
+        if let Some(dir) = &base_dir {
+            let _ = access.allow(dir);
+        }
         let mut checked = regatta_schema::check(
             regatta_parser::SourceText::from_bytes(name.to_owned(), text.clone().into_bytes()),
             &regatta_schema::Options {
                 strict: !lenient,
+                access,
                 base_dir,
-                proto_path: Vec::new(),
+                ..regatta_schema::Options::default()
             },
         );
-        checked
-            .diagnostics
-            .extend(regatta_runtime::neural::check_networks(&checked.scene));
+        regatta_runtime::check::check_scene(&mut checked);
         let render = |errors: bool| -> String {
             checked
                 .diagnostics
