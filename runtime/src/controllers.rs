@@ -21,8 +21,8 @@
 //!   to), as a sailor rounds a mark and leaves it. Near a buoy the retina's normalisation
 //!   (by the mean photocurrent) can dim the far ones below the lobe contrast, so that
 //!   without habituation the robot circles the near one for ever (worlds/regatta_wide.wbt).
-//!   In the paper's arena the next light takes over before habituation would; a robot that
-//!   has only ever seen one light keeps circling it, as the paper's did. `habituation=0`
+//!   In the paper's arena the next light almost always takes over before habituation would;
+//!   a robot that has only ever seen one light keeps circling it, as the paper's did. `habituation=0`
 //!   turns it off.
 
 use std::ops::ControlFlow;
@@ -79,8 +79,8 @@ impl Default for Parameters {
             light_gain: 0.1,
             min_contrast: 1.5,
             // 2.4 s at the 32 ms control cycle, about 160° of a tight orbit: in the paper's
-            // arena the next light takes over sooner; later, the next mark has turned past
-            // the bow and the rounding would change sense.
+            // arena the next light almost always takes over sooner; later, the next mark
+            // has turned past the bow and the rounding would change sense.
             habituation: 75.0,
         }
     }
