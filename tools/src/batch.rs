@@ -14,7 +14,7 @@ use crate::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The world file.
+    /// The world file (`-` reads standard input).
     world: PathBuf,
     /// Seeds: a range `1..1000` (both ends included) or a list `1,5,9`.
     #[arg(long, default_value = "1..10", value_parser = parse_seeds)]

@@ -156,11 +156,7 @@ fn gltf(points: usize, runs: usize) -> anyhow::Result<Outcome> {
     let started = Instant::now();
     let checked = regatta_schema::check(
         regatta_parser::SourceText::from_bytes("mesh.wbt".into(), world.into_bytes()),
-        &regatta_schema::Options {
-            strict: true,
-            base_dir: None,
-            proto_path: Vec::new(),
-        },
+        &regatta_schema::Options::default(),
     );
     if checked.has_errors() {
         bail!("the generated world does not check");

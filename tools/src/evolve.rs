@@ -4,8 +4,7 @@
 //! and the best candidate's log.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use anyhow::{bail, Context};
@@ -185,11 +184,9 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         None => Evolution::new(settings, dimension),
     };
     let checkpoint_dir = args.checkpoint.clone().or_else(|| args.resume.clone());
-    let interrupted = Arc::new(AtomicBool::new(false));
-    {
-        let interrupted = interrupted.clone();
-        let _ = ctrlc::set_handler(move || interrupted.store(true, Ordering::SeqCst));
-    }
+    // SIGINT or SIGTERM ends the evolution after the generation in progress, with a
+    // checkpoint to resume from; the exit code says which signal it was.
+    let stop = crate::signals::Stop::install();
     let pool = regatta_evolve::thread_pool(args.jobs);
     let runs_per_generation =
         (evolution.population() * experiments.len() * evolution.settings.trials) as u64;
@@ -227,7 +224,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         if let Some(dir) = &checkpoint_dir {
             evolution.save(dir)?;
         }
-        if interrupted.load(Ordering::SeqCst) {
+        if stop.requested() {
             break;
         }
     }
@@ -257,7 +254,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         done.load(Ordering::Relaxed),
         done.load(Ordering::Relaxed) as f64 / wall.max(1e-9)
     );
-    Ok(Outcome::Clean)
+    Ok(stop.outcome().unwrap_or(Outcome::Clean))
 }
 
 /// best.wbt, fitness.csv, fitness.png (or .svg) and best.mcap in `out`.

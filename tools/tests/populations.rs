@@ -148,7 +148,10 @@ fn run_json_follows_its_schema_and_a_log_gives_the_live_fitness() {
         ]);
         if world.contains("regatta") {
             let visits = std::fs::read_to_string(csv.join("visits.csv")).unwrap();
-            assert!(visits.starts_with("t,robot,buoy,name,visits\n"), "{visits}");
+            assert!(
+                visits.starts_with("step,t_ns,t,robot,buoy,name,visits\n"),
+                "{visits}"
+            );
             let rows = visits.lines().count() - 1;
             assert_eq!(rows, value["robots"][0]["visits"].as_array().unwrap().len());
         }
