@@ -41,5 +41,7 @@ echo "regatta module built and installed in $(( $(date +%s) - started )) s"
 
 # The Python tests compare with the command line built by `cargo test` above.
 export REGATTA_BIN=${REGATTA_BIN:-$root/target/debug/regatta}
-cd python
-"$venv/bin/python" -m pytest tests -q -p no:cacheprovider
+# pytest runs from the repository's root through its own script, never `python -m pytest` from
+# python/: that would put python/ first on sys.path and import the source folder (which has no
+# compiled extension) instead of the installed module.
+"$venv/bin/pytest" python/tests -q -p no:cacheprovider

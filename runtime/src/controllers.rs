@@ -27,8 +27,8 @@
 //!   to), as a sailor rounds a mark and leaves it. Near a buoy the retina's normalisation
 //!   (by the mean photocurrent) can dim the far ones below the lobe contrast, so that
 //!   without habituation the robot circles the near one for ever (worlds/regatta_wide.wbt).
-//!   In the paper's arena the next light takes over before habituation would; a robot that
-//!   has only ever seen one light keeps circling it, as the paper's did. `habituation=0`
+//!   In the paper's arena the next light almost always takes over before habituation would;
+//!   a robot that has only ever seen one light keeps circling it, as the paper's did. `habituation=0`
 //!   turns it off.
 //! - `neural`: the robot's `NeuralNetwork` node (see [`crate::neural`]); it takes no
 //!   `controllerArgs`: its parameters are the network's fields.
@@ -176,8 +176,8 @@ const REGATTA_PARAMETERS: &[ParameterSpec] = &[
         key: "habituation",
         kind: ParameterKind::Count,
         // 2.4 s at the 32 ms control cycle, about 160° of a tight orbit: in the paper's
-        // arena the next light takes over sooner; later, the next mark has turned past the
-        // bow and the rounding would change sense.
+        // arena the next light almost always takes over sooner; later, the next mark has
+        // turned past the bow and the rounding would change sense.
         default: 75.0,
         doc: "Control steps with the followed light abeam before the robot loses interest in it (0: never).",
     },
