@@ -879,13 +879,42 @@ impl<'c> Lowerer<'c> {
                         }
                         continue;
                     }
-                    crate::proto_path::Lookup::Refused(looked_up, refusal) => {
-                        self.refuse(
+                    crate::proto_path::Lookup::Refused {
+                        looked_up,
+                        folder,
+                        refusal,
+                    } => {
+                        // Nothing was read: an error in both modes, as for the world's own
+                        // urls; the stand-in, if any, still stands in.
+                        let why = match refusal {
+                            Refusal::LinkOutsideRoot => {
+                                "is a symbolic link to a place outside that folder"
+                            }
+                            Refusal::OutsideRoot => "leads outside that folder",
+                            Refusal::Absolute => "is an absolute path",
+                            Refusal::Network { .. } => "is a network url",
+                            _ => "cannot be read",
+                        };
+                        let instead = if WEBOTS_STANDINS.iter().any(|(n, _, _)| *n == name) {
+                            "regatta's stand-in is used instead"
+                        } else {
+                            "its PROTO stays unknown"
+                        };
+                        self.error(
                             file,
-                            url.span,
-                            &format!("{looked_up} (in the PROTO path)"),
-                            refusal,
-                            UrlUse::ExternProto,
+                            Diagnostic::error(
+                                url.span,
+                                format!(
+                                    "EXTERNPROTO url '{}' is not read from the PROTO path: '{looked_up}' in '{}' {why}",
+                                    url.value,
+                                    folder.display()
+                                ),
+                            )
+                            .with_label("refused")
+                            .with_note(format!(
+                                "{instead}; a PROTO-path folder is read only inside itself (no `..` out of it, no link leading out)"
+                            ))
+                            .with_code("file-access"),
                         );
                     }
                     crate::proto_path::Lookup::Absent => {}

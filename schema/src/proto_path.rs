@@ -33,31 +33,47 @@ pub enum Lookup {
     Found(PathBuf),
     /// No folder has it.
     Absent,
-    /// A folder has a file there, but reaching it breaks the file rules (a symbolic link out
-    /// of the folder): the url, as looked up, and the rule.
-    Refused(String, Refusal),
+    /// The url breaks the file rules: it climbs out of the folder (`..`) or is absolute, or a
+    /// folder has a file there that is a symbolic link out of it. The path as looked up in
+    /// the folder, the folder, and the rule. Nothing was read.
+    Refused {
+        looked_up: String,
+        folder: PathBuf,
+        refusal: Refusal,
+    },
 }
 
 /// The file for the PROTO `name` that a `webots://` url names by `inside` (its path inside a
 /// Webots installation), looked for as `DIR/inside` and then as `DIR/name.proto` in each
 /// folder in turn.
 pub fn find(dirs: &[PathBuf], inside: &str, name: &str) -> Lookup {
+    let candidates = [inside.to_owned(), format!("{name}.proto")];
     let mut refused = None;
     for dir in dirs {
         let mut access = FileAccess::none();
         let Ok(()) = access.allow(dir) else {
+            // A folder that does not exist (a stale environment variable) holds nothing.
             continue;
         };
         let root = access.roots()[0].clone();
-        for url in [inside.to_owned(), format!("{name}.proto")] {
-            match access.resolve(&url, Some(&root)) {
+        for looked_up in &candidates {
+            let refusal = match access.resolve(looked_up, Some(&root)) {
                 Ok(path) if path.is_file() => return Lookup::Found(path),
-                Ok(_) | Err(Refusal::Missing) => {}
-                Err(refusal @ Refusal::LinkOutsideRoot) => {
-                    refused.get_or_insert(Lookup::Refused(url, refusal));
-                }
-                // `..`, absolute: the url is not a path inside a Webots installation.
-                Err(_) => {}
+                Ok(_) | Err(Refusal::Missing) => continue,
+                Err(refusal) => refusal,
+            };
+            let lookup = Lookup::Refused {
+                looked_up: looked_up.clone(),
+                folder: dir.clone(),
+                refusal: refusal.clone(),
+            };
+            if refusal == Refusal::LinkOutsideRoot {
+                // This folder's file is unusable; another folder may still have the PROTO.
+                refused.get_or_insert(lookup);
+            } else {
+                // `..` out of the folder, an absolute path: the url itself reaches out, in
+                // every folder alike.
+                return lookup;
             }
         }
     }
@@ -73,6 +89,7 @@ mod tests {
     #[test]
     fn finds_by_path_then_by_name_through_file_access() {
         let dir = std::env::temp_dir().join(format!("regatta-proto-path-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
         let nested = dir.join("webots/projects/robots/x/protos");
         std::fs::create_dir_all(&nested).unwrap();
         std::fs::write(nested.join("X.proto"), "PROTO X [] { Group {} }").unwrap();
@@ -87,7 +104,26 @@ mod tests {
             find(&dirs, "projects/elsewhere/Y.proto", "Y"),
             Lookup::Found(p) if p.ends_with("Y.proto")
         ));
-        assert_eq!(find(&dirs, "../outside.proto", "outside"), Lookup::Absent);
+        // `..` out of the folder is refused before anything is looked at, even where the
+        // file exists, and so is a name that climbs out.
+        let outside = |looked_up: &str| Lookup::Refused {
+            looked_up: looked_up.to_owned(),
+            folder: dir.join("webots"),
+            refusal: Refusal::OutsideRoot,
+        };
+        assert_eq!(
+            find(&dirs, "projects/../../outside.proto", "outside"),
+            outside("projects/../../outside.proto")
+        );
+        assert_eq!(
+            find(&dirs, "projects/x/X.proto", "../outside"),
+            outside("../outside.proto")
+        );
+        // `..` that stays inside is an ordinary path.
+        assert!(matches!(
+            find(&dirs, "projects/robots/../robots/x/protos/X.proto", "X"),
+            Lookup::Found(p) if p.ends_with("X.proto")
+        ));
         assert_eq!(find(&dirs, "projects/nothing/Z.proto", "Z"), Lookup::Absent);
         #[cfg(unix)]
         {
@@ -95,7 +131,21 @@ mod tests {
                 .unwrap();
             assert_eq!(
                 find(&dirs, "projects/l/L.proto", "L"),
-                Lookup::Refused("L.proto".to_owned(), Refusal::LinkOutsideRoot)
+                Lookup::Refused {
+                    looked_up: "L.proto".to_owned(),
+                    folder: dir.join("webots"),
+                    refusal: Refusal::LinkOutsideRoot
+                }
+            );
+            // A folder linked out as a whole is refused the same way.
+            std::os::unix::fs::symlink(&dir, dir.join("webots/up")).unwrap();
+            assert_eq!(
+                find(&dirs, "up/outside.proto", "Q"),
+                Lookup::Refused {
+                    looked_up: "up/outside.proto".to_owned(),
+                    folder: dir.join("webots"),
+                    refusal: Refusal::LinkOutsideRoot
+                }
             );
         }
         std::fs::remove_dir_all(&dir).unwrap();

@@ -471,6 +471,7 @@ fn an_extern_epuck_is_driven_by_serve() {
 #[test]
 fn proto_path_lookups_obey_the_file_rules() {
     let dir = std::env::temp_dir().join(format!("regatta-proto-path-cli-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
     let webots = dir.join("webots");
     let protos = webots.join("projects/objects/misc/protos");
     std::fs::create_dir_all(&protos).unwrap();
@@ -491,6 +492,25 @@ fn proto_path_lookups_obey_the_file_rules() {
         "#VRML_SIM R2023b utf8\nEXTERNPROTO \"webots://projects/objects/misc/protos/Crate.proto\"\nEXTERNPROTO \"webots://projects/objects/misc/protos/Secret.proto\"\nCrate { side 0.2 }\nSecret { }\n",
     )
     .unwrap();
+    // `..` out of the folder, to a file that exists: refused without a look.
+    let climbing = dir.join("world/climbing.wbt");
+    std::fs::write(
+        &climbing,
+        "#VRML_SIM R2023b utf8\nEXTERNPROTO \"webots://projects/../../secret.proto\"\nsecret { }\n",
+    )
+    .unwrap();
+    let output = regatta()
+        .arg("check")
+        .arg(&climbing)
+        .arg("--lenient")
+        .arg("--proto-path")
+        .arg(&webots)
+        .output()
+        .expect("regatta runs");
+    let (_, stderr) = text(&output);
+    assert!(!output.status.success(), "{stderr}");
+    assert!(stderr.contains("leads outside that folder"), "{stderr}");
+    assert!(stderr.contains("climbing.wbt:2:"), "{stderr}");
     let check = |env: bool| {
         let mut command = regatta();
         command.arg("check").arg(&world).arg("--lenient");
@@ -512,7 +532,7 @@ fn proto_path_lookups_obey_the_file_rules() {
             let (_, stderr) = text(&output);
             assert!(!output.status.success(), "{stderr}");
             assert!(
-                stderr.contains("symbolic link to a place outside"),
+                stderr.contains("is a symbolic link to a place outside that folder"),
                 "{stderr}"
             );
             assert!(!stderr.contains("Crate"), "{stderr}");
