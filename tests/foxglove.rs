@@ -123,7 +123,7 @@ struct Cdr<'a> {
 impl Cdr<'_> {
     fn take(&mut self, n: usize) -> &[u8] {
         // Primitives are aligned to their size, counted after the 4-byte header.
-        while (self.at - 4) % n.min(8) != 0 {
+        while !(self.at - 4).is_multiple_of(n.min(8)) {
             self.at += 1;
         }
         let bytes = self

@@ -195,7 +195,7 @@ impl Cdr {
         self.buf.extend_from_slice(&[0, 1, 0, 0]);
     }
     fn align(&mut self, n: usize) {
-        while (self.buf.len() - 4) % n != 0 {
+        while !(self.buf.len() - 4).is_multiple_of(n) {
             self.buf.push(0);
         }
     }
@@ -270,7 +270,7 @@ impl<'a> CdrReader<'a> {
         CdrReader { data, at: 4 }
     }
     fn align(&mut self, n: usize) {
-        while (self.at - 4) % n != 0 {
+        while !(self.at - 4).is_multiple_of(n) {
             self.at += 1;
         }
     }

@@ -3171,7 +3171,7 @@ impl<'c> Lowerer<'c> {
         }
         let arity = base.arity();
         let count_ok = if ty.multi {
-            numbers.len() % arity == 0
+            numbers.len().is_multiple_of(arity)
         } else {
             numbers.len() == arity
         };

@@ -451,7 +451,7 @@ impl<'a> Builder<'a> {
     }
 
     fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut view = json!({
@@ -832,7 +832,7 @@ impl<'a> Builder<'a> {
         if self.bin.len() > u32::MAX as usize - 64 {
             return Err(ExportError::TooLarge(self.bin.len()));
         }
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let node_count = self.nodes.len();
