@@ -212,7 +212,12 @@ impl VectorWorld {
         }
         let autoreset = Autoreset::parse(autoreset)?;
         let fitness = Fitness::parse(fitness).map_err(|e| value_error(e.to_string()))?;
-        let experiment = load(&path, text, lenient)?;
+        let named = robot.clone().map(|name| vec![name]);
+        let driven = match &named {
+            Some(names) => regatta_evolve::Driven::Named(names),
+            None => regatta_evolve::Driven::First,
+        };
+        let experiment = load(&path, text, lenient, driven)?;
         let robot = match robot {
             Some(name) => name,
             None => experiment

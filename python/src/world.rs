@@ -9,7 +9,7 @@ use numpy::{
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use regatta_evolve::{Experiment, Fitness};
+use regatta_evolve::{Driven, Experiment, Fitness};
 use regatta_runtime::retina::FilterKind;
 
 use crate::core::{Core, CoreError, LogRequest};
@@ -38,15 +38,24 @@ pub fn embedded_world(name: &str) -> PyResult<&'static str> {
         })
 }
 
-/// Loads a world from its file, or from `text` (named `path`, reading no other file).
+/// Loads a world from its file, or from `text` (named `path`, reading no other file); the
+/// robots Python drives may wait for an external controller (Webots' `"<extern>"`).
 pub fn load(
     path: &std::path::Path,
     text: Option<&str>,
     lenient: bool,
+    driven: Driven<'_>,
 ) -> PyResult<Arc<Experiment>> {
     let experiment = match text {
-        Some(text) => Experiment::from_text(&path.display().to_string(), text, None, lenient, &[]),
-        None => Experiment::load(path, lenient, &[]),
+        Some(text) => Experiment::from_text_driven(
+            &path.display().to_string(),
+            text,
+            None,
+            lenient,
+            &[],
+            driven,
+        ),
+        None => Experiment::load_driven(path, lenient, &[], driven),
     };
     experiment
         .map(Arc::new)
@@ -83,7 +92,10 @@ pub fn read_actions(actions: &Bound<'_, PyAny>, out: &mut [f64]) -> PyResult<()>
 /// compiles a world file (a world that does not check raises `WorldError` with the
 /// diagnostics at file:line:col). The robots named in `control` (every robot when `None`) are
 /// driven by the actions given to `step`; the others run the controllers their world gives
-/// them (`control=[]` runs the world as `regatta run` does).
+/// them (`control=[]` runs the world as `regatta run` does). A driven robot may have an
+/// external controller in its world (Webots' `"<extern>"`, as webots_ros2's worlds give the
+/// e-puck): that is what such a world asks for; one that is not driven is refused (`lenient`:
+/// it runs `braitenberg`), as `regatta run` does.
 ///
 /// An action is two numbers per driven robot, the left and right wheel, in units of the
 /// robot's speed scale (its `NeuralNetwork.outputScale`, else 20 pulses per 10 ms): 1 is
@@ -134,7 +146,11 @@ impl World {
         text: Option<&str>,
     ) -> PyResult<World> {
         let fitness = Fitness::parse(fitness).map_err(|e| value_error(e.to_string()))?;
-        let experiment = load(&path, text, lenient)?;
+        let driven = match &control {
+            Some(names) => Driven::Named(names),
+            None => Driven::Every,
+        };
+        let experiment = load(&path, text, lenient, driven)?;
         let core = Core::new(experiment, control.as_deref(), fitness, seed, 0).map_err(to_py)?;
         let lengths: Vec<usize> = core.observations().iter().map(|o| o.len()).collect();
         if lengths.windows(2).any(|w| w[0] != w[1]) {

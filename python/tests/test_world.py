@@ -107,6 +107,28 @@ def test_world_controllers_run_when_nothing_is_driven(cli):
     assert len(visits) >= 3, visits
 
 
+# webots_ros2's e-puck world, whose robot waits for an external controller ("<extern>").
+EXTERN_EPUCK = ROOT.parent / "shared" / "corpus" / "webots-ext" / "cyberbotics+webots_ros2" / "_versions" / "R2023b" / "webots_ros2_epuck" / "worlds" / "epuck_world.wbt"
+
+
+def test_an_extern_robot_of_a_webots_world_is_driven_by_actions():
+    if not EXTERN_EPUCK.exists():
+        pytest.skip(f"the corpus is not beside the repository ({EXTERN_EPUCK})")
+    # Lenient: the world's Pi-puck has no stand-in and is skipped.
+    w = regatta.World(EXTERN_EPUCK, lenient=True, seed=1)
+    assert w.controlled == ["e-puck"]
+    x0 = w["e-puck"].pose
+    for _ in range(50):
+        w.step([1, 1])
+    x1 = w["e-puck"].pose
+    assert np.hypot(x1[0] - x0[0], x1[1] - x0[1]) > 0.01, (x0, x1)
+    # Driven by nobody, it is refused as `regatta run` refuses it.
+    text = '#VRML_SIM R2023b utf8\nRectangleArena { }\nE-puck { controller "<extern>" }\n'
+    assert regatta.World("extern.wbt", text=text).controlled == ["e-puck"]
+    with pytest.raises(regatta.WorldError, match='"<extern>"'):
+        regatta.World("extern.wbt", text=text, control=[])
+
+
 def test_summary_is_run_json(cli):
     help_text = cli("run", "--help").stdout.decode()
     if "--json" not in help_text:

@@ -92,12 +92,49 @@ pub struct Experiment {
     pub warnings: String,
 }
 
+/// The robots driven from outside the simulator (by Python's actions): a world written for
+/// that names an external controller for them (Webots' `"<extern>"`), which is then what they
+/// should have rather than a controller to refuse.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Driven<'a> {
+    /// No robot: every robot runs its world's controller (`regatta batch`, `evolve`).
+    #[default]
+    Nobody,
+    /// Every robot.
+    Every,
+    /// The first robot.
+    First,
+    /// The robots of these names.
+    Named(&'a [String]),
+}
+
+impl Driven<'_> {
+    fn drives(&self, index: usize, name: &str) -> bool {
+        match self {
+            Driven::Nobody => false,
+            Driven::Every => true,
+            Driven::First => index == 0,
+            Driven::Named(names) => names.iter().any(|n| n == name),
+        }
+    }
+}
+
 impl Experiment {
     /// Reads, edits (`--set`), checks and compiles a world file.
     pub fn load(
         path: &Path,
         lenient: bool,
         overrides: &[Override],
+    ) -> Result<Experiment, LoadError> {
+        Experiment::load_driven(path, lenient, overrides, Driven::Nobody)
+    }
+
+    /// [`Experiment::load`], with the robots that are driven from outside.
+    pub fn load_driven(
+        path: &Path,
+        lenient: bool,
+        overrides: &[Override],
+        driven: Driven<'_>,
     ) -> Result<Experiment, LoadError> {
         if path.as_os_str() == "-" {
             // Standard input: a world with no folder, which reads no file.
@@ -112,14 +149,28 @@ impl Experiment {
                 })
             })?;
             let source = regatta_parser::SourceText::from_bytes("<stdin>".to_owned(), bytes);
-            return Experiment::from_text(&source.name, &source.text, None, lenient, overrides);
+            return Experiment::from_text_driven(
+                &source.name,
+                &source.text,
+                None,
+                lenient,
+                overrides,
+                driven,
+            );
         }
         let source = regatta_parser::SourceText::read(path)?;
         let base = match path.parent() {
             Some(parent) if !parent.as_os_str().is_empty() => parent.to_owned(),
             _ => PathBuf::from("."),
         };
-        Experiment::from_text(&source.name, &source.text, Some(base), lenient, overrides)
+        Experiment::from_text_driven(
+            &source.name,
+            &source.text,
+            Some(base),
+            lenient,
+            overrides,
+            driven,
+        )
     }
 
     /// A world given as text; `base_dir` is where its EXTERNPROTOs and Inlines resolve
@@ -130,6 +181,18 @@ impl Experiment {
         base_dir: Option<PathBuf>,
         lenient: bool,
         overrides: &[Override],
+    ) -> Result<Experiment, LoadError> {
+        Experiment::from_text_driven(name, text, base_dir, lenient, overrides, Driven::Nobody)
+    }
+
+    /// [`Experiment::from_text`], with the robots that are driven from outside.
+    pub fn from_text_driven(
+        name: &str,
+        text: &str,
+        base_dir: Option<PathBuf>,
+        lenient: bool,
+        overrides: &[Override],
+        driven: Driven<'_>,
     ) -> Result<Experiment, LoadError> {
         let text = apply_overrides(text, overrides)?;
         // The world reads files under its own folder only (see regatta_schema::access).
@@ -184,8 +247,18 @@ impl Experiment {
         }
         let mut compiled = regatta_runtime::compile(&checked.scene);
         // Webots controller names, as `regatta run` maps them.
-        for robot in &mut compiled.rig.robots {
-            use regatta_runtime::webots_controllers::{resolve_robot, Resolved};
+        for (index, robot) in compiled.rig.robots.iter_mut().enumerate() {
+            use regatta_runtime::webots_controllers::{
+                resolve, resolve_robot, Resolution, Resolved,
+            };
+            if driven.drives(index, &robot.name)
+                && matches!(resolve(&robot.controller), Resolution::External(_))
+            {
+                // Waiting for a controller from outside, and it gets one: its own never runs.
+                robot.controller = "none".to_owned();
+                robot.controller_args.clear();
+                continue;
+            }
             match resolve_robot(robot, lenient) {
                 Ok(Resolved::Same) => {}
                 Ok(Resolved::Mapped(note)) => warnings.push_str(&format!("note: {note}\n")),
@@ -642,5 +715,35 @@ impl RunSummary {
             ]);
         }
         cells.join(",")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A robot waiting for an external controller (Webots' `"<extern>"`) is what a world
+    /// driven from outside asks for; nobody driving it is a refusal, as in `regatta run`.
+    #[test]
+    fn an_extern_robot_is_accepted_only_when_driven() {
+        let world = "#VRML_SIM R2023b utf8\nRectangleArena { }\nE-puck { name \"puck\" controller \"<extern>\" }\nE-puck { name \"other\" translation 0.2 0 0 controller \"<extern>\" }\n";
+        let load = |driven| Experiment::from_text_driven("w.wbt", world, None, false, &[], driven);
+        let refused = load(Driven::Nobody).unwrap_err().to_string();
+        assert!(refused.contains("\"<extern>\""), "{refused}");
+        let refused = load(Driven::First).unwrap_err().to_string();
+        assert!(refused.contains("robot 'other'"), "{refused}");
+        let named = ["other".to_owned(), "puck".to_owned()];
+        for driven in [Driven::Every, Driven::Named(&named)] {
+            let experiment = load(driven).expect("driven from outside");
+            for robot in &experiment.compiled.rig.robots {
+                assert_eq!(robot.controller, "none");
+            }
+            assert!(!experiment.warnings.contains("braitenberg"));
+        }
+        // Lenient and not driven: the replacement `regatta run --lenient` makes.
+        let lenient = Experiment::from_text_driven("w.wbt", world, None, true, &[], Driven::First)
+            .expect("lenient");
+        assert_eq!(lenient.compiled.rig.robots[0].controller, "none");
+        assert_eq!(lenient.compiled.rig.robots[1].controller, "braitenberg");
     }
 }

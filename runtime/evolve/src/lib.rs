@@ -20,5 +20,5 @@ pub mod ga;
 pub mod record;
 pub mod world;
 
-pub use experiment::{evaluate, thread_pool, Experiment, Observer, RunSummary};
+pub use experiment::{evaluate, thread_pool, Driven, Experiment, Observer, RunSummary};
 pub use fitness::Fitness;
