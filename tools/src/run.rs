@@ -193,9 +193,14 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
         simulation.steps,
         simulation.time_step * 1000.0
     );
+    // Short runs take well under a millisecond: three significant digits, not three decimals.
+    let wall_shown = if wall >= 1.0 {
+        format!("{wall:.3} s")
+    } else {
+        format!("{:.3} ms", wall * 1e3)
+    };
     println!(
-        "wall time {:.3} s: {:.0} steps/s, {:.0}× real time",
-        wall,
+        "wall time {wall_shown}: {:.0} steps/s, {:.0}× real time",
         simulation.steps as f64 / wall.max(1e-9),
         simulation.time / wall.max(1e-9)
     );
