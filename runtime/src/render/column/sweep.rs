@@ -141,14 +141,48 @@ fn sort_small(values: &mut [f64]) {
     }
 }
 
+/// `x`'s place in [`f64::total_cmp`]'s order, as an unsigned integer.
+#[inline(always)]
+fn total_key(x: f64) -> u64 {
+    let bits = x.to_bits();
+    if bits >> 63 == 1 {
+        !bits
+    } else {
+        bits | 1 << 63
+    }
+}
+
+/// The number whose [`total_key`] is `key`.
+#[inline(always)]
+fn from_total_key(key: u64) -> f64 {
+    if key >> 63 == 1 {
+        f64::from_bits(key & !(1 << 63))
+    } else {
+        f64::from_bits(!key)
+    }
+}
+
+/// Sorts numbers in [`f64::total_cmp`]'s order, comparing integers (each number's key held
+/// in its own bits meanwhile): no per-comparison bit twiddling.
+fn sort_total(values: &mut [f64]) {
+    for value in values.iter_mut() {
+        *value = f64::from_bits(total_key(*value));
+    }
+    values.sort_unstable_by_key(|value| value.to_bits());
+    for value in values.iter_mut() {
+        *value = from_total_key(value.to_bits());
+    }
+}
+
 /// The angular sweep over one look: asked for the objects facing azimuth intervals `(a, b)`
 /// with `a` never decreasing, it keeps the objects whose intervals have opened and not yet
 /// closed, so each answer costs the objects open there, not every object. Its answers are
 /// exactly [`EyeObject::meets`]'s, in object order.
 #[derive(Default)]
 pub(super) struct Sweep {
-    /// Objects with an ordinary interval, by their interval's start.
-    order: Vec<u32>,
+    /// Objects with an ordinary interval (their start's [`total_key`], their index), by
+    /// their interval's start.
+    order: Vec<(u64, u32)>,
     /// How many of `order` have opened.
     opened: usize,
     /// Objects open now (and those whose interval passes ±π, always), ascending.
@@ -173,12 +207,11 @@ impl Sweep {
             if object.wraps {
                 self.open.push(index as u32);
             } else {
-                self.order.push(index as u32);
+                self.order.push((total_key(object.lo), index as u32));
             }
         }
-        let objects = &look.objects;
-        self.order
-            .sort_unstable_by(|&x, &y| objects[x as usize].lo.total_cmp(&objects[y as usize].lo));
+        // Objects with equal starts open together, so their order here does not matter.
+        self.order.sort_unstable_by_key(|&(key, _)| key);
         self.opened = 0;
         self.last = f64::NEG_INFINITY;
     }
@@ -200,7 +233,7 @@ impl Sweep {
             let o = &objects[i as usize];
             o.wraps || o.hi > a
         });
-        while let Some(&next) = self.order.get(self.opened) {
+        while let Some(&(_, next)) = self.order.get(self.opened) {
             if objects[next as usize].lo >= b {
                 break;
             }
@@ -455,7 +488,7 @@ impl ColumnScene<'_> {
         if breaks.len() <= FEW {
             sort_small(breaks);
         } else {
-            breaks.sort_unstable_by(f64::total_cmp);
+            sort_total(breaks);
         }
         // Objects may share an edge: one is enough.
         breaks.dedup();
@@ -496,5 +529,35 @@ impl ColumnScene<'_> {
                     && hider.y0 / entry <= hidden.y0
                     && hider.y1 / entry >= hidden.y1
             })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sorting_by_keys_is_total_cmp_order() {
+        let mut values = vec![
+            0.5,
+            -0.0,
+            0.0,
+            -1.5,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            3.25e-300,
+            -3.25e-300,
+            1.0,
+            -2.0,
+            0.5,
+        ];
+        for i in 0..200 {
+            values.push(libm::sin(i as f64 * 1.7) * 3.0);
+        }
+        let mut expected = values.clone();
+        expected.sort_by(f64::total_cmp);
+        sort_total(&mut values);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&values), bits(&expected));
     }
 }
