@@ -5,7 +5,7 @@
 use std::fmt::Write;
 
 use regatta_parser::{parse, SourceText};
-use regatta_schema::{check, Options};
+use regatta_schema::{check, FileAccess, Options};
 use regatta_tests::{expect_file, files_with, root};
 
 #[test]
@@ -40,8 +40,9 @@ fn typed_diagnostics_match_their_expectations() {
         let lenient = source.text.contains("# mode: lenient");
         let options = Options {
             strict: !lenient,
-            base_dir: Some(input.parent().unwrap().to_owned()),
-            proto_path: Vec::new(),
+            access: FileAccess::for_world(&input).expect("the test folder exists"),
+            base_dir: Some(input.parent().unwrap().canonicalize().unwrap()),
+            ..Options::default()
         };
         let checked = check(source, &options);
         let mut actual = String::new();

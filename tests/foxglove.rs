@@ -255,7 +255,7 @@ fn compile(world: &str) -> (regatta_runtime::Compiled, String) {
         &regatta_schema::Options {
             strict: true,
             base_dir: Some(regatta_tests::root().join("worlds")),
-            proto_path: Vec::new(),
+            ..regatta_schema::Options::default()
         },
     );
     assert!(!checked.has_errors(), "{}", checked.render(false));

@@ -126,8 +126,92 @@ fn world() -> impl Strategy<Value = String> {
         })
 }
 
+/// An instance of one of `count` PROTOs, maybe with field values (which may instantiate more).
+fn instance(count: usize, depth: u32) -> BoxedStrategy<String> {
+    let plain = (0..count, prop::option::of(-2.0f64..2.0)).prop_map(|(k, size)| match size {
+        Some(size) => format!("P{k} {{ size {size:.3} }}"),
+        None => format!("P{k} {{ }}"),
+    });
+    if depth == 0 {
+        return plain.boxed();
+    }
+    prop_oneof![
+        3 => plain,
+        1 => (0..count, prop::collection::vec(instance(count, depth - 1), 0..4))
+            .prop_map(|(k, kids)| format!("P{k} {{ kids [ {} ] }}", kids.join(" "))),
+        1 => (0..count, instance(count, depth - 1))
+            .prop_map(|(k, one)| format!("DEF D{k} P{k} {{ one {one} }}")),
+        1 => (0..count).prop_map(|k| format!("USE D{k}")),
+    ]
+    .boxed()
+}
+
+/// A system of PROTOs whose bodies and defaults instantiate each other (earlier ones, later
+/// ones, themselves), pass fields on with IS, compute with templates, copy with USE.
+fn proto_system() -> impl Strategy<Value = String> {
+    (2usize..7).prop_flat_map(|count| {
+        (
+            prop::collection::vec(
+                (
+                    prop::collection::vec(instance(count, 2), 0..5),
+                    prop::collection::vec(instance(count, 1), 0..3),
+                    prop::option::of(instance(count, 1)),
+                    1usize..12,
+                ),
+                count,
+            ),
+            prop::collection::vec(instance(count, 2), 1..4),
+        )
+            .prop_map(move |(protos, world)| {
+                let mut text = String::from("#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" }\n");
+                for (k, (body, defaults, one, copies)) in protos.iter().enumerate() {
+                    let one = one.clone().unwrap_or_else(|| "NULL".to_owned());
+                    let repeated = vec![body.join(" "); *copies].join(" ");
+                    text.push_str(&format!(
+                        "PROTO P{k} [\n  field SFFloat size 1\n  field MFNode kids [ {} ]\n  field SFNode one {one}\n] {{\n  Transform {{\n    scale %<= fields.size.value >% 1 1\n    children [ {repeated} Group {{ children IS kids }} Transform {{ children [ ] }} ]\n  }}\n}}\n",
+                        defaults.join(" ")
+                    ));
+                }
+                text.push_str(&world.join("\n"));
+                text.push('\n');
+                text
+            })
+    })
+}
+
+/// Checks `text` on a thread of its own (a test thread's 2 MiB stack) and gives up, failing,
+/// if it has not finished after a minute: a hang detector, not a timing.
+fn check_within_a_minute(text: String, options: Options) -> Result<usize, String> {
+    let (send, receive) = std::sync::mpsc::channel();
+    std::thread::Builder::new()
+        .stack_size(2 << 20)
+        .spawn(move || {
+            let checked = check(
+                SourceText::from_bytes("system.wbt".to_owned(), text.into_bytes()),
+                &options,
+            );
+            let _ = send.send(checked.scene.nodes.len());
+        })
+        .map_err(|e| e.to_string())?;
+    receive
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .map_err(|_| "the check did not finish within a minute".to_owned())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    /// PROTOs that instantiate each other in every way: no panic, no stack overflow, no hang,
+    /// and never more nodes than the limit.
+    #[test]
+    fn proto_systems_expand_within_their_limits(text in proto_system(), nodes in 50usize..5000, depth in 2usize..40) {
+        let mut options = Options::default();
+        options.limits.nodes = nodes;
+        options.limits.proto_depth = depth;
+        let built = check_within_a_minute(text.clone(), options);
+        prop_assert!(built.is_ok(), "{text}\n{built:?}");
+        prop_assert!(built.unwrap_or(0) <= nodes, "{text}");
+    }
 
     #[test]
     fn generated_worlds_parse_cleanly(text in world()) {
@@ -169,7 +253,7 @@ proptest! {
         for diagnostic in &parsed.diagnostics {
             let _ = diagnostic.render("noise", &text, false);
         }
-        let _ = check(SourceText::from_bytes("noise".to_owned(), text.into_bytes()), &Options { strict: false, base_dir: None, proto_path: Vec::new() });
+        let _ = check(SourceText::from_bytes("noise".to_owned(), text.into_bytes()), &Options { strict: false, ..Options::default() });
     }
 }
 
@@ -219,11 +303,23 @@ fn exponential_proto_expansion_is_bounded() {
         SourceText::from_bytes("bomb.wbt".to_owned(), text.into_bytes()),
         &Options::default(),
     );
-    assert!(checked
+    let limits: Vec<&str> = checked
         .diagnostics
         .iter()
-        .any(|d| d.diagnostic.code == "too-large" || d.diagnostic.code == "depth"));
-    assert!(checked.scene.nodes.len() <= regatta_schema::MAX_NODES);
+        .filter(|d| d.diagnostic.code == "limit")
+        .map(|d| d.diagnostic.message.as_str())
+        .collect();
+    assert_eq!(limits.len(), 1, "{:?}", checked.short());
+    assert!(
+        limits[0].contains("more than the limit of 1000000"),
+        "{limits:?}"
+    );
+    // Refused before anything was built.
+    assert!(
+        checked.scene.nodes.len() < 10,
+        "{}",
+        checked.scene.nodes.len()
+    );
 }
 
 mod worlds_that_check {
@@ -325,4 +421,16 @@ mod worlds_that_check {
             }
         }
     }
+}
+
+/// Found by `arbitrary_bytes_never_panic`: a list left open whose last token ends in a
+/// multi-byte character (here U+FFFD from an invalid byte) once made `fmt` slice inside it.
+#[test]
+fn an_unclosed_list_ending_inside_a_character_formats() {
+    let source = SourceText::from_bytes("cut".to_owned(), vec![58, 123, 58, 91, 48, 0, 128]);
+    let parsed = parse(&source.text);
+    let _ = format(&parsed.file, &source.text);
+    let text = "Group { children [ 0 1é";
+    let parsed = parse(text);
+    let _ = format(&parsed.file, text);
 }

@@ -319,7 +319,8 @@ fn the_regatta_emerges_across_layouts() {
         ("regatta_two.wbt", 40),
         ("regatta_four.wbt", 40),
         ("regatta_five.wbt", 50),
-        ("regatta_offcentre.wbt", 20),
+        ("regatta_offcentre.wbt", 50),
+        ("regatta_wide.wbt", 40),
     ] {
         let (visits, cyclic) = regatta_in(world);
         assert!(
@@ -334,6 +335,24 @@ fn the_regatta_emerges_across_layouts() {
             );
         }
     }
+}
+
+#[test]
+fn without_habituation_the_wide_triangle_traps_the_robot_around_one_buoy() {
+    // Near a buoy, the retina's normalisation dims the far lamps of the wide triangle below
+    // the odd filter's lobe contrast: the robot that never loses interest in the light it
+    // rounds circles it for the whole run (with habituation: the_regatta_emerges_across_layouts).
+    let text =
+        std::fs::read_to_string(regatta_tests::root().join("worlds/regatta_wide.wbt")).unwrap();
+    let text = text.replace(
+        "controller \"regatta\"",
+        "controller \"regatta\" controllerArgs \"habituation=0\"",
+    );
+    let compiled = compile_text(&text);
+    let mut simulation = Simulation::new(&compiled, None).unwrap();
+    simulation.run((300.0 / simulation.time_step) as u64);
+    let visits = merged(&simulation.robots[0].visits.sequence);
+    assert_eq!(visits, [0], "{visits:?}");
 }
 
 #[test]

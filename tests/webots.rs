@@ -122,8 +122,9 @@ fn load(path: &std::path::Path, text: Option<&str>) -> Compiled {
             ),
             &regatta_schema::Options {
                 strict: false,
+                access: regatta_schema::FileAccess::for_world(path).expect("the world's folder"),
                 base_dir: path.parent().map(|p| p.to_owned()),
-                proto_path: Vec::new(),
+                ..regatta_schema::Options::default()
             },
         ),
         None => regatta_schema::check_file(path, false).expect("readable"),

@@ -2,7 +2,7 @@
 //! style of rustc: `file:line:col`, the source line, a caret, what was expected and found.
 
 use codespan_reporting::diagnostic as cs;
-use codespan_reporting::files::SimpleFile;
+use codespan_reporting::files::{Files, SimpleFiles};
 use codespan_reporting::term;
 
 use crate::syntax::Span;
@@ -19,6 +19,9 @@ pub enum Severity {
 pub struct Label {
     pub span: Span,
     pub message: String,
+    /// The file it is in, as an index of the [`SourceMap`] the diagnostic is rendered with;
+    /// `None` is the diagnostic's own file. (A PROTO's body, shown beside the user's line.)
+    pub file: Option<usize>,
 }
 
 /// One message about one place in one file.
@@ -71,6 +74,22 @@ impl Diagnostic {
         self.secondary.push(Label {
             span,
             message: message.into(),
+            file: None,
+        });
+        self
+    }
+
+    /// Adds a secondary place in another file of the same [`SourceMap`].
+    pub fn with_secondary_in(
+        mut self,
+        file: usize,
+        span: Span,
+        message: impl Into<String>,
+    ) -> Diagnostic {
+        self.secondary.push(Label {
+            span,
+            message: message.into(),
+            file: Some(file),
         });
         self
     }
@@ -99,43 +118,9 @@ impl Diagnostic {
 
     /// Renders in rustc's style: header, `--> file:line:col`, the line and a caret.
     pub fn render(&self, file_name: &str, source: &str, color: bool) -> String {
-        let file = SimpleFile::new(file_name, source);
-        let clamp = |span: Span| {
-            let end = (span.end as usize).min(source.len());
-            let start = (span.start as usize).min(end);
-            floor_char_boundary(source, start)..floor_char_boundary(source, end)
-        };
-        let mut labels = vec![cs::Label::primary((), clamp(self.span)).with_message(&self.label)];
-        for label in &self.secondary {
-            labels.push(cs::Label::secondary((), clamp(label.span)).with_message(&label.message));
-        }
-        let diagnostic = match self.severity {
-            Severity::Error => cs::Diagnostic::error(),
-            Severity::Warning => cs::Diagnostic::warning(),
-        }
-        .with_message(&self.message)
-        .with_labels(labels)
-        .with_notes(self.notes.clone());
-        let config = term::Config::default();
-        let mut out = Vec::new();
-        let result = if color {
-            let mut writer = term::termcolor::Ansi::new(&mut out);
-            term::emit_to_write_style(&mut writer, &config, &file, &diagnostic)
-        } else {
-            let mut writer = term::termcolor::NoColor::new(&mut out);
-            term::emit_to_write_style(&mut writer, &config, &file, &diagnostic)
-        };
-        match result {
-            Ok(()) => String::from_utf8_lossy(&out).into_owned(),
-            Err(_) => {
-                let (line, col) = self.line_col(source);
-                format!(
-                    "{}: {file_name}:{line}:{col}: {}\n",
-                    self.severity_word(),
-                    self.message
-                )
-            }
-        }
+        let mut map = SourceMap::new();
+        let file = map.add(file_name, source);
+        map.render(file, self, color)
     }
 
     /// `file:line:col: error: message` on one line, for logs and tests.
@@ -152,6 +137,95 @@ impl Diagnostic {
         match self.severity {
             Severity::Error => "error",
             Severity::Warning => "warning",
+        }
+    }
+}
+
+/// The files diagnostics point into, with their line starts found once: rendering many
+/// diagnostics of a large file costs one pass over it, not one per diagnostic.
+pub struct SourceMap<'a> {
+    files: SimpleFiles<&'a str, &'a str>,
+}
+
+impl Default for SourceMap<'_> {
+    fn default() -> Self {
+        SourceMap::new()
+    }
+}
+
+impl<'a> SourceMap<'a> {
+    pub fn new() -> SourceMap<'a> {
+        SourceMap {
+            files: SimpleFiles::new(),
+        }
+    }
+
+    /// Adds a file; returns its index.
+    pub fn add(&mut self, name: &'a str, source: &'a str) -> usize {
+        self.files.add(name, source)
+    }
+
+    fn range(&self, file: usize, span: Span) -> std::ops::Range<usize> {
+        let source = self.files.get(file).map(|f| *f.source()).unwrap_or("");
+        let end = (span.end as usize).min(source.len());
+        let start = (span.start as usize).min(end);
+        floor_char_boundary(source, start)..floor_char_boundary(source, end)
+    }
+
+    /// `line:col` (both from 1; col in characters) of byte `offset` of `file`.
+    pub fn line_col(&self, file: usize, offset: usize) -> (usize, usize) {
+        let Ok(entry) = self.files.get(file) else {
+            return (1, 1);
+        };
+        let source = *entry.source();
+        let offset = floor_char_boundary(source, offset.min(source.len()));
+        match self.files.location(file, offset) {
+            Ok(location) => (location.line_number, location.column_number),
+            Err(_) => line_col(source, offset),
+        }
+    }
+
+    /// `file:line:col: error: message`.
+    pub fn short(&self, file: usize, diagnostic: &Diagnostic) -> String {
+        let name = self.files.get(file).map(|f| *f.name()).unwrap_or("?");
+        let (line, col) = self.line_col(file, diagnostic.span.start as usize);
+        format!(
+            "{name}:{line}:{col}: {}: {}",
+            diagnostic.severity_word(),
+            diagnostic.message
+        )
+    }
+
+    /// Renders `diagnostic`, which is about `file`, in rustc's style.
+    pub fn render(&self, file: usize, diagnostic: &Diagnostic, color: bool) -> String {
+        let mut labels = vec![cs::Label::primary(file, self.range(file, diagnostic.span))
+            .with_message(&diagnostic.label)];
+        for label in &diagnostic.secondary {
+            let in_file = label.file.unwrap_or(file);
+            labels.push(
+                cs::Label::secondary(in_file, self.range(in_file, label.span))
+                    .with_message(&label.message),
+            );
+        }
+        let rendered = match diagnostic.severity {
+            Severity::Error => cs::Diagnostic::error(),
+            Severity::Warning => cs::Diagnostic::warning(),
+        }
+        .with_message(&diagnostic.message)
+        .with_labels(labels)
+        .with_notes(diagnostic.notes.clone());
+        let config = term::Config::default();
+        let mut out = Vec::new();
+        let result = if color {
+            let mut writer = term::termcolor::Ansi::new(&mut out);
+            term::emit_to_write_style(&mut writer, &config, &self.files, &rendered)
+        } else {
+            let mut writer = term::termcolor::NoColor::new(&mut out);
+            term::emit_to_write_style(&mut writer, &config, &self.files, &rendered)
+        };
+        match result {
+            Ok(()) => String::from_utf8_lossy(&out).into_owned(),
+            Err(_) => format!("{}\n", self.short(file, diagnostic)),
         }
     }
 }

@@ -231,17 +231,34 @@ impl Printer<'_> {
     }
 
     fn value(&mut self, value: &Value) {
+        let open = value.span.start as usize;
         if value.bracketed {
-            self.word("[", value.span.start as usize);
+            self.word("[", open);
         }
         let close = (value.span.end as usize).saturating_sub(1);
+        // A flat list keeps a line break after `[` and before `]` where the source had one,
+        // like the breaks between its items: a table stays a table.
+        let flat_items: Option<(usize, usize)> = match &value.items {
+            Items::Numbers(list) if !list.values.is_empty() => Some((
+                list.span_of(0, self.src).start as usize,
+                list.span_of(list.values.len() - 1, self.src).end as usize,
+            )),
+            Items::Atoms(atoms) if !atoms.is_empty() => Some((
+                atoms[0].span().start as usize,
+                atoms[atoms.len() - 1].span().end as usize,
+            )),
+            _ => None,
+        };
+        let multiline = matches!(&value.items, Items::Atoms(atoms) if value.bracketed
+        && atoms.iter().any(|atom| {
+            matches!(atom, Atom::Node(_) | Atom::String(_) | Atom::Template(_))
+        }));
+        if let (true, false, Some((first, _))) = (value.bracketed, multiline, flat_items) {
+            self.break_if_source_did(Some(open + 1), first);
+        }
         match &value.items {
             Items::Numbers(list) => self.numbers(list),
             Items::Atoms(atoms) => {
-                let multiline = value.bracketed
-                    && atoms.iter().any(|atom| {
-                        matches!(atom, Atom::Node(_) | Atom::String(_) | Atom::Template(_))
-                    });
                 if multiline {
                     self.indent += 1;
                     for atom in atoms {
@@ -262,6 +279,16 @@ impl Printer<'_> {
             }
         }
         if value.bracketed {
+            if let (false, Some((_, last))) = (multiline, flat_items) {
+                // Bytes, not text: an unclosed list may end inside a character.
+                let between = self.src.as_bytes().get(last.min(close)..close);
+                if between.is_some_and(|gap| gap.contains(&b'\n')) {
+                    self.flush_comments_before(close);
+                    if !self.at_line_start() {
+                        self.newline();
+                    }
+                }
+            }
             self.word("]", close);
             self.last_source_end = value.span.end as usize;
         }

@@ -16,7 +16,7 @@ pub mod source;
 pub mod syntax;
 pub mod testgen;
 
-pub use diagnostic::{Diagnostic, Label, Severity};
-pub use parse::{parse, Parse, MAX_DEPTH};
+pub use diagnostic::{Diagnostic, Label, Severity, SourceMap};
+pub use parse::{parse, parse_with, Parse, MAX_DEPTH, MAX_ERRORS};
 pub use source::{SourceError, SourceText};
 pub use syntax::Span;

@@ -10,9 +10,13 @@ use crate::diagnostic::Diagnostic;
 use crate::lexer::{parse_number, unescape, Lexer, Token, TokenKind};
 use crate::syntax::*;
 
-/// Deepest nesting of nodes and PROTOs the parser follows. Real worlds stay under 30; the
-/// bound keeps recursion far from the 2 MiB stack of a test thread, even in debug builds.
+/// Deepest nesting of nodes and PROTOs the parser follows by default. Real worlds stay under
+/// 30; the bound keeps recursion far from the 2 MiB stack of a test thread, even in debug
+/// builds. [`parse_with`] takes another bound (the command line's `--limit nesting=N`).
 pub const MAX_DEPTH: usize = 64;
+
+/// Syntax errors reported per file; past it, one message says so and parsing goes on quietly.
+pub const MAX_ERRORS: usize = 200;
 
 /// What [`parse`] returns: always a tree, and every problem found on the way.
 #[derive(Clone, Debug, PartialEq)]
@@ -30,6 +34,12 @@ impl Parse {
 
 /// Parses a whole world or PROTO file. Never fails, never panics.
 pub fn parse(source: &str) -> Parse {
+    parse_with(source, MAX_DEPTH)
+}
+
+/// [`parse`] with another bound on the nesting of nodes and PROTOs: deeper groups are
+/// reported once (with the limit in the message) and skipped without recursion.
+pub fn parse_with(source: &str, max_depth: usize) -> Parse {
     let (header, start) = read_header(source);
     let mut lexer = Lexer::new(source, start);
     lexer.multiline_strings = !matches!(
@@ -49,7 +59,12 @@ pub fn parse(source: &str) -> Parse {
         lexer,
         diagnostics: Vec::new(),
         depth: 0,
+        max_depth,
+        depth_reported: false,
         eof_reported: false,
+        newlines: None,
+        open_lists: 0,
+        unclosed_at: None,
     };
     if source.len() > u32::MAX as usize {
         parser.diagnostics.push(Diagnostic::error(
@@ -139,8 +154,17 @@ struct Parser<'s> {
     previous: Span,
     diagnostics: Vec<Diagnostic>,
     depth: usize,
+    max_depth: usize,
+    /// Too-deep nesting is one cause: it is said once, where the limit was first crossed.
+    depth_reported: bool,
     /// Unclosed groups all end at the end of the file: that is said once.
     eof_reported: bool,
+    /// Offsets of the newlines, found at the first message that needs a line number.
+    newlines: Option<Vec<u32>>,
+    /// `[` lists open around the current token.
+    open_lists: usize,
+    /// Where a node that was never closed was noticed: the nodes around it end there quietly.
+    unclosed_at: Option<u32>,
 }
 
 impl<'s> Parser<'s> {
@@ -201,19 +225,43 @@ impl<'s> Parser<'s> {
             }
             self.eof_reported = true;
         }
+        if self.diagnostics.len() >= MAX_ERRORS {
+            // Garbage gives an error every few bytes: past the cap, messages would only cost
+            // time and memory. The last one says so.
+            if self.diagnostics.len() == MAX_ERRORS {
+                self.diagnostics.push(
+                    Diagnostic::error(
+                        diagnostic.span,
+                        format!("too many syntax errors: only the first {MAX_ERRORS} are reported"),
+                    )
+                    .with_label("parsing went on without reporting past here")
+                    .with_note("is this a world file?"),
+                );
+            }
+            return;
+        }
         self.diagnostics.push(diagnostic);
+    }
+
+    /// The line (from 0) of byte `offset`, from line starts found once.
+    fn line_of(&mut self, offset: u32) -> usize {
+        let newlines = self.newlines.get_or_insert_with(|| {
+            self.src
+                .bytes()
+                .enumerate()
+                .filter(|&(_, b)| b == b'\n')
+                .map(|(i, _)| i as u32)
+                .collect()
+        });
+        newlines.partition_point(|&n| n < offset)
     }
 
     /// "Expected X, found Y": the caret on the previous token when Y is on a later line, so
     /// that the message lands on the line with the mistake; otherwise on Y.
     fn expected(&mut self, what: &str) {
         let message = format!("Expected {what}, found {}.", self.found());
-        let found_line = self.src[..self.current.span.start as usize]
-            .matches('\n')
-            .count();
-        let previous_line = self.src[..self.previous.start as usize]
-            .matches('\n')
-            .count();
+        let found_line = self.line_of(self.current.span.start);
+        let previous_line = self.line_of(self.previous.start);
         let diagnostic = if found_line > previous_line && self.previous.end > 0 {
             Diagnostic::error(self.previous, message)
                 .with_label(format!("expected {what} after this"))
@@ -337,7 +385,7 @@ impl<'s> Parser<'s> {
         // gives one message; the node keeps an empty type name.
         let type_name = type_name.unwrap_or_else(|| empty_ident(self.previous));
         let body = if self.current.kind == TokenKind::LBrace {
-            Some(self.node_body())
+            Some(self.node_body(&type_name))
         } else {
             if !type_name.text.is_empty() {
                 self.expected("'{'");
@@ -352,13 +400,10 @@ impl<'s> Parser<'s> {
         })
     }
 
-    fn node_body(&mut self) -> NodeBody {
+    fn node_body(&mut self, type_name: &Ident) -> NodeBody {
         let open = self.bump().span;
-        if self.depth >= MAX_DEPTH {
-            self.error(
-                Diagnostic::error(open, format!("nodes nested deeper than {MAX_DEPTH} levels"))
-                    .with_label("this node is skipped"),
-            );
+        if self.depth >= self.max_depth {
+            self.too_deep(open, "nodes");
             self.skip_rest_of_group();
             return NodeBody {
                 span: open.to(self.previous),
@@ -385,7 +430,7 @@ impl<'s> Parser<'s> {
                             format!("Expected field name or '}}', found {}.", self.found()),
                         )
                         .with_label("the file ends here")
-                        .with_secondary(open, "this '{' is never closed");
+                        .with_secondary(open, self.never_closed(type_name));
                         self.error(diagnostic);
                     }
                     self.depth -= 1;
@@ -394,7 +439,32 @@ impl<'s> Parser<'s> {
                         items,
                     };
                 }
+                // A `]` cannot stand in a node: the list around this node ends here, so this
+                // node (and any between it and that list) was never closed.
+                TokenKind::RBracket if self.open_lists > 0 => {
+                    self.unclosed(type_name, open);
+                    self.depth -= 1;
+                    return NodeBody {
+                        span: open.to(self.previous),
+                        items,
+                    };
+                }
                 _ => {}
+            }
+            if self.at_node_start() {
+                // A node where a field name goes: most likely the `}` of this one is missing.
+                if self.unclosed_at == Some(self.current.span.start) {
+                    // Already said by the node inside this one: the stray node is read and
+                    // dropped, and this node goes on.
+                    self.node();
+                    continue;
+                }
+                self.unclosed(type_name, open);
+                self.depth -= 1;
+                return NodeBody {
+                    span: open.to(self.previous),
+                    items,
+                };
             }
             match self.body_item() {
                 Some(item) => {
@@ -410,6 +480,72 @@ impl<'s> Parser<'s> {
                 }
             }
         }
+    }
+
+    /// Whether the current token starts a node: `DEF`, `USE`, or a name followed by `{`.
+    fn at_node_start(&mut self) -> bool {
+        if self.current.kind != TokenKind::Word {
+            return false;
+        }
+        match self.current_text() {
+            "DEF" | "USE" => true,
+            text if is_identifier(text) && !DECLARATION_KEYWORDS.contains(&text) => {
+                self.peek_second().kind == TokenKind::LBrace
+            }
+            _ => false,
+        }
+    }
+
+    /// What the secondary label of an unclosed node says.
+    fn never_closed(&self, type_name: &Ident) -> String {
+        if type_name.text.is_empty() {
+            "this '{' is never closed".to_owned()
+        } else {
+            format!("this {} node is never closed", type_name.text)
+        }
+    }
+
+    /// Reports a node whose `}` is missing, noticed at the current token (once per place).
+    fn unclosed(&mut self, type_name: &Ident, open: Span) {
+        if self.unclosed_at == Some(self.current.span.start) {
+            return;
+        }
+        self.unclosed_at = Some(self.current.span.start);
+        let line = self.line_of(open.start) + 1;
+        let node = if type_name.text.is_empty() {
+            "node".to_owned()
+        } else {
+            format!("{} node", type_name.text)
+        };
+        let found = if self.current.kind == TokenKind::RBracket {
+            "']'".to_owned()
+        } else {
+            format!("the next node, {}", self.found())
+        };
+        let diagnostic = Diagnostic::error(
+            self.current.span,
+            format!("Expected '}}' to close the {node} of line {line}, found {found}."),
+        )
+        .with_label("expected '}' before this")
+        .with_secondary(open, self.never_closed(type_name))
+        .with_code("unclosed");
+        self.error(diagnostic);
+    }
+
+    /// Nesting beyond the limit: one message, where it was first crossed.
+    fn too_deep(&mut self, open: Span, what: &str) {
+        if std::mem::replace(&mut self.depth_reported, true) {
+            return;
+        }
+        let limit = self.max_depth;
+        self.error(
+            Diagnostic::error(open, format!("{what} nested deeper than {limit} levels"))
+                .with_label("this group and everything in it is skipped")
+                .with_note(format!(
+                    "the nesting limit is {limit}; `--limit nesting=N` raises it"
+                ))
+                .with_code("too-deep"),
+        );
     }
 
     /// After a `{` that is not followed: skip to its matching `}` without recursion.
@@ -494,6 +630,27 @@ impl<'s> Parser<'s> {
         }
         match self.value() {
             Some(value) => FieldValue::Value(value),
+            None if self.at_unquoted_string() => {
+                // `name khepera`: one word alone where a value goes is a string without its
+                // quotes. It is taken, so that it is not read as the next field's name.
+                let found = self.bump().span;
+                let word = self.text(found);
+                let diagnostic = Diagnostic::error(
+                    found,
+                    format!(
+                        "Expected a value for '{}', found '{word}': strings are quoted.",
+                        name.text
+                    ),
+                )
+                .with_label("a word alone is not a value")
+                .with_note(format!(
+                    "if it is a string, write: {} \"{word}\"",
+                    name.text
+                ))
+                .with_code("missing-value");
+                self.error(diagnostic);
+                FieldValue::Missing { found }
+            }
             None => {
                 let found = self.current.span;
                 let message = format!(
@@ -511,6 +668,22 @@ impl<'s> Parser<'s> {
                 self.error(diagnostic.with_code("missing-value"));
                 FieldValue::Missing { found }
             }
+        }
+    }
+
+    /// Whether the current token is a bare word on the field's line that ends a field: the
+    /// next token closes the node or list, ends the file, or is on a later line.
+    fn at_unquoted_string(&mut self) -> bool {
+        if self.current.kind != TokenKind::Word
+            || !is_identifier(self.current_text())
+            || self.on_later_line(self.current.span)
+        {
+            return false;
+        }
+        let next = self.peek_second();
+        match next.kind {
+            TokenKind::RBrace | TokenKind::RBracket | TokenKind::Eof => true,
+            _ => self.src[self.current.span.end as usize..next.span.start as usize].contains('\n'),
         }
     }
 
@@ -581,6 +754,13 @@ impl<'s> Parser<'s> {
     /// `[ items ]`. Pure number lists are read by a tight loop with a capacity estimate,
     /// since they are most of a mesh-heavy file.
     fn list(&mut self) -> Value {
+        self.open_lists += 1;
+        let value = self.list_inner();
+        self.open_lists -= 1;
+        value
+    }
+
+    fn list_inner(&mut self) -> Value {
         let open = self.bump().span;
         let mut numbers = NumberList::default();
         let mut atoms: Vec<Atom> = Vec::new();
@@ -615,6 +795,7 @@ impl<'s> Parser<'s> {
                             .push(crate::diagnostic::Label {
                                 span: open,
                                 message: "this '[' is not closed".to_owned(),
+                                file: None,
                             });
                     }
                     let items = if atoms.is_empty() {
@@ -710,11 +891,8 @@ impl<'s> Parser<'s> {
         let mut body = Vec::new();
         if self.current.kind == TokenKind::LBrace {
             let open = self.bump().span;
-            if self.depth >= MAX_DEPTH {
-                self.error(Diagnostic::error(
-                    open,
-                    format!("PROTOs nested deeper than {MAX_DEPTH} levels"),
-                ));
+            if self.depth >= self.max_depth {
+                self.too_deep(open, "PROTOs");
                 self.skip_rest_of_group();
             } else {
                 self.depth += 1;

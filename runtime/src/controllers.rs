@@ -1,6 +1,12 @@
 //! The built-in controllers, chosen by a world's `controller` field and tuned by
 //! `controllerArgs` (`"key=value"` strings).
 //!
+//! [`CONTROLLERS`] is the registry: each entry names a controller, documents it, lists its
+//! parameters with their kinds and defaults, and builds it. `regatta check` validates a
+//! world's controllers against it ([`check_scene`]: unknown names and keys, ill-typed values,
+//! with "did you mean"), and a run builds them from it ([`build`]), so both agree by
+//! construction. Adding a controller is one entry here.
+//!
 //! - `none`: does nothing.
 //! - `braitenberg`: Mondada's obstacle avoider, the feed-forward network of the Khepera BIOS:
 //!   `speed = bias + irGain · Σ proximity[i]·w[i] / 400` per wheel, K-Team's weights.
@@ -12,11 +18,31 @@
 //!   ±`STALL_SPEED` while a front sensor reads more than `STALL_PROXIMITY`, for `STALL_STEPS`
 //!   steps: the Braitenberg network's deadlock in a corner) turns on the spot, away from the
 //!   nearer side, for `ESCAPE_STEPS` steps.
+//!
+//!   Habituation: a robot that has seen two lights at once (it knows there is more than one
+//!   buoy) and has kept the light it follows abeam (more than `ABEAM_PIXELS` from the
+//!   retina's centre: rounding it, not sailing to it) for `habituation` control steps loses
+//!   interest in it: the light is ignored until it leaves the view, and the robot sails on
+//!   to the light farthest to the other side (the first one the rounding turned its bow
+//!   to), as a sailor rounds a mark and leaves it. Near a buoy the retina's normalisation
+//!   (by the mean photocurrent) can dim the far ones below the lobe contrast, so that
+//!   without habituation the robot circles the near one for ever (worlds/regatta_wide.wbt).
+//!   In the paper's arena the next light almost always takes over before habituation would;
+//!   a robot that has only ever seen one light keeps circling it, as the paper's did. `habituation=0`
+//!   turns it off.
+//! - `neural`: the robot's `NeuralNetwork` node (see [`crate::neural`]); it takes no
+//!   `controllerArgs`: its parameters are the network's fields.
 
 use std::ops::ControlFlow;
 
+use regatta_parser::{Diagnostic, Severity};
+use regatta_schema::catalogue::did_you_mean as did_you_mean_in;
+use regatta_schema::{Checked, FileDiagnostic, Value};
+
+use crate::compile::rig::RobotRig;
 use crate::khepera::{Controller, Khepera, KheperaError, Senses};
 use crate::retina::FilterKind;
+use crate::webots_controllers::{resolve, Resolution, LENIENT_DEFAULT, MAPPED};
 
 /// K-Team's weights, sensors 0…7 (khepera.md).
 pub const LEFT_WEIGHTS: [f64; 8] = [4.0, 4.0, 6.0, -18.0, -15.0, -5.0, 5.0, 3.0];
@@ -25,20 +51,413 @@ pub const RIGHT_WEIGHTS: [f64; 8] = [-5.0, -15.0, -18.0, 6.0, 4.0, 4.0, 3.0, 5.0
 /// Why a controller could not be built from a world's fields.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ControllerError {
-    #[error("unknown controller \"{0}\"; built in: none, braitenberg, regatta, neural")]
-    Unknown(String),
+    #[error("unknown controller \"{name}\"; built in: {}{}", known_names(), did_you_mean_note(*.hint))]
+    Unknown {
+        name: String,
+        /// The built-in name closest to it, if one is close.
+        hint: Option<&'static str>,
+    },
     #[error(transparent)]
     Network(#[from] crate::neural::NetworkError),
     #[error("controller argument \"{0}\" is not key=value")]
     Malformed(String),
-    #[error("controller {controller} has no parameter \"{key}\"; it takes {known}")]
+    #[error("controller {controller} has no parameter \"{key}\"; it takes {}{}", parameter_names(controller), did_you_mean_note(*.hint))]
     UnknownKey {
-        controller: String,
+        controller: &'static str,
         key: String,
-        known: String,
+        /// The parameter closest to it, if one is close.
+        hint: Option<&'static str>,
     },
-    #[error("controller argument {key}={value} is not a finite number")]
-    NotANumber { key: String, value: String },
+    #[error("controller argument {key}={value} is not {expected}")]
+    NotANumber {
+        key: String,
+        value: String,
+        /// "a finite number", "a whole number"…
+        expected: &'static str,
+    },
+}
+
+/// The kind of a parameter's value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ParameterKind {
+    /// A finite number.
+    Number,
+    /// A whole number.
+    Integer,
+    /// A whole number that is not negative (a count of steps).
+    Count,
+}
+
+impl ParameterKind {
+    fn noun(self) -> &'static str {
+        match self {
+            ParameterKind::Number => "a finite number",
+            ParameterKind::Integer => "a whole number",
+            ParameterKind::Count => "a whole number of steps, not negative",
+        }
+    }
+}
+
+/// One `controllerArgs` key of a controller.
+#[derive(Clone, Copy, Debug)]
+pub struct ParameterSpec {
+    pub key: &'static str,
+    pub kind: ParameterKind,
+    pub default: f64,
+    pub doc: &'static str,
+}
+
+/// A built-in controller: what a world names and what it may pass.
+pub struct ControllerSpec {
+    pub name: &'static str,
+    /// Other names that mean the same controller.
+    pub aliases: &'static [&'static str],
+    pub doc: &'static str,
+    pub parameters: &'static [ParameterSpec],
+    /// Builds the controller from arguments already checked against `parameters`, and the
+    /// robot it drives when there is one (a controller may need more of the world than its
+    /// arguments: `neural` takes its network from there).
+    pub build: Builder,
+}
+
+/// How a registry entry makes its controller: from checked arguments and, for a run, the
+/// robot it drives.
+pub type Builder =
+    fn(&Arguments, Option<&RobotRig>) -> Result<Box<dyn Controller>, ControllerError>;
+
+/// Checked `controllerArgs`: each known key with its value.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Arguments {
+    values: Vec<(&'static str, f64)>,
+}
+
+impl Arguments {
+    /// The value of `key`, or `default` when the world did not give it.
+    pub fn get(&self, key: &str, default: f64) -> f64 {
+        self.values
+            .iter()
+            .rev()
+            .find(|(k, _)| *k == key)
+            .map_or(default, |(_, v)| *v)
+    }
+}
+
+const BRAITENBERG_PARAMETERS: &[ParameterSpec] = &[
+    ParameterSpec {
+        key: "irGain",
+        kind: ParameterKind::Number,
+        default: 1.0,
+        doc: "Multiplies the IR network (the paper doubled it in simulation).",
+    },
+    ParameterSpec {
+        key: "bias",
+        kind: ParameterKind::Number,
+        default: 10.0,
+        doc: "The bias neurons' forward speed (pulses per 10 ms).",
+    },
+];
+
+const REGATTA_PARAMETERS: &[ParameterSpec] = &[
+    BRAITENBERG_PARAMETERS[0],
+    BRAITENBERG_PARAMETERS[1],
+    ParameterSpec {
+        key: "lightGain",
+        kind: ParameterKind::Number,
+        default: 0.1,
+        doc: "Steering per pixel of light offset (pulses per 10 ms per pixel).",
+    },
+    ParameterSpec {
+        key: "minContrast",
+        kind: ParameterKind::Number,
+        default: 1.5,
+        doc: "Least odd-filter lobe, in LSB, that counts as a light edge.",
+    },
+    ParameterSpec {
+        key: "habituation",
+        kind: ParameterKind::Count,
+        // 2.4 s at the 32 ms control cycle, about 160° of a tight orbit: in the paper's
+        // arena the next light almost always takes over sooner; later, the next mark has
+        // turned past the bow and the rounding would change sense.
+        default: 75.0,
+        doc: "Control steps with the followed light abeam before the robot loses interest in it (0: never).",
+    },
+];
+
+/// Every built-in controller.
+pub static CONTROLLERS: &[ControllerSpec] = &[
+    ControllerSpec {
+        name: "none",
+        aliases: &["", "<none>"],
+        doc: "Does nothing: the robot stands still (its sensors still read).",
+        parameters: &[],
+        build: |_, _| Ok(Box::new(Idle)),
+    },
+    ControllerSpec {
+        name: "braitenberg",
+        aliases: &[],
+        doc: "Mondada's obstacle avoider: the Khepera BIOS's feed-forward IR network.",
+        parameters: BRAITENBERG_PARAMETERS,
+        build: |args, _| {
+            Ok(Box::new(Braitenberg {
+                parameters: Parameters::from_arguments(args),
+            }))
+        },
+    },
+    ControllerSpec {
+        name: "regatta",
+        aliases: &[],
+        doc: "The paper's controller: the Braitenberg network plus light seeking with the Panoramic turret's odd filter.",
+        parameters: REGATTA_PARAMETERS,
+        build: |args, _| {
+            Ok(Box::new(Regatta {
+                parameters: Parameters::from_arguments(args),
+                thresholds: None,
+                enabled: false,
+                odd: Vec::new(),
+                maxima: Vec::new(),
+                escape: StallEscape::default(),
+                habituation: Habituation::default(),
+            }))
+        },
+    },
+    ControllerSpec {
+        name: "neural",
+        aliases: &[],
+        doc: "The robot's NeuralNetwork node (feed-forward, Elman or CTRNN); its parameters are the network's fields.",
+        parameters: &[],
+        build: |_, rig| match rig.and_then(|rig| rig.network.as_ref()) {
+            Some(Ok(spec)) => Ok(Box::new(crate::neural::Neural::from_spec(spec)?)),
+            Some(Err(error)) => Err(error.clone().into()),
+            None => Err(crate::neural::NetworkError::NoNetwork.into()),
+        },
+    },
+];
+
+/// The registry entry called `name` (or one of its aliases).
+pub fn find(name: &str) -> Option<&'static ControllerSpec> {
+    CONTROLLERS
+        .iter()
+        .find(|c| c.name == name || c.aliases.contains(&name))
+}
+
+/// The names a world may give, for messages.
+fn known_names() -> String {
+    CONTROLLERS
+        .iter()
+        .map(|c| c.name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The parameters of the controller called `name`, for messages.
+fn parameter_names(name: &str) -> String {
+    match find(name) {
+        Some(spec) if !spec.parameters.is_empty() => spec
+            .parameters
+            .iter()
+            .map(|p| p.key)
+            .collect::<Vec<_>>()
+            .join(", "),
+        _ => "no parameters".to_owned(),
+    }
+}
+
+/// "; did you mean …?", or nothing.
+fn did_you_mean_note(close: Option<&str>) -> String {
+    close
+        .map(|close| format!("; did you mean \"{close}\"?"))
+        .unwrap_or_default()
+}
+
+/// The controller called `name`, or why not.
+pub fn spec_of(name: &str) -> Result<&'static ControllerSpec, ControllerError> {
+    find(name).ok_or_else(|| ControllerError::Unknown {
+        name: name.to_owned(),
+        hint: did_you_mean_in(name, CONTROLLERS.iter().map(|c| c.name)),
+    })
+}
+
+/// The `key=value` items of `controllerArgs` strings (each string may hold several,
+/// separated by spaces, commas or semicolons).
+fn items(args: &[String]) -> impl Iterator<Item = &str> {
+    args.iter()
+        .flat_map(|a| a.split([' ', ',', ';']))
+        .filter(|a| !a.is_empty())
+}
+
+/// Checks one `key=value` item against a controller's parameters.
+fn argument(spec: &ControllerSpec, item: &str) -> Result<(&'static str, f64), ControllerError> {
+    let (key, value) = item
+        .split_once('=')
+        .ok_or_else(|| ControllerError::Malformed(item.to_owned()))?;
+    let key = key.trim();
+    let Some(parameter) = spec.parameters.iter().find(|p| p.key == key) else {
+        return Err(ControllerError::UnknownKey {
+            controller: spec.name,
+            key: key.to_owned(),
+            hint: did_you_mean_in(key, spec.parameters.iter().map(|p| p.key)),
+        });
+    };
+    let number = value
+        .trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .filter(|v| parameter.kind == ParameterKind::Number || v.fract() == 0.0)
+        .filter(|v| parameter.kind != ParameterKind::Count || *v >= 0.0)
+        .ok_or_else(|| ControllerError::NotANumber {
+            key: key.to_owned(),
+            value: value.to_owned(),
+            expected: parameter.kind.noun(),
+        })?;
+    Ok((parameter.key, number))
+}
+
+/// Checks `controllerArgs` against the controller called `name`.
+pub fn arguments(name: &str, args: &[String]) -> Result<Arguments, ControllerError> {
+    let spec = spec_of(name)?;
+    let mut values = Vec::new();
+    for item in items(args) {
+        values.push(argument(spec, item)?);
+    }
+    Ok(Arguments { values })
+}
+
+/// Builds a built-in controller from its name and arguments (`neural` needs its robot: see
+/// [`build_for`]).
+pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, ControllerError> {
+    let spec = spec_of(name)?;
+    (spec.build)(&arguments(name, args)?, None)
+}
+
+/// Builds a robot's controller as its world sets it.
+pub fn build_for(rig: &RobotRig) -> Result<Box<dyn Controller>, ControllerError> {
+    let spec = spec_of(&rig.controller)?;
+    (spec.build)(
+        &arguments(&rig.controller, &rig.controller_args)?,
+        Some(rig),
+    )
+}
+
+/// Checks every robot's `controller` and `controllerArgs` against the registry, adding a
+/// diagnostic per problem at the line that wrote the value (the user's line, through PROTOs).
+/// An unknown controller or argument is an error; in a check whose scene was read leniently
+/// (every error a warning), it is a warning and the robot runs `none`, or without that
+/// argument.
+pub fn check_scene(checked: &mut Checked) {
+    let lenient = !checked.strict;
+    let catalogue = regatta_schema::Catalogue::get();
+    let mut found = Vec::new();
+    for id in checked.scene.walk() {
+        let node = checked.scene.node(id);
+        let spec = catalogue.spec(node.spec);
+        let (Some(controller), Some(args)) = (
+            spec.field_index("controller"),
+            spec.field_index("controllerArgs"),
+        ) else {
+            continue;
+        };
+        found.push((id, controller, args));
+    }
+    for (id, controller_index, args_index) in found {
+        let node = &checked.scene.nodes[id.index()];
+        let name = node.fields[controller_index]
+            .strings()
+            .first()
+            .cloned()
+            .unwrap_or_default();
+        let args = node.fields[args_index].strings().to_vec();
+        let at = |index: usize| node.value_span_at(index).unwrap_or(node.origin);
+        let (name_at, args_at) = (at(controller_index), at(args_index));
+        let mut problems: Vec<(regatta_schema::scene::Origin, Diagnostic)> = Vec::new();
+        let mut kept_args = Vec::new();
+        let mut replacement = None;
+        match resolve(&name) {
+            Resolution::Unknown => {
+                let candidates = CONTROLLERS
+                    .iter()
+                    .map(|c| c.name)
+                    .chain(MAPPED.iter().map(|(n, _, _)| *n));
+                let mut diagnostic =
+                    Diagnostic::error(name_at.span, format!("unknown controller \"{name}\""))
+                        .with_label("no built-in controller has this name")
+                        .with_note(format!(
+                            "built in: {}, and the Webots names in the README",
+                            known_names()
+                        ))
+                        .with_code("unknown-controller");
+                if let Some(close) = did_you_mean_in(&name, candidates) {
+                    diagnostic = diagnostic.with_note(format!("did you mean \"{close}\"?"));
+                }
+                if lenient {
+                    diagnostic = diagnostic
+                        .with_note(format!("lenient mode runs \"{LENIENT_DEFAULT}\" instead"));
+                    replacement = Some((LENIENT_DEFAULT, Vec::new()));
+                }
+                problems.push((name_at, diagnostic));
+            }
+            // Driven from outside (`regatta serve`): `run` says so, `serve` drives it.
+            Resolution::External(_) => {}
+            Resolution::Builtin(builtin, why) if builtin != name && !why.is_empty() => {
+                // A Webots name: its controllerArgs were for Webots' program, not regatta's.
+                if items(&args).next().is_some() {
+                    let diagnostic = Diagnostic::warning(
+                        args_at.span,
+                        format!(
+                            "controllerArgs of Webots' \"{name}\" are not used: it runs as regatta's \"{builtin}\" ({why})"
+                        ),
+                    )
+                    .with_label("ignored")
+                    .with_code("controller-args");
+                    problems.push((args_at, diagnostic));
+                    replacement = Some((builtin, Vec::new()));
+                }
+            }
+            Resolution::Builtin(builtin, _) => {
+                let Some(spec) = find(builtin) else {
+                    continue;
+                };
+                for item in items(&args) {
+                    match argument(spec, item) {
+                        Ok(_) => kept_args.push(item.to_owned()),
+                        Err(error) => {
+                            let mut diagnostic = Diagnostic::error(
+                                args_at.span,
+                                format!("controllerArgs of \"{}\": {error}", spec.name),
+                            )
+                            .with_label("in these arguments")
+                            .with_code("controller-args");
+                            if lenient {
+                                diagnostic = diagnostic.with_note(format!("\"{item}\" is ignored"));
+                            }
+                            problems.push((args_at, diagnostic));
+                        }
+                    }
+                }
+                if lenient {
+                    replacement = Some((spec.name, kept_args));
+                }
+            }
+        }
+        if problems.is_empty() {
+            continue;
+        }
+        for (origin, mut diagnostic) in problems {
+            if lenient {
+                diagnostic.severity = Severity::Warning;
+            }
+            checked.diagnostics.push(FileDiagnostic {
+                file: origin.file,
+                diagnostic,
+            });
+        }
+        // What runs instead, where the world goes on (lenient mode, ignored Webots arguments).
+        if let Some((controller, args)) = replacement {
+            let node = &mut checked.scene.nodes[id.index()];
+            node.fields[controller_index] = Value::String(controller.to_owned());
+            node.fields[args_index] = Value::Strings(args);
+        }
+    }
 }
 
 /// Parameters of the built-in controllers, with their defaults.
@@ -52,99 +471,39 @@ pub struct Parameters {
     pub light_gain: f64,
     /// Least odd-filter lobe, in LSB, that counts as a light edge.
     pub min_contrast: f64,
+    /// Control steps with the followed light abeam before the robot loses interest in it
+    /// (0: never).
+    pub habituation: f64,
 }
 
 impl Default for Parameters {
     fn default() -> Parameters {
-        Parameters {
-            ir_gain: 1.0,
-            bias: 10.0,
-            light_gain: 0.1,
-            min_contrast: 1.5,
-        }
+        Parameters::from_arguments(&Arguments::default())
     }
 }
-
-const KEYS: &[&str] = &["irGain", "bias", "lightGain", "minContrast"];
 
 impl Parameters {
-    /// Reads `key=value` strings (each string may hold several, separated by spaces or commas).
-    pub fn parse(controller: &str, args: &[String]) -> Result<Parameters, ControllerError> {
-        let mut parameters = Parameters::default();
-        for arg in args
-            .iter()
-            .flat_map(|a| a.split([' ', ',', ';']))
-            .filter(|a| !a.is_empty())
-        {
-            let (key, value) = arg
-                .split_once('=')
-                .ok_or_else(|| ControllerError::Malformed(arg.to_owned()))?;
-            let number: f64 = value
-                .trim()
-                .parse()
-                .ok()
-                .filter(|v: &f64| v.is_finite())
-                .ok_or_else(|| ControllerError::NotANumber {
-                    key: key.to_owned(),
-                    value: value.to_owned(),
-                })?;
-            match key.trim() {
-                "irGain" => parameters.ir_gain = number,
-                "bias" => parameters.bias = number,
-                "lightGain" => parameters.light_gain = number,
-                "minContrast" => parameters.min_contrast = number,
-                other => {
-                    return Err(ControllerError::UnknownKey {
-                        controller: controller.to_owned(),
-                        key: other.to_owned(),
-                        known: KEYS.join(", "),
-                    });
-                }
-            }
+    /// The parameters of checked arguments, defaults filled in from the registry.
+    pub fn from_arguments(args: &Arguments) -> Parameters {
+        let value = |key: &str| {
+            let default = REGATTA_PARAMETERS
+                .iter()
+                .find(|p| p.key == key)
+                .map_or(0.0, |p| p.default);
+            args.get(key, default)
+        };
+        Parameters {
+            ir_gain: value("irGain"),
+            bias: value("bias"),
+            light_gain: value("lightGain"),
+            min_contrast: value("minContrast"),
+            habituation: value("habituation"),
         }
-        Ok(parameters)
     }
-}
 
-/// Builds a robot's controller as its world sets it: [`build`], or for `neural` the network
-/// of its `network` field.
-pub fn build_for(
-    rig: &crate::compile::rig::RobotRig,
-) -> Result<Box<dyn Controller>, ControllerError> {
-    if rig.controller != "neural" {
-        return build(&rig.controller, &rig.controller_args);
-    }
-    if let Some(arg) = rig.controller_args.iter().find(|a| !a.trim().is_empty()) {
-        return Err(ControllerError::UnknownKey {
-            controller: "neural".to_owned(),
-            key: arg.clone(),
-            known: "nothing (its parameters are the NeuralNetwork's fields)".to_owned(),
-        });
-    }
-    match &rig.network {
-        Some(Ok(spec)) => Ok(Box::new(crate::neural::Neural::from_spec(spec)?)),
-        Some(Err(error)) => Err(error.clone().into()),
-        None => Err(crate::neural::NetworkError::NoNetwork.into()),
-    }
-}
-
-/// Builds a built-in controller from its name and arguments (`neural` needs its network:
-/// see [`build_for`]).
-pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, ControllerError> {
-    match name {
-        "none" | "" | "<none>" => Ok(Box::new(Idle)),
-        "braitenberg" => Ok(Box::new(Braitenberg {
-            parameters: Parameters::parse(name, args)?,
-        })),
-        "regatta" => Ok(Box::new(Regatta {
-            parameters: Parameters::parse(name, args)?,
-            thresholds: None,
-            enabled: false,
-            odd: Vec::new(),
-            escape: StallEscape::default(),
-        })),
-        "neural" => Err(crate::neural::NetworkError::NoNetwork.into()),
-        other => Err(ControllerError::Unknown(other.to_owned())),
+    /// Reads `key=value` strings for the controller called `controller`.
+    pub fn parse(controller: &str, args: &[String]) -> Result<Parameters, ControllerError> {
+        Ok(Parameters::from_arguments(&arguments(controller, args)?))
     }
 }
 
@@ -367,15 +726,107 @@ impl StallEscape {
     }
 }
 
+/// A light moves less than this many pixels from one step to the next while the robot
+/// turns at its speeds (an orbit turns it by about 1.4 pixels per 32 ms step): the maximum
+/// nearest a light's last position, within it, is the same light.
+pub const TRACK_PIXELS: f64 = 8.0;
+
+/// A followed light this many pixels or more from the retina's centre (80°) is abeam.
+pub const ABEAM_PIXELS: f64 = 50.0;
+
+/// Departing ends once the next mark is this close to the retina's centre (pixels).
+pub const DEPARTED_PIXELS: f64 = 10.0;
+
+/// The regatta controller's habituation to the light it follows (see the module's
+/// documentation). Lights have no names: a light is followed from step to step by its
+/// position on the retina.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Habituation {
+    /// Whether two lights were ever seen at once.
+    several: bool,
+    /// The light followed (its position, in pixels from the region's first) and the steps
+    /// it has been abeam.
+    followed: Option<(f64, u32)>,
+    /// The light the robot lost interest in, followed until it leaves the view.
+    ignored: Option<f64>,
+    /// Set on losing interest in a light: the side it was on (−1 left, +1 right).
+    departing: Option<f64>,
+}
+
+/// The maximum in `maxima` nearest `position`, within [`TRACK_PIXELS`].
+fn track(maxima: &[f64], position: f64) -> Option<f64> {
+    maxima
+        .iter()
+        .copied()
+        .filter(|m| (m - position).abs() <= TRACK_PIXELS)
+        .min_by(|a, b| (a - position).abs().total_cmp(&(b - position).abs()))
+}
+
+/// The maximum nearest `centre` (the first of equals, as [`nearest_light_maximum`]) other
+/// than `except`.
+fn nearest_to(maxima: &[f64], centre: f64, except: Option<f64>) -> Option<f64> {
+    let mut nearest: Option<f64> = None;
+    for &m in maxima {
+        if Some(m) != except && nearest.is_none_or(|n| (m - centre).abs() < (n - centre).abs()) {
+            nearest = Some(m);
+        }
+    }
+    nearest
+}
+
+impl Habituation {
+    /// The light to steer to among this step's `maxima` (in pixel order, `centre` the
+    /// retina's centre in the same units), if any. `habituation` is the parameter.
+    pub fn choose(&mut self, maxima: &[f64], centre: f64, habituation: f64) -> Option<f64> {
+        self.ignored = self.ignored.and_then(|p| track(maxima, p));
+        let followed = self
+            .followed
+            .and_then(|(p, steps)| track(maxima, p).map(|m| (m, steps)));
+        self.several |= maxima.len() >= 2;
+        let target = match self.departing {
+            // Leaving a light behind on one side: the next mark is the light farthest to
+            // the other side (the first the rounding turned the bow to).
+            Some(side) => maxima
+                .iter()
+                .copied()
+                .filter(|&m| Some(m) != self.ignored)
+                .max_by(|a, b| (side * (centre - a)).total_cmp(&(side * (centre - b)))),
+            None => nearest_to(maxima, centre, self.ignored),
+        };
+        let Some(target) = target else {
+            self.followed = None;
+            return None;
+        };
+        if (target - centre).abs() <= DEPARTED_PIXELS {
+            self.departing = None;
+        }
+        let abeam = u32::from((target - centre).abs() >= ABEAM_PIXELS);
+        let steps = match followed {
+            Some((p, steps)) if p == target => steps.saturating_add(abeam),
+            _ => abeam,
+        };
+        if self.several && habituation > 0.0 && steps as f64 > habituation {
+            self.ignored = Some(target);
+            self.departing = Some((target - centre).signum());
+            self.followed = None;
+            return None;
+        }
+        self.followed = Some((target, steps));
+        Some(target)
+    }
+}
+
 /// The paper's regatta controller.
 pub struct Regatta {
     pub parameters: Parameters,
     /// The lobe thresholds, with the resolution and contrast they were found for.
     thresholds: Option<(u32, u64, LobeThresholds)>,
     enabled: bool,
-    /// The odd filter's last reading, its buffer reused.
+    /// The odd filter's last reading and its maxima, their buffers reused.
     odd: Vec<u16>,
+    maxima: Vec<f64>,
     escape: StallEscape,
+    habituation: Habituation,
 }
 
 impl Controller for Regatta {
@@ -402,8 +853,17 @@ impl Controller for Regatta {
                 thresholds
             }
         };
-        let nearest = thresholds.nearest_maximum(&self.odd, centre - first as f64);
-        if let Some(maximum) = nearest {
+        self.maxima.clear();
+        thresholds.for_each_maximum(&self.odd, |p| {
+            self.maxima.push(p);
+            ControlFlow::Continue(())
+        });
+        let chosen = self.habituation.choose(
+            &self.maxima,
+            centre - first as f64,
+            self.parameters.habituation,
+        );
+        if let Some(maximum) = chosen {
             let offset = maximum + first as f64 - centre;
             // Right of centre (positive) turns right: left wheel faster.
             left += self.parameters.light_gain * offset;
@@ -452,8 +912,71 @@ mod tests {
         ));
         assert!(matches!(
             build("wander", &[]),
-            Err(ControllerError::Unknown(_))
+            Err(ControllerError::Unknown { .. })
         ));
+        assert!(matches!(
+            Parameters::parse("braitenberg", &["lightGain=1".to_owned()]),
+            Err(ControllerError::UnknownKey { .. })
+        ));
+    }
+
+    #[test]
+    fn habituation_is_a_number_of_steps() {
+        let p = Parameters::parse("regatta", &["habituation=0".to_owned()]).unwrap();
+        assert_eq!(p.habituation, 0.0);
+        assert!(matches!(
+            Parameters::parse("regatta", &["habituation=-3".to_owned()]),
+            Err(ControllerError::NotANumber { .. })
+        ));
+        assert!(matches!(
+            Parameters::parse("regatta", &["habituation=2.5".to_owned()]),
+            Err(ControllerError::NotANumber { .. })
+        ));
+    }
+
+    #[test]
+    fn a_light_kept_abeam_too_long_is_left_for_the_farthest_on_the_other_side() {
+        let centre = 75.0;
+        let limit = 3.0;
+        // One light only, abeam on the left: the robot has never seen two, so it keeps it.
+        let mut lone = Habituation::default();
+        for _ in 0..10 {
+            assert_eq!(lone.choose(&[20.0], centre, limit), Some(20.0));
+        }
+        // Two lights seen at once, then one abeam: kept for `limit` steps abeam, then left.
+        let mut h = Habituation::default();
+        assert_eq!(h.choose(&[20.0, 140.0], centre, limit), Some(20.0));
+        // Sailing to a light near the centre never counts.
+        for _ in 0..10 {
+            assert_eq!(h.choose(&[70.0], centre, limit), Some(70.0));
+        }
+        // It drifts abeam (moving a pixel a step: the same light).
+        let mut position = 24.0;
+        let mut chosen = Vec::new();
+        for _ in 0..5 {
+            position -= 1.0;
+            chosen.push(h.choose(&[position], centre, limit));
+        }
+        assert_eq!(
+            chosen,
+            [Some(23.0), Some(22.0), Some(21.0), None, None],
+            "left after {limit} steps abeam, then ignored while in view"
+        );
+        // Other lights appear: the one farthest right (the light left was on the left) is
+        // the next mark, even if another is nearer the centre.
+        assert_eq!(h.choose(&[18.0, 60.0, 100.0], centre, limit), Some(100.0));
+        // Once it is ahead, the usual rule again: the light nearest the centre.
+        assert_eq!(h.choose(&[18.0, 72.0, 80.0], centre, limit), Some(80.0));
+        assert_eq!(h.choose(&[18.0, 74.0, 80.0], centre, limit), Some(74.0));
+        // The ignored light, lost from view, may be followed again.
+        assert_eq!(h.choose(&[], centre, limit), None);
+        assert_eq!(h.choose(&[18.0], centre, limit), Some(18.0));
+        // habituation=0: never left.
+        let mut off = Habituation::default();
+        assert_eq!(off.choose(&[20.0, 140.0], centre, 0.0), Some(20.0));
+        for _ in 0..100 {
+            assert_eq!(off.choose(&[20.0], centre, 0.0), Some(20.0));
+        }
     }
 
     #[test]

@@ -9,6 +9,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod broad;
+pub mod check;
 pub mod compile;
 pub mod controllers;
 pub mod geometry;

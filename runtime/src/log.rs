@@ -664,7 +664,7 @@ pub struct LogContents {
     pub topics: Vec<TopicInfo>,
     /// The `regatta` metadata record as written (world hash, version, time step, …).
     pub metadata: BTreeMap<String, String>,
-    /// The world's time step (s), from the metadata.
+    /// The run's basic time step (s), when the log says it.
     pub time_step: Option<f64>,
     /// The end record's entries, if the run finished writing it.
     pub end: Option<BTreeMap<String, String>>,
@@ -675,58 +675,135 @@ pub struct LogContents {
     pub truncated: Option<String>,
 }
 
-/// Reads a log; a file cut short yields what its complete chunks hold, and says so.
+/// Largest uncompressed chunk a log may claim: regatta writes chunks of about 4 MB, and a
+/// damaged or hostile header must not make the reader allocate what it says.
+const MAX_CHUNK: u64 = 256 << 20;
+
+/// The longest prefix of `bytes` whose records are framed soundly (lengths within the file,
+/// chunks of sane sizes), and why it ends early, if it does. MCAP frames every record as an
+/// opcode byte and a little-endian u64 length; a chunk (opcode 6) gives its uncompressed size
+/// at bytes 16..24 of its body.
+fn sound_prefix(bytes: &[u8]) -> (&[u8], Option<String>) {
+    const MAGIC: usize = 8;
+    let mut at = MAGIC.min(bytes.len());
+    while at < bytes.len() {
+        let Some(header) = bytes.get(at..at + 9) else {
+            return (&bytes[..at], None);
+        };
+        let length = u64::from_le_bytes(header[1..9].try_into().unwrap_or_default());
+        let body_start = at + 9;
+        let end = match usize::try_from(length)
+            .ok()
+            .and_then(|l| body_start.checked_add(l))
+        {
+            Some(end) if end <= bytes.len() => end,
+            // Cut short: the reader says so itself.
+            _ => return (&bytes[..at], None),
+        };
+        if header[0] == 0x06 {
+            let claimed = bytes
+                .get(body_start + 16..body_start + 24)
+                .map(|b| u64::from_le_bytes(b.try_into().unwrap_or_default()))
+                .unwrap_or(u64::MAX);
+            if claimed > MAX_CHUNK {
+                return (
+                    &bytes[..at],
+                    Some(format!(
+                        "a chunk at byte {at} claims {claimed} bytes uncompressed: the log is damaged there"
+                    )),
+                );
+            }
+        }
+        if header[0] == 0x02 {
+            // The footer: the file ends here.
+            return (&bytes[..end], None);
+        }
+        at = end;
+    }
+    (bytes, None)
+}
+
+/// The reader's bounds: every length at most [`MAX_CHUNK`] (a damaged length must not make it
+/// allocate what it says), every chunk's CRC checked before its records are read.
+fn reader_options() -> mcap::sans_io::LinearReaderOptions {
+    mcap::sans_io::LinearReaderOptions::default()
+        .with_skip_end_magic(true)
+        .with_record_length_limit(MAX_CHUNK as usize)
+        .with_prevalidate_chunk_crcs(true)
+}
+
+/// Calls `visit` on every record of `bytes`, chunks flattened; returns why reading stopped
+/// early, if it did.
+fn each_record(
+    bytes: &[u8],
+    mut visit: impl FnMut(mcap::records::Record<'_>) -> Result<(), LogError>,
+) -> Result<Option<String>, LogError> {
+    let mut reader = mcap::sans_io::LinearReader::new_with_options(reader_options());
+    let mut at = 0;
+    while let Some(event) = reader.next_event() {
+        match event {
+            Ok(mcap::sans_io::LinearReadEvent::ReadRequest(need)) => {
+                let n = need.min(bytes.len() - at);
+                reader.insert(n).copy_from_slice(&bytes[at..at + n]);
+                reader.notify_read(n);
+                at += n;
+            }
+            Ok(mcap::sans_io::LinearReadEvent::Record { data, opcode }) => {
+                match mcap::parse_record(opcode, data) {
+                    Ok(record) => visit(record)?,
+                    Err(error) => return Ok(Some(error.to_string())),
+                }
+            }
+            Err(error) => return Ok(Some(error.to_string())),
+        }
+    }
+    Ok(None)
+}
+
+/// Reads a log; a file cut short or damaged yields what its complete chunks hold, and says so.
 pub fn read(bytes: &[u8]) -> Result<LogContents, LogError> {
+    let (bytes, damaged) = sound_prefix(bytes);
     let mut run = None;
     let mut time_step = None;
     let mut end = None;
-    let mut truncated = None;
     let mut schemas = BTreeMap::new();
     let mut topics = Vec::new();
     let mut raw_metadata = BTreeMap::new();
-    let reader = mcap::read::ChunkFlattener::new_with_options(
-        bytes,
-        mcap::read::Options::IgnoreEndMagic.into(),
-    )
-    .map_err(LogError::Read)?;
-    for record in reader {
+    let stopped = each_record(bytes, |record| {
         match record {
-            Ok(mcap::records::Record::Schema { header, .. }) => {
+            mcap::records::Record::Schema { header, .. } => {
                 schemas.insert(header.id, header.name);
             }
-            Ok(mcap::records::Record::Channel(channel)) => {
-                if !topics.iter().any(|t: &TopicInfo| t.topic == channel.topic) {
-                    topics.push(TopicInfo {
-                        schema: schemas.get(&channel.schema_id).cloned().unwrap_or_default(),
-                        robot: channel.metadata.get("robot").cloned(),
-                        topic: channel.topic,
-                        message_encoding: channel.message_encoding,
-                    });
-                }
+            mcap::records::Record::Channel(channel)
+                if !topics.iter().any(|t: &TopicInfo| t.topic == channel.topic) =>
+            {
+                topics.push(TopicInfo {
+                    schema: schemas.get(&channel.schema_id).cloned().unwrap_or_default(),
+                    robot: channel.metadata.get("robot").cloned(),
+                    topic: channel.topic,
+                    message_encoding: channel.message_encoding,
+                });
             }
-            Ok(mcap::records::Record::Metadata(metadata)) if metadata.name == "regatta" => {
+            mcap::records::Record::Metadata(metadata) if metadata.name == "regatta" => {
                 time_step = metadata
                     .metadata
                     .get("time_step")
-                    .and_then(|t| t.parse::<f64>().ok());
+                    .and_then(|t| t.parse::<f64>().ok())
+                    .filter(|t| *t > 0.0 && t.is_finite());
                 run = Some(RunInfo::from_metadata(&metadata.metadata)?);
                 raw_metadata = metadata.metadata;
             }
-            Ok(mcap::records::Record::Metadata(metadata)) if metadata.name == "regatta.end" => {
+            mcap::records::Record::Metadata(metadata) if metadata.name == "regatta.end" => {
                 end = Some(metadata.metadata)
             }
-            Ok(_) => {}
-            Err(error) => {
-                truncated = Some(error.to_string());
-                break;
-            }
+            _ => {}
         }
-    }
+        Ok(())
+    })?;
+    let mut truncated = damaged.or(stopped);
     let run = run.ok_or(LogError::NoMetadata)?;
     let mut messages = Vec::new();
-    let stream =
-        mcap::MessageStream::new_with_options(bytes, mcap::read::Options::IgnoreEndMagic.into())
-            .map_err(LogError::Read)?;
+    let stream = mcap::io::MessageReader::new_with_options(bytes, reader_options());
     for message in stream {
         match message {
             Ok(message) => messages.push((

@@ -34,7 +34,7 @@ pub enum VisionError {
 }
 
 /// A renderer of many vision devices at once.
-pub trait VisionBackend {
+pub trait VisionBackend: Send {
     /// What it runs on, for summaries (e.g. `wgpu: llvmpipe (Vulkan)`).
     fn describe(&self) -> String;
 

@@ -14,8 +14,9 @@ pub enum Resolution {
     Unknown,
 }
 
-/// regatta's own controllers (`controllers::build`).
-pub const BUILT_IN: &[&str] = &["none", "braitenberg", "regatta", "neural"];
+/// The controller a DifferentialWheels robot runs when lenient mode replaces one regatta
+/// does not have: the Khepera's and e-puck's default in Webots is obstacle avoidance.
+pub const LENIENT_DEFAULT: &str = "braitenberg";
 
 /// (Webots name, regatta controller, documented behaviour): the table in the README.
 pub const MAPPED: &[(&str, &str, &str)] = &[
@@ -70,8 +71,9 @@ pub fn resolve(name: &str) -> Resolution {
     if name.is_empty() {
         return Resolution::Builtin("none", "");
     }
-    if let Some(own) = BUILT_IN.iter().find(|n| **n == name) {
-        return Resolution::Builtin(own, "");
+    // regatta's own names (and their aliases): the registry's.
+    if let Some(own) = crate::controllers::find(name) {
+        return Resolution::Builtin(own.name, "");
     }
     if let Some((_, builtin, why)) = MAPPED.iter().find(|(n, _, _)| *n == name) {
         return Resolution::Builtin(builtin, why);

@@ -43,6 +43,13 @@ pub struct FieldSpec {
     /// Exact number of items of an MF field.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub count: Option<usize>,
+    /// The strings are urls of local files: each is checked against the world's root.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub file: bool,
+    /// VRML97's access: `field` (set in the file only), `exposedField` (the default: set in
+    /// the file and by events), `eventIn` or `eventOut` (events only; never written).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub access: Option<String>,
     /// The parsed type (filled when the catalogue loads).
     #[serde(skip)]
     pub field_type: Option<FieldType>,

@@ -5,6 +5,7 @@
 //! PROTOs (the standard ones in `worlds/protos/` are built in) and resolves DEF/USE, returning
 //! the scene and every diagnostic. It never fails on user input.
 
+pub mod access;
 pub mod catalogue;
 mod lower;
 pub mod proto_path;
@@ -14,11 +15,15 @@ pub mod template;
 pub mod value;
 pub mod webots;
 
+pub use access::{FileAccess, Limits, Refusal};
 pub use catalogue::{Catalogue, FieldSpec, NodeSpec};
 pub use lower::{
-    check, check_file, check_file_with_proto_path, Checked, FileDiagnostic, Options, Source,
-    Substitution, UnbuiltRobot, MAX_INSTANCE_DEPTH, MAX_NODES,
+    check, check_file, check_file_with_proto_path, check_path, Binding, Bindings, Checked,
+    FileDiagnostic, Options, Source, Substitution, UnbuiltRobot, MAX_DIAGNOSTICS,
+    MAX_INSTANCE_DEPTH, MAX_NODES,
 };
-pub use protos::{BUILTIN_PROTOS, WEBOTS_STANDINS};
+pub use protos::{
+    standard_proto, standard_protos, ProtoField, ProtoSpec, BUILTIN_PROTOS, WEBOTS_STANDINS,
+};
 pub use scene::{FileId, NodeId, Scene, SceneNode, UpAxis};
 pub use value::{BaseType, FieldType, Value};

@@ -7,31 +7,45 @@
 //!   error and the scene is always a DAG; among repeated DEFs the latest bound wins.
 //! - Strict mode makes unknown nodes, fields and template code errors; lenient mode makes them
 //!   warnings and skips them, as Webots does.
-//! - No URL is ever fetched: `webots://` and `http(s)://` PROTOs are unknown types.
+//! - Files are read through [`FileAccess`] only: urls resolve relative to the file naming
+//!   them and never leave the world's root; no url is ever fetched.
+//! - Every [`Limits`] bound is checked where it is crossed and reported there, once.
+//! - A problem inside a PROTO's body that the instance caused (a value it passed, a template
+//!   over its fields, any problem in a built-in PROTO) is reported at the instance's line, with
+//!   the PROTO's line beside it, as rustc does for macros.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 use regatta_parser::syntax::{self, Atom, BodyItem, Dialect, Item, Items, NodeKind};
-use regatta_parser::{Diagnostic, SourceText, Span};
+use regatta_parser::{Diagnostic, SourceMap, SourceText, Span};
 
+use crate::access::{FileAccess, Limits, Refusal};
 use crate::catalogue::{did_you_mean, Catalogue, FieldSpec, SpecId};
 use crate::protos::{BUILTIN_PROTOS, WEBOTS_STANDINS};
 use crate::scene::{FileId, NodeId, Origin, Scene, SceneNode, UpAxis};
 use crate::value::{BaseType, FieldType, Image, Value};
 
-/// Deepest nesting of PROTO instances and Inline files.
+/// Deepest nesting of PROTO instances, by default (see [`Limits`]).
 pub const MAX_INSTANCE_DEPTH: usize = 32;
-/// Largest scene, in nodes, after PROTO expansion.
+/// Largest scene, in nodes, after PROTO expansion, by default (see [`Limits`]).
 pub const MAX_NODES: usize = 1_000_000;
+/// Diagnostics kept per check; past it, one message says how many more there were.
+pub const MAX_DIAGNOSTICS: usize = 500;
 
 /// How to check a world.
 #[derive(Clone, Debug)]
 pub struct Options {
     /// Unknown nodes and fields are errors (regatta's own worlds) or warnings (foreign files).
     pub strict: bool,
-    /// Directory against which EXTERNPROTO and Inline paths resolve; `None` forbids file access.
+    /// The folders the world may read files from; [`check_path`] adds the world's own folder.
+    pub access: FileAccess,
+    /// Bounds on includes, PROTO depth, nodes, nesting and file size.
+    pub limits: Limits,
+    /// The folder the main text's relative urls resolve against: the world file's folder
+    /// ([`check_path`] sets it); `None` for a text with no folder (standard input), whose
+    /// urls resolve against the current directory, still within `access`.
     pub base_dir: Option<PathBuf>,
     /// Folders where `webots://` PROTOs are looked for before regatta's stand-ins (a Webots
     /// installation, or any folder of PROTOs); see [`crate::proto_path`].
@@ -42,6 +56,8 @@ impl Default for Options {
     fn default() -> Options {
         Options {
             strict: true,
+            access: FileAccess::none(),
+            limits: Limits::default(),
             base_dir: None,
             proto_path: Vec::new(),
         }
@@ -65,6 +81,8 @@ pub struct Source {
 /// The result of checking a world: always a scene (possibly partial) and every diagnostic.
 #[derive(Debug)]
 pub struct Checked {
+    /// Whether unknown things were errors (or warnings, in lenient mode).
+    pub strict: bool,
     pub scene: Scene,
     pub diagnostics: Vec<FileDiagnostic>,
     /// The files diagnostics refer to, indexed by [`FileId`].
@@ -105,25 +123,47 @@ impl Checked {
         self.diagnostics.iter().any(|d| d.diagnostic.is_error())
     }
 
+    /// Puts diagnostics added after the check (by later stages) in the stable order.
+    pub fn sort_diagnostics(&mut self) {
+        self.diagnostics.sort_by(|a, b| {
+            (a.file.0, a.diagnostic.span.start, &a.diagnostic.message).cmp(&(
+                b.file.0,
+                b.diagnostic.span.start,
+                &b.diagnostic.message,
+            ))
+        });
+    }
+
+    /// The files of this check, for rendering (indexed by [`FileId`]).
+    pub fn source_map(&self) -> SourceMap<'_> {
+        let mut map = SourceMap::new();
+        for source in &self.sources {
+            map.add(&source.name, &source.text);
+        }
+        map
+    }
+
     /// Renders every diagnostic in rustc's style.
     pub fn render(&self, color: bool) -> String {
+        self.render_where(|_| true, color)
+    }
+
+    /// Renders the diagnostics `keep` selects, in rustc's style.
+    pub fn render_where(&self, keep: impl Fn(&FileDiagnostic) -> bool, color: bool) -> String {
+        let map = self.source_map();
         self.diagnostics
             .iter()
-            .map(|d| {
-                let source = &self.sources[d.file.0 as usize];
-                d.diagnostic.render(&source.name, &source.text, color)
-            })
+            .filter(|d| keep(d))
+            .map(|d| map.render(d.file.0 as usize, &d.diagnostic, color))
             .collect()
     }
 
     /// One line per diagnostic: `file:line:col: error: message`.
     pub fn short(&self) -> Vec<String> {
+        let map = self.source_map();
         self.diagnostics
             .iter()
-            .map(|d| {
-                let source = &self.sources[d.file.0 as usize];
-                d.diagnostic.short(&source.name, &source.text)
-            })
+            .map(|d| map.short(d.file.0 as usize, &d.diagnostic))
             .collect()
     }
 }
@@ -131,14 +171,25 @@ impl Checked {
 /// Checks a world given as text (its own parse diagnostics included).
 pub fn check(source: SourceText, options: &Options) -> Checked {
     let mut lowerer = Lowerer::new(options.clone());
-    let file = lowerer.add_file(source);
+    let base = match &options.base_dir {
+        Some(dir) => UrlBase::Dir(dir.clone()),
+        None => UrlBase::CurrentDir,
+    };
+    let file = lowerer.add_file(source, base);
     lowerer.lower_world(file);
     lowerer.finish()
 }
 
-/// Reads and checks a world file; `Err` only when the file cannot be read at all.
+/// Reads and checks a world file with the default limits, reading files under its folder
+/// only; `Err` only when the file cannot be read at all.
 pub fn check_file(path: &Path, strict: bool) -> Result<Checked, regatta_parser::SourceError> {
-    check_file_with_proto_path(path, strict, Vec::new())
+    check_path(
+        path,
+        &Options {
+            strict,
+            ..Options::default()
+        },
+    )
 }
 
 /// [`check_file`], looking for `webots://` PROTOs in `proto_path` before the stand-ins.
@@ -147,13 +198,40 @@ pub fn check_file_with_proto_path(
     strict: bool,
     proto_path: Vec<PathBuf>,
 ) -> Result<Checked, regatta_parser::SourceError> {
-    let source = SourceText::read(path)?;
-    let options = Options {
-        strict,
-        base_dir: Some(path.parent().map(Path::to_owned).unwrap_or_default()),
-        proto_path,
+    check_path(
+        path,
+        &Options {
+            strict,
+            proto_path,
+            ..Options::default()
+        },
+    )
+}
+
+/// Reads and checks a world file: its folder joins `options.access`, and its urls resolve
+/// against that folder. `Err` only when the file cannot be read at all.
+pub fn check_path(path: &Path, options: &Options) -> Result<Checked, regatta_parser::SourceError> {
+    let source = SourceText::read_limited(path, options.limits.file_size)?;
+    let mut options = options.clone();
+    let io = |source| regatta_parser::SourceError::Io {
+        path: path.to_owned(),
+        source,
     };
-    Ok(check(source, &options))
+    let canonical = path.canonicalize().map_err(io)?;
+    let folder = canonical
+        .parent()
+        .map(Path::to_owned)
+        .unwrap_or_else(|| PathBuf::from("/"));
+    options.access.allow(&folder).map_err(io)?;
+    options.base_dir = Some(folder);
+    let mut lowerer = Lowerer::new(options.clone());
+    let file = lowerer.add_file(
+        source,
+        UrlBase::Dir(options.base_dir.clone().unwrap_or_default()),
+    );
+    lowerer.loaded.insert(canonical, file);
+    lowerer.lower_world(file);
+    Ok(lowerer.finish())
 }
 
 /// Types a catalogue default (used when the catalogue loads).
@@ -189,7 +267,11 @@ pub(crate) fn type_default(
     };
     let mut lowerer = Lowerer::new(Options::default());
     lowerer.catalogue = Some(catalogue);
-    let file = lowerer.add_text("<catalogue>", &format!("Default {{ {text} }}"));
+    let file = lowerer.add_text(
+        "<catalogue>",
+        &format!("Default {{ {text} }}"),
+        UrlBase::NoFiles,
+    );
     let mut scope = Scope::new(file);
     let typed = lowerer.lower_field_value(
         &value,
@@ -213,9 +295,33 @@ pub(crate) fn type_default(
 
 /// PROTOs visible at some point, in order of definition (later entries win).
 type ProtoTable = Rc<Vec<(String, Rc<ProtoDef>)>>;
-/// A PROTO instance's interface fields: declared type and bound value.
-/// Declared type, bound value, and where an instance wrote it (defaults have no origin).
-pub(crate) type Bindings = BTreeMap<String, (FieldType, Option<Value>, Option<(FileId, Span)>)>;
+/// A PROTO instance's interface fields, by name.
+pub type Bindings = BTreeMap<String, Binding>;
+
+/// One interface field of a PROTO instance.
+#[derive(Clone, Debug)]
+pub struct Binding {
+    pub ty: FieldType,
+    /// The instance's value, or the default.
+    pub value: Option<Value>,
+    /// Where the user wrote the value: the file, each string's span, the field's span (none
+    /// for a default). A value passed on through IS keeps its first site.
+    pub site: Option<(FileId, Vec<Span>, Span)>,
+    /// `field`, `exposedField`, `eventIn`…
+    pub keyword: String,
+}
+
+impl Binding {
+    /// A binding to a plain `field` with no site (a default).
+    pub fn new(ty: FieldType, value: Option<Value>) -> Binding {
+        Binding {
+            ty,
+            value,
+            site: None,
+            keyword: "field".to_owned(),
+        }
+    }
+}
 
 /// A PROTO definition and the file it was read from.
 struct ProtoDef {
@@ -273,29 +379,98 @@ impl Scope {
     }
 }
 
+/// What a file's relative urls resolve against.
+#[derive(Clone, Debug)]
+enum UrlBase {
+    /// The folder of the file (canonical).
+    Dir(PathBuf),
+    /// A text with no folder (standard input): the current directory.
+    CurrentDir,
+    /// Built-in text (standard PROTOs, the catalogue): it names no file.
+    NoFiles,
+}
+
+/// What a url is for: says what happens when it is not followed.
+#[derive(Clone, Copy, Debug)]
+enum UrlUse<'a> {
+    Inline,
+    ExternProto,
+    /// A file a node names but regatta does not read (an ImageTexture's image).
+    Image(&'a str),
+}
+
+impl UrlUse<'_> {
+    fn noun(&self) -> &str {
+        match self {
+            UrlUse::Inline => "Inline",
+            UrlUse::ExternProto => "EXTERNPROTO",
+            UrlUse::Image(node) => node,
+        }
+    }
+
+    fn instead(&self) -> &'static str {
+        match self {
+            UrlUse::Inline => "the Inline stays empty",
+            UrlUse::ExternProto => "its PROTO stays unknown",
+            UrlUse::Image(_) => "the image is not used (regatta does not read images yet)",
+        }
+    }
+}
+
+/// One PROTO instance being expanded.
+struct Frame {
+    name: String,
+    /// The definition's offset in its file (with `definition`, its identity).
+    key: u32,
+    /// Where the instance was written.
+    instance: (FileId, Span),
+    /// The file holding the PROTO's definition.
+    definition: FileId,
+}
+
 struct Lowerer<'c> {
     options: Options,
     catalogue: Option<&'c Catalogue>,
     nodes: Vec<SceneNode>,
+    /// Whether each node is, or holds, a robot (a robot must not be USEd twice).
+    holds_robot: Vec<bool>,
     sources: Vec<Source>,
+    /// What each file's urls resolve against, by file id.
+    file_bases: Vec<UrlBase>,
     /// Parse diagnostics of each file, kept until the end so that typed messages can replace
     /// the parser's generic "missing value" ones.
     parse_diagnostics: Vec<FileDiagnostic>,
     diagnostics: Vec<FileDiagnostic>,
+    /// Diagnostics dropped past [`MAX_DIAGNOSTICS`].
+    dropped: usize,
     refined_missing: BTreeSet<(u32, u32)>,
     builtins: Option<ProtoTable>,
     /// EXTERNPROTO names that point where regatta does not go, with the URL.
     unresolved: HashMap<String, String>,
-    instance_stack: Vec<String>,
+    /// The PROTO instances being expanded, outermost first.
+    frames: Vec<Frame>,
+    /// The Inline and EXTERNPROTO files being read, outermost first.
+    includes: Vec<FileId>,
+    /// Nodes being lowered inside each other (the expanded scene's depth).
+    node_depth: usize,
+    /// The user's line a value inside a PROTO body came from, while it is being typed.
+    blame: Option<(FileId, Span)>,
+    /// Places problems in PROTO bodies were moved to (each gets one message).
+    relocated: BTreeSet<(u32, u32)>,
     /// PROTOs whose interface was already checked for unused fields.
     checked_protos: BTreeSet<(u32, u32)>,
+    /// Nodes a PROTO expands to at most, by definition (file, offset).
+    estimates: HashMap<(u32, u32), u64>,
     /// Files already loaded (EXTERNPROTO, Inline), by canonical path.
     loaded: HashMap<PathBuf, FileId>,
+    /// Each file's syntax tree, parsed once.
+    parsed: HashMap<u32, Rc<syntax::SourceFile>>,
     /// The PROTO table of each file, by file id.
     file_scopes: HashMap<u32, ProtoTable>,
-    budget_reported: bool,
-    /// Too-deep instance nesting is reported once: one cause, one message.
-    depth_reported: bool,
+    /// The PROTO each instance's root node was made by (the outermost one), for ROUTEs.
+    instance_of: HashMap<NodeId, Rc<ProtoDef>>,
+    /// Limits already reported (each is one cause: one message).
+    limits_reported: BTreeSet<&'static str>,
     up_axis: UpAxis,
     objects: crate::webots::Objects,
     roots: Vec<NodeId>,
@@ -303,6 +478,9 @@ struct Lowerer<'c> {
     file_authoring: HashMap<u32, crate::webots::Authoring>,
     /// PROTO instance roots: the authoring of the file that wrote the instance.
     instance_authoring: HashMap<u32, crate::webots::Authoring>,
+    /// PROTO instance roots: the authoring of the file their body was written in (their
+    /// origin is the instance, in the user's file).
+    body_authoring: HashMap<u32, crate::webots::Authoring>,
     /// The urls EXTERNPROTOs give for stand-in names.
     standin_urls: HashMap<String, String>,
     substitutions: Vec<Substitution>,
@@ -310,28 +488,43 @@ struct Lowerer<'c> {
 }
 
 impl<'c> Lowerer<'c> {
-    fn new(options: Options) -> Lowerer<'c> {
+    fn new(mut options: Options) -> Lowerer<'c> {
+        // The PROTO path's folders are the user's: files there may be read, under the same
+        // rules as the world's own (their PROTOs' urls stay inside them).
+        for dir in options.proto_path.clone() {
+            let _ = options.access.allow(&dir);
+        }
         Lowerer {
             options,
             catalogue: None,
             nodes: Vec::new(),
+            holds_robot: Vec::new(),
             sources: Vec::new(),
+            file_bases: Vec::new(),
             parse_diagnostics: Vec::new(),
             diagnostics: Vec::new(),
+            dropped: 0,
             refined_missing: BTreeSet::new(),
             builtins: None,
             unresolved: HashMap::new(),
-            instance_stack: Vec::new(),
+            frames: Vec::new(),
+            includes: Vec::new(),
+            node_depth: 0,
+            blame: None,
+            relocated: BTreeSet::new(),
             checked_protos: BTreeSet::new(),
+            estimates: HashMap::new(),
             loaded: HashMap::new(),
+            parsed: HashMap::new(),
             file_scopes: HashMap::new(),
-            budget_reported: false,
-            depth_reported: false,
+            instance_of: HashMap::new(),
+            limits_reported: BTreeSet::new(),
             up_axis: UpAxis::Y,
             objects: crate::webots::Objects::Legacy,
             roots: Vec::new(),
             file_authoring: HashMap::new(),
             instance_authoring: HashMap::new(),
+            body_authoring: HashMap::new(),
             standin_urls: HashMap::new(),
             substitutions: Vec::new(),
             unbuilt_robots: Vec::new(),
@@ -345,17 +538,18 @@ impl<'c> Lowerer<'c> {
         }
     }
 
-    fn add_text(&mut self, name: &str, text: &str) -> FileId {
+    fn add_text(&mut self, name: &str, text: &str, base: UrlBase) -> FileId {
         let id = FileId(self.sources.len() as u32);
         self.sources.push(Source {
             name: name.to_owned(),
             text: Rc::from(text),
         });
+        self.file_bases.push(base);
         id
     }
 
-    fn add_file(&mut self, source: SourceText) -> FileId {
-        let id = self.add_text(&source.name, &source.text);
+    fn add_file(&mut self, source: SourceText, base: UrlBase) -> FileId {
+        let id = self.add_text(&source.name, &source.text, base);
         for diagnostic in source.diagnostics {
             self.parse_diagnostics.push(FileDiagnostic {
                 file: id,
@@ -365,19 +559,93 @@ impl<'c> Lowerer<'c> {
         id
     }
 
-    /// Parses a registered file, keeping its syntax diagnostics.
+    fn is_builtin(&self, file: FileId) -> bool {
+        matches!(self.file_bases.get(file.0 as usize), Some(UrlBase::NoFiles))
+    }
+
+    /// Parses a registered file once, keeping its syntax diagnostics.
     fn parse(&mut self, file: FileId) -> Rc<syntax::SourceFile> {
+        if let Some(parsed) = self.parsed.get(&file.0) {
+            return parsed.clone();
+        }
         let text = self.sources[file.0 as usize].text.clone();
-        let parse = regatta_parser::parse(&text);
+        let parse = regatta_parser::parse_with(&text, self.options.limits.nesting);
         for diagnostic in parse.diagnostics {
             self.parse_diagnostics
                 .push(FileDiagnostic { file, diagnostic });
         }
-        Rc::new(parse.file)
+        let parsed = Rc::new(parse.file);
+        self.parsed.insert(file.0, parsed.clone());
+        parsed
     }
 
     fn error(&mut self, file: FileId, diagnostic: Diagnostic) {
+        let original = file;
+        let (file, diagnostic) = self.relocate(file, diagnostic);
+        // One mistake, one message: a user's value that breaks several parts of a PROTO's
+        // body is reported once, at the value.
+        if file != original && !self.relocated.insert((file.0, diagnostic.span.start)) {
+            return;
+        }
+        if self.diagnostics.len() >= MAX_DIAGNOSTICS {
+            self.dropped += 1;
+            return;
+        }
         self.diagnostics.push(FileDiagnostic { file, diagnostic });
+    }
+
+    /// The innermost PROTO instance being expanded that the user wrote (not a built-in
+    /// PROTO's body).
+    fn user_instance(&self) -> Option<(FileId, Span)> {
+        self.frames
+            .iter()
+            .rev()
+            .find(|f| !self.is_builtin(f.instance.0))
+            .map(|f| f.instance)
+    }
+
+    /// Inside a PROTO's expansion, a problem the instance caused is shown at the instance's
+    /// line, with the PROTO's line beside it: a value typed while `blame` is set (a template
+    /// over the instance's fields), or any problem in a built-in PROTO, which the user cannot
+    /// edit.
+    fn relocate(&self, file: FileId, mut diagnostic: Diagnostic) -> (FileId, Diagnostic) {
+        let target = match self.blame {
+            Some((blamed, span)) if blamed != file || span != diagnostic.span => {
+                Some((blamed, span))
+            }
+            _ if self.is_builtin(file) => self.user_instance(),
+            _ => None,
+        };
+        let Some((user_file, user_span)) = target else {
+            return (file, diagnostic);
+        };
+        let proto = self
+            .frames
+            .iter()
+            .rev()
+            .find(|f| f.definition == file)
+            .map(|f| format!("in the body of PROTO '{}'", f.name))
+            .unwrap_or_else(|| "in a PROTO body".to_owned());
+        for label in &mut diagnostic.secondary {
+            label.file.get_or_insert(file.0 as usize);
+        }
+        let original = diagnostic.span;
+        let label = std::mem::take(&mut diagnostic.label);
+        diagnostic.span = user_span;
+        diagnostic.label = "caused by this".to_owned();
+        diagnostic.secondary.insert(
+            0,
+            regatta_parser::Label {
+                span: original,
+                message: if label.is_empty() {
+                    proto
+                } else {
+                    format!("{proto}: {label}")
+                },
+                file: Some(file.0 as usize),
+            },
+        );
+        (user_file, diagnostic)
     }
 
     /// An error in strict mode, a warning in lenient mode.
@@ -388,7 +656,19 @@ impl<'c> Lowerer<'c> {
         self.error(file, diagnostic);
     }
 
+    /// Reports a crossed limit once: one cause, one message.
+    fn limit_crossed(&mut self, key: &'static str, file: FileId, diagnostic: Diagnostic) {
+        if self.limits_reported.insert(key) {
+            let diagnostic = diagnostic
+                .with_note(format!("`--limit {key}=N` raises the limit"))
+                .with_code("limit");
+            self.error(file, diagnostic);
+        }
+    }
+
     fn finish(mut self) -> Checked {
+        self.check_expanded_size();
+        self.check_robot_names();
         let refined = std::mem::take(&mut self.refined_missing);
         let mut diagnostics: Vec<FileDiagnostic> = self
             .parse_diagnostics
@@ -399,7 +679,7 @@ impl<'c> Lowerer<'c> {
             })
             .collect();
         diagnostics.append(&mut self.diagnostics);
-        // Stable order: by file, then position, then message.
+        // Stable order: by file, then position, then message; one message per place.
         diagnostics.sort_by(|a, b| {
             (a.file.0, a.diagnostic.span.start, &a.diagnostic.message).cmp(&(
                 b.file.0,
@@ -407,13 +687,32 @@ impl<'c> Lowerer<'c> {
                 &b.diagnostic.message,
             ))
         });
-        diagnostics.dedup();
+        diagnostics.dedup_by(|a, b| {
+            a.file == b.file
+                && a.diagnostic.span == b.diagnostic.span
+                && a.diagnostic.message == b.diagnostic.message
+        });
+        if self.dropped > 0 {
+            if let Some(last) = diagnostics.last().cloned() {
+                diagnostics.push(FileDiagnostic {
+                    file: last.file,
+                    diagnostic: Diagnostic::error(
+                        last.diagnostic.span,
+                        format!("too many problems: {} more were not reported", self.dropped),
+                    )
+                    .with_code("too-many"),
+                });
+            }
+        }
         for (index, node) in self.nodes.iter_mut().enumerate() {
-            let body = self
-                .file_authoring
-                .get(&node.origin.file.0)
-                .copied()
-                .unwrap_or_default();
+            let body = match self.body_authoring.get(&(index as u32)) {
+                Some(&body) => body,
+                None => self
+                    .file_authoring
+                    .get(&node.origin.file.0)
+                    .copied()
+                    .unwrap_or_default(),
+            };
             let own = self
                 .instance_authoring
                 .get(&(index as u32))
@@ -429,6 +728,7 @@ impl<'c> Lowerer<'c> {
             objects: self.objects,
         };
         Checked {
+            strict: self.options.strict,
             scene,
             diagnostics,
             sources: self.sources,
@@ -452,7 +752,11 @@ impl<'c> Lowerer<'c> {
             } else {
                 "protos/webots"
             };
-            let file = self.add_text(&format!("<builtin>/{folder}/{name}.proto"), text);
+            let file = self.add_text(
+                &format!("<builtin>/{folder}/{name}.proto"),
+                text,
+                UrlBase::NoFiles,
+            );
             self.file_authoring.insert(file.0, authoring);
             let parsed = self.parse(file);
             for item in &parsed.items {
@@ -470,16 +774,11 @@ impl<'c> Lowerer<'c> {
     }
 
     /// The PROTOs a file defines or imports, after the built-in ones (later entries win).
-    fn file_protos(
-        &mut self,
-        file: FileId,
-        parsed: &syntax::SourceFile,
-        depth: usize,
-    ) -> ProtoTable {
+    fn file_protos(&mut self, file: FileId, parsed: &syntax::SourceFile) -> ProtoTable {
         let mut list: Vec<(String, Rc<ProtoDef>)> = self.builtins().iter().cloned().collect();
         for item in &parsed.items {
             if let Item::ExternProto(extern_proto) = item {
-                self.extern_proto(file, extern_proto, &mut list, depth);
+                self.extern_proto(file, extern_proto, &mut list);
             }
         }
         let own: Vec<&syntax::Proto> = parsed
@@ -536,8 +835,8 @@ impl<'c> Lowerer<'c> {
         file: FileId,
         extern_proto: &syntax::ExternProto,
         list: &mut Vec<(String, Rc<ProtoDef>)>,
-        depth: usize,
     ) {
+        let mut refused = None;
         for url in &extern_proto.urls {
             let (path_part, fragment) = match url.value.split_once('#') {
                 Some((p, f)) => (p, Some(f)),
@@ -554,58 +853,52 @@ impl<'c> Lowerer<'c> {
                         .map(|s| s.to_string_lossy().into_owned())
                         .unwrap_or_default()
                 });
-            if path_part.contains("://") {
-                if let Some(inside) = crate::webots::webots_path(path_part) {
-                    if let Some(path) =
-                        crate::proto_path::find(&self.options.proto_path, inside, &name)
-                    {
-                        if self.extern_from_file(file, &path, url, &name, list, depth) {
-                            return;
-                        }
-                        continue;
-                    }
-                    if WEBOTS_STANDINS.iter().any(|(n, _, _)| *n == name) {
-                        // The stand-in is already in the table, after regatta's own PROTOs.
-                        self.standin_urls
-                            .entry(name)
-                            .or_insert_with(|| url.value.clone());
+            if let Some(inside) = crate::webots::webots_path(path_part) {
+                // A Webots PROTO: from a folder of the PROTO path (the user's, trusted, and
+                // confined to it), else regatta's stand-in, else unknown where it is used.
+                if let Some(path) = crate::proto_path::find(&self.options.proto_path, inside, &name)
+                {
+                    if self.extern_from_file(file, &path, url, &name, list) {
                         return;
                     }
+                    continue;
                 }
-                self.unresolved
-                    .entry(name)
-                    .or_insert_with(|| url.value.clone());
-                continue;
+                if WEBOTS_STANDINS.iter().any(|(n, _, _)| *n == name) {
+                    // The stand-in is already in the table, after regatta's own PROTOs.
+                    self.standin_urls
+                        .entry(name)
+                        .or_insert_with(|| url.value.clone());
+                    return;
+                }
             }
-            let Some(base) = self.options.base_dir.clone() else {
-                self.unresolved
-                    .entry(name)
-                    .or_insert_with(|| url.value.clone());
-                continue;
+            let path = match self.resolve_url(file, path_part) {
+                Ok(path) => path,
+                Err(Refusal::Network { .. }) => {
+                    // Said where the PROTO is used ("its EXTERNPROTO points to …").
+                    self.unresolved
+                        .entry(name)
+                        .or_insert_with(|| url.value.clone());
+                    continue;
+                }
+                Err(refusal) => {
+                    self.unresolved
+                        .entry(name)
+                        .or_insert_with(|| url.value.clone());
+                    refused.get_or_insert((refusal, url));
+                    continue;
+                }
             };
-            let path = base.join(path_part);
-            if !path.exists() {
-                self.strict_or_warn(
-                    file,
-                    Diagnostic::error(
-                        url.span,
-                        format!("EXTERNPROTO file '{path_part}' does not exist"),
-                    )
-                    .with_code("externproto"),
-                );
-                self.unresolved
-                    .entry(name)
-                    .or_insert_with(|| url.value.clone());
-                continue;
-            }
-            if self.extern_from_file(file, &path, url, &name, list, depth) {
+            if self.extern_from_file(file, &path, url, &name, list) {
                 return;
             }
         }
+        if let Some((refusal, url)) = refused {
+            self.refuse(file, url.span, &url.value, refusal, UrlUse::ExternProto);
+        }
     }
 
-    /// Reads the PROTO `name` from the file at `path` into `list`; false (after reporting)
-    /// when the file cannot be read or defines no such PROTO.
+    /// Reads the PROTO `name` from the file at `path` (already resolved) into `list`; false
+    /// (after reporting) when the file cannot be read or defines no such PROTO.
     fn extern_from_file(
         &mut self,
         file: FileId,
@@ -613,9 +906,8 @@ impl<'c> Lowerer<'c> {
         url: &syntax::StringLit,
         name: &str,
         list: &mut Vec<(String, Rc<ProtoDef>)>,
-        depth: usize,
     ) -> bool {
-        let Some(loaded) = self.load_file(file, path, url.span, depth) else {
+        let Some(loaded) = self.load_resolved(file, path, &url.value, url.span) else {
             return false;
         };
         let parsed = self.parse(loaded);
@@ -625,7 +917,11 @@ impl<'c> Lowerer<'c> {
         });
         match found {
             Some(proto) => {
-                self.file_protos(loaded, &parsed, depth + 1);
+                if !self.file_scopes.contains_key(&loaded.0) {
+                    self.includes.push(loaded);
+                    self.file_protos(loaded, &parsed);
+                    self.includes.pop();
+                }
                 list.push((
                     name.to_owned(),
                     Rc::new(ProtoDef {
@@ -650,49 +946,147 @@ impl<'c> Lowerer<'c> {
         }
     }
 
-    /// Reads a file named by EXTERNPROTO or Inline, once.
-    fn load_file(&mut self, from: FileId, path: &Path, span: Span, depth: usize) -> Option<FileId> {
-        if depth >= MAX_INSTANCE_DEPTH {
-            self.error(
+    /// Where `url`, written in `file`, leads, if the world may read it.
+    fn resolve_url(&self, file: FileId, url: &str) -> Result<PathBuf, Refusal> {
+        let base = match &self.file_bases[file.0 as usize] {
+            UrlBase::Dir(dir) => Some(dir.as_path()),
+            UrlBase::CurrentDir => None,
+            UrlBase::NoFiles => return Err(Refusal::NoAccess),
+        };
+        self.options.access.resolve(url, base)
+    }
+
+    /// Reports a url that was not followed, and what happens instead. Escapes are errors in
+    /// both modes: nothing is read either way, and a world that reaches outside its folder
+    /// should not look fine.
+    fn refuse(&mut self, file: FileId, span: Span, url: &str, refusal: Refusal, user: UrlUse) {
+        let diagnostic = Diagnostic::error(
+            span,
+            format!("{} url {}", user.noun(), refusal.message(url)),
+        )
+        .with_label(match refusal {
+            Refusal::Network { .. } => "not fetched",
+            Refusal::Missing => "no such file",
+            _ => "refused",
+        })
+        .with_note(format!("{}; {}", user.instead(), refusal.rule()))
+        .with_code("file-access");
+        match (&refusal, user) {
+            (Refusal::Missing | Refusal::Network { .. }, UrlUse::Image(_)) => {
+                let mut diagnostic = diagnostic;
+                diagnostic.severity = regatta_parser::Severity::Warning;
+                self.error(file, diagnostic);
+            }
+            (Refusal::Missing | Refusal::Network { .. } | Refusal::Empty, _) => {
+                self.strict_or_warn(file, diagnostic)
+            }
+            _ => self.error(file, diagnostic),
+        }
+    }
+
+    /// Reads a file named by EXTERNPROTO or Inline (already resolved to `path`), once; `url`
+    /// is how the including file wrote it, for messages.
+    fn load_resolved(
+        &mut self,
+        from: FileId,
+        path: &Path,
+        url: &str,
+        span: Span,
+    ) -> Option<FileId> {
+        if self.includes.len() >= self.options.limits.include_depth {
+            let limit = self.options.limits.include_depth;
+            self.limit_crossed(
+                "include-depth",
                 from,
-                Diagnostic::error(span, "files include each other too deeply").with_code("depth"),
+                Diagnostic::error(
+                    span,
+                    format!("files include each other more than {limit} levels deep"),
+                )
+                .with_label("this file is not read"),
             );
             return None;
         }
-        let key = path.canonicalize().unwrap_or_else(|_| path.to_owned());
-        if let Some(&id) = self.loaded.get(&key) {
-            return Some(id);
-        }
-        match SourceText::read(path) {
-            Ok(source) => {
-                let id = self.add_file(source);
-                self.loaded.insert(key, id);
-                Some(id)
-            }
-            Err(error) => {
-                // Name the file as written (relative), so messages do not depend on the checkout.
-                let reason = match &error {
-                    regatta_parser::SourceError::Io { source, .. } => source.to_string(),
-                    other => other.to_string(),
-                };
-                let shown = path
-                    .file_name()
-                    .map(|n| n.to_string_lossy().into_owned())
-                    .unwrap_or_default();
+        if let Some(&id) = self.loaded.get(path) {
+            if self.includes.contains(&id) || id == FileId(0) {
                 self.error(
                     from,
-                    Diagnostic::error(span, format!("cannot read '{shown}': {reason}"))
-                        .with_code("io"),
+                    Diagnostic::error(span, format!("'{url}' includes itself"))
+                        .with_label("a file that includes itself would never end")
+                        .with_code("include-cycle"),
                 );
-                None
+                return None;
             }
+            return Some(id);
         }
+        let problem = |lowerer: &mut Self, message: String| {
+            lowerer.error(
+                from,
+                Diagnostic::error(span, message)
+                    .with_label("not read")
+                    .with_code("not-a-world"),
+            );
+        };
+        let source = match SourceText::read_limited(path, self.options.limits.file_size) {
+            Ok(source) => source,
+            Err(regatta_parser::SourceError::TooLarge { limit, .. }) => {
+                self.limit_crossed(
+                    "file-size",
+                    from,
+                    Diagnostic::error(
+                        span,
+                        format!("'{url}' is larger than the file-size limit of {limit} bytes"),
+                    )
+                    .with_label("not read"),
+                );
+                return None;
+            }
+            Err(regatta_parser::SourceError::Binary { .. }) => {
+                problem(
+                    self,
+                    format!("'{url}' is not a world file: it holds binary data"),
+                );
+                return None;
+            }
+            Err(regatta_parser::SourceError::Gzip { .. }) => {
+                problem(
+                    self,
+                    format!("'{url}' looks gzip-compressed but does not inflate"),
+                );
+                return None;
+            }
+            Err(regatta_parser::SourceError::Io { source, .. }) => {
+                let reason = match source.kind() {
+                    std::io::ErrorKind::PermissionDenied => "permission denied",
+                    std::io::ErrorKind::IsADirectory => "it is a folder",
+                    _ => "it cannot be read",
+                };
+                let reason = if path.is_dir() {
+                    "it is a folder"
+                } else {
+                    reason
+                };
+                problem(self, format!("cannot read '{url}': {reason}"));
+                return None;
+            }
+        };
+        if !regatta_parser::source::has_world_header(&source.text) {
+            problem(
+                self,
+                format!("'{url}' is not a world file: it does not start with a #VRML header"),
+            );
+            return None;
+        }
+        let name = included_name(&self.sources[from.0 as usize].name, url);
+        let folder = path.parent().map(Path::to_owned).unwrap_or_default();
+        let id = self.add_file(SourceText { name, ..source }, UrlBase::Dir(folder));
+        self.loaded.insert(path.to_owned(), id);
+        Some(id)
     }
 
     fn lower_world(&mut self, file: FileId) {
         let parsed = self.parse(file);
         let header = parsed.header.clone();
-        let protos = self.file_protos(file, &parsed, 0);
+        let protos = self.file_protos(file, &parsed);
         let mut scope = Scope {
             protos,
             ..Scope::new(file)
@@ -724,14 +1118,7 @@ impl<'c> Lowerer<'c> {
                     )
                     .with_code("template"),
                 ),
-                Item::Route(route) => self.error(
-                    scope.file,
-                    Diagnostic::warning(
-                        route.span,
-                        "ROUTEs are read but not simulated: regatta has no event model",
-                    )
-                    .with_code("route"),
-                ),
+                Item::Route(route) => self.route(route, scope),
                 _ => {}
             }
         }
@@ -802,22 +1189,45 @@ impl<'c> Lowerer<'c> {
     }
 
     fn alloc(&mut self, node: SceneNode, file: FileId, span: Span) -> Option<NodeId> {
-        if self.nodes.len() >= MAX_NODES {
-            if !self.budget_reported {
-                self.budget_reported = true;
-                self.error(
-                    file,
-                    Diagnostic::error(span, format!("the scene expands to more than {MAX_NODES} nodes"))
-                        .with_label("expansion stopped here")
-                        .with_note("PROTOs or USEs multiply each other; check for accidental exponential nesting")
-                        .with_code("too-large"),
-                );
-            }
+        if self.nodes.len() >= self.options.limits.nodes {
+            self.nodes_limit(file, span, None);
             return None;
         }
+        let spec = self.catalogue().spec(node.spec);
+        let holds_robot = spec.classes.iter().any(|c| c == "robot")
+            || node
+                .fields
+                .iter()
+                .any(|v| v.nodes().iter().any(|c| self.holds_robot[c.index()]));
         let id = NodeId(self.nodes.len() as u32);
         self.nodes.push(node);
+        self.holds_robot.push(holds_robot);
         Some(id)
+    }
+
+    /// The scene grew past the node limit (or would, by `estimate`).
+    fn nodes_limit(&mut self, file: FileId, span: Span, estimate: Option<(&str, u64)>) {
+        let limit = self.options.limits.nodes;
+        let message = match estimate {
+            Some((name, nodes)) => format!(
+                "PROTO '{name}' expands to {} nodes, more than the limit of {limit}",
+                if nodes == u64::MAX {
+                    "more than 18446744073709551615".to_owned()
+                } else {
+                    nodes.to_string()
+                }
+            ),
+            None => format!("the scene expands to more than {limit} nodes"),
+        };
+        self.limit_crossed(
+            "nodes",
+            file,
+            Diagnostic::error(span, message)
+                .with_label("expansion stopped here")
+                .with_note(
+                    "PROTOs or USEs multiply each other; check for accidental exponential nesting",
+                ),
+        );
     }
 
     /// Types one node where `accepted` classes may stand. `place` names the field, for messages.
@@ -828,16 +1238,57 @@ impl<'c> Lowerer<'c> {
         accepted: &[String],
         place: &str,
     ) -> Option<NodeId> {
-        if self.budget_reported {
+        if self.limits_reported.contains("nodes") {
             // The scene is already too large: stop expanding anything.
             return None;
         }
+        if self.node_depth >= self.options.limits.scene_depth() {
+            let limit = self.options.limits.scene_depth();
+            self.limit_crossed(
+                "nesting",
+                scope.file,
+                Diagnostic::error(
+                    node.span,
+                    format!("nodes nested deeper than {limit} levels once PROTOs and Inline files are expanded"),
+                )
+                .with_label("this node is skipped"),
+            );
+            return None;
+        }
+        self.node_depth += 1;
+        let id = self.lower_node_inner(node, scope, accepted, place);
+        self.node_depth -= 1;
+        id
+    }
+
+    fn lower_node_inner(
+        &mut self,
+        node: &syntax::Node,
+        scope: &mut Scope,
+        accepted: &[String],
+        place: &str,
+    ) -> Option<NodeId> {
         let id = match &node.kind {
             NodeKind::Use(name) => {
                 if name.text.is_empty() {
                     return None;
                 }
                 match scope.defs.get(&name.text) {
+                    Some(&id) if self.holds_robot[id.index()] => {
+                        // A robot is one body with one name: a second copy would be a second
+                        // robot under the same name.
+                        self.strict_or_warn(
+                            scope.file,
+                            Diagnostic::error(
+                                node.span,
+                                format!("USE {} would copy a robot", name.text),
+                            )
+                            .with_label("a robot cannot be USEd")
+                            .with_note("write a second robot with its own name instead; this USE is skipped")
+                            .with_code("use-of-robot"),
+                        );
+                        return None;
+                    }
                     Some(&id) => id,
                     None if scope.skipped_defs.contains(&name.text) => {
                         self.error(
@@ -923,24 +1374,47 @@ impl<'c> Lowerer<'c> {
         };
         let spec = self.catalogue().spec(self.nodes[id.index()].spec);
         if !spec.fits(accepted) {
-            let accepted_list = accepted.join(" or ");
-            self.strict_or_warn(
-                scope.file,
-                Diagnostic::error(
-                    node.span,
-                    format!("a {} node cannot stand in {place}", spec.name),
-                )
-                .with_label(format!(
-                    "{} is a {} node",
-                    spec.name,
-                    spec.classes.join("/")
-                ))
-                .with_note(format!("{place} accepts {accepted_list} nodes"))
-                .with_code("wrong-node-class"),
-            );
+            let diagnostic = self.wrong_class(spec, accepted, place, node.span);
+            self.strict_or_warn(scope.file, diagnostic);
             return None;
         }
         Some(id)
+    }
+
+    /// "a Box node cannot stand in 'turret'", naming the node types that can.
+    fn wrong_class(
+        &self,
+        spec: &crate::catalogue::NodeSpec,
+        accepted: &[String],
+        place: &str,
+        span: Span,
+    ) -> Diagnostic {
+        let catalogue = self.catalogue();
+        let types: Vec<&str> = catalogue
+            .nodes
+            .iter()
+            .filter(|n| n.fits(accepted))
+            .map(|n| n.name.as_str())
+            .collect();
+        let shown = if types.len() <= 8 {
+            format!(": {}", types.join(", "))
+        } else {
+            format!(" ({} types, `regatta schema` lists them)", types.len())
+        };
+        Diagnostic::error(
+            span,
+            format!("a {} node cannot stand in {place}", spec.name),
+        )
+        .with_label(format!(
+            "{} is a {} node",
+            spec.name,
+            spec.classes.join("/")
+        ))
+        .with_note(format!(
+            "{place} accepts {} nodes{shown}",
+            accepted.join(" or ")
+        ))
+        .with_code("wrong-node-class")
     }
 
     fn unknown_node(&mut self, type_name: &syntax::Ident, scope: &Scope) {
@@ -995,6 +1469,8 @@ impl<'c> Lowerer<'c> {
             .collect();
         let mut written = vec![false; fields.len()];
         let mut value_spans = vec![None; fields.len()];
+        // Each url of a `file` field, with where it was written and the file it is relative to.
+        let mut urls: Vec<(usize, String, FileId, Span)> = Vec::new();
         let mut seen: HashMap<&str, Span> = HashMap::new();
         for item in items {
             match item {
@@ -1021,23 +1497,31 @@ impl<'c> Lowerer<'c> {
                         );
                     }
                     let field_spec = &spec.fields[index];
+                    if matches!(field_spec.access.as_deref(), Some("eventIn" | "eventOut")) {
+                        self.strict_or_warn(
+                            scope.file,
+                            Diagnostic::error(field.name.span, format!("'{}' is an {} of {}: it receives or sends events and takes no value", field.name.text, field_spec.access.as_deref().unwrap_or_default(), spec.name))
+                                .with_code("event-as-field"),
+                        );
+                        continue;
+                    }
+                    let site = self.value_site(field, scope);
                     if let Some(value) = self.lower_field_value(&field.value, field_spec.ty(), Some(field_spec), scope, &field.name.text, field.name.span) {
+                        if field_spec.file {
+                            for (k, url) in value.strings().iter().enumerate() {
+                                let span = site.1.get(k).copied().unwrap_or(site.2);
+                                urls.push((index, url.clone(), site.0, span));
+                            }
+                        }
                         fields[index] = value;
                         written[index] = true;
-                        value_spans[index] = match &field.value {
-                            syntax::FieldValue::Value(value) => Some(Origin {
-                                file: scope.file,
-                                span: value.span,
-                            }),
-                            // Bound through IS: where the instance wrote it, if it did.
-                            syntax::FieldValue::Is(target) => scope
-                                .interface
-                                .as_ref()
-                                .and_then(|i| i.get(&target.text))
-                                .and_then(|(_, _, origin)| *origin)
-                                .map(|(file, span)| Origin { file, span }),
-                            syntax::FieldValue::Missing { .. } => None,
+                        // A value written here points at itself; one bound through IS at the
+                        // instance that gave it.
+                        let span = match &field.value {
+                            syntax::FieldValue::Value(value) => value.span,
+                            _ => site.2,
                         };
+                        value_spans[index] = Some(Origin { file: site.0, span });
                     }
                 }
                 BodyItem::Declaration(declaration) => self.strict_or_warn(
@@ -1054,10 +1538,7 @@ impl<'c> Lowerer<'c> {
                     scope.file,
                     Diagnostic::warning(proto.name.span, "a PROTO inside a node is not visible outside it and is ignored").with_code("nested-proto"),
                 ),
-                BodyItem::Route(route) => self.error(
-                    scope.file,
-                    Diagnostic::warning(route.span, "ROUTEs are read but not simulated: regatta has no event model").with_code("route"),
-                ),
+                BodyItem::Route(route) => self.route(route, scope),
             }
         }
         let origin = Origin {
@@ -1065,7 +1546,13 @@ impl<'c> Lowerer<'c> {
             span: node.span,
         };
         if spec.name == "Inline" {
-            return self.inline(&fields, written[0], node, scope);
+            return self.inline(&urls, node, scope, origin);
+        }
+        // Other files are named, not read (textures): each must still lie inside the root.
+        for (_, url, file, span) in &urls {
+            if let Err(refusal) = self.resolve_url(*file, url) {
+                self.refuse(*file, *span, url, refusal, UrlUse::Image(&spec.name));
+            }
         }
         self.alloc(
             SceneNode {
@@ -1083,66 +1570,78 @@ impl<'c> Lowerer<'c> {
         )
     }
 
+    /// Where a field's value was written: the file, each string's span, and the field's span.
+    /// A value passed in through IS points at the instance that passed it.
+    fn value_site(&self, field: &syntax::Field, scope: &Scope) -> (FileId, Vec<Span>, Span) {
+        if let (syntax::FieldValue::Is(target), Some(interface)) = (&field.value, &scope.interface)
+        {
+            if let Some(binding) = interface.get(&target.text) {
+                if let Some(site) = &binding.site {
+                    return site.clone();
+                }
+            }
+            // A default: the user's instance is where it came from, unless this PROTO is
+            // the user's own (then its line is).
+            if self.is_builtin(scope.file) {
+                if let Some((file, span)) = self.user_instance() {
+                    return (file, Vec::new(), span);
+                }
+            }
+            return (scope.file, Vec::new(), field.span);
+        }
+        (scope.file, string_spans(&field.value), field.span)
+    }
+
     /// Inline becomes a Group holding the included file's nodes.
     fn inline(
         &mut self,
-        fields: &[Value],
-        written: bool,
+        urls: &[(usize, String, FileId, Span)],
         node: &syntax::Node,
         scope: &Scope,
+        origin: Origin,
     ) -> Option<NodeId> {
         let group = self
             .catalogue()
             .lookup("Group")
             .expect("catalogue has Group");
         let mut children = Vec::new();
-        let urls = match &fields[0] {
-            Value::Strings(urls) if written => urls.clone(),
-            _ => Vec::new(),
-        };
-        if let Some(url) = urls.first() {
-            if url.contains("://") {
-                self.strict_or_warn(
-                    scope.file,
-                    Diagnostic::error(node.span, format!("Inline url '{url}' is not a local file; regatta never fetches from the network")).with_code("inline"),
-                );
-            } else if let Some(base) = self.options.base_dir.clone() {
-                if self.instance_stack.len() < MAX_INSTANCE_DEPTH
-                    && !self.instance_stack.iter().any(|s| s == url)
-                {
-                    if let Some(file) = self.load_file(
-                        scope.file,
-                        &base.join(url),
-                        node.span,
-                        self.instance_stack.len(),
-                    ) {
-                        self.instance_stack.push(url.clone());
-                        let parsed = self.parse(file);
-                        let protos = self.file_protos(file, &parsed, self.instance_stack.len());
-                        let mut inner = Scope {
-                            protos,
-                            ..Scope::new(file)
-                        };
-                        children = self.lower_items(&parsed.items, &mut inner, true);
-                        self.instance_stack.pop();
-                    }
-                } else {
-                    self.error(
-                        scope.file,
-                        Diagnostic::error(node.span, format!("Inline '{url}' includes itself"))
-                            .with_code("inline"),
-                    );
+        // VRML97: the urls are alternatives, the first one that can be read is used.
+        let mut refused = None;
+        let mut chosen: Option<(PathBuf, &String, FileId, Span)> = None;
+        for (_, url, file, span) in urls {
+            match self.resolve_url(*file, url) {
+                Ok(path) => {
+                    chosen = Some((path, url, *file, *span));
+                    break;
                 }
-            } else {
-                self.error(
-                    scope.file,
-                    Diagnostic::error(
-                        node.span,
-                        "Inline files cannot be read when the world comes from standard input",
-                    )
-                    .with_code("inline"),
-                );
+                Err(refusal) => {
+                    refused.get_or_insert((refusal, url, *file, *span));
+                }
             }
+        }
+        match (chosen, refused) {
+            (Some((path, url, file, span)), _) => {
+                if let Some(loaded) = self.load_resolved(file, &path, url, span) {
+                    self.includes.push(loaded);
+                    let parsed = self.parse(loaded);
+                    let protos = self.file_protos(loaded, &parsed);
+                    let mut inner = Scope {
+                        protos,
+                        ..Scope::new(loaded)
+                    };
+                    // The included file's nodes are the user's too: nothing is relocated.
+                    let frames = std::mem::take(&mut self.frames);
+                    let blame = self.blame.take();
+                    children = self.lower_items(&parsed.items, &mut inner, true);
+                    self.frames = frames;
+                    self.blame = blame;
+                    self.includes.pop();
+                }
+            }
+            (None, Some((refusal, url, file, span))) => {
+                self.refuse(file, span, url, refusal, UrlUse::Inline);
+            }
+            (None, None) => {}
         }
         let spec = self.catalogue().spec(group);
         let mut group_fields: Vec<Value> = spec
@@ -1151,18 +1650,17 @@ impl<'c> Lowerer<'c> {
             .map(|f| f.default_value().clone())
             .collect();
         group_fields[0] = Value::Nodes(children);
+        let mut written = vec![false; group_fields.len()];
+        written[0] = true;
         self.alloc(
             SceneNode {
                 spec: group,
-                written: vec![true],
+                written,
                 value_spans: vec![None; group_fields.len()],
                 fields: group_fields,
                 def_name: None,
                 proto_names: vec!["Inline".to_owned()],
-                origin: Origin {
-                    file: scope.file,
-                    span: node.span,
-                },
+                origin,
                 axes: Default::default(),
             },
             scope.file,
@@ -1179,7 +1677,12 @@ impl<'c> Lowerer<'c> {
     ) -> Option<NodeId> {
         let proto = &def.proto;
         let name = &proto.name.text;
-        if self.instance_stack.iter().any(|n| n == name) {
+        let key = (def.file.0, proto.span.start);
+        if self
+            .frames
+            .iter()
+            .any(|f| f.definition == def.file && f.key == key.1)
+        {
             self.error(
                 scope.file,
                 Diagnostic::error(
@@ -1191,18 +1694,24 @@ impl<'c> Lowerer<'c> {
             );
             return None;
         }
-        if self.instance_stack.len() >= MAX_INSTANCE_DEPTH {
-            if std::mem::replace(&mut self.depth_reported, true) {
-                return None;
-            }
-            self.error(
+        if self.frames.len() >= self.options.limits.proto_depth {
+            let limit = self.options.limits.proto_depth;
+            self.limit_crossed(
+                "proto-depth",
                 scope.file,
                 Diagnostic::error(
                     node.span,
-                    format!("PROTO instances nested deeper than {MAX_INSTANCE_DEPTH} levels"),
+                    format!("PROTO instances nested deeper than {limit} levels"),
                 )
-                .with_code("depth"),
+                .with_label("this instance is not expanded"),
             );
+            return None;
+        }
+        // An exponential PROTO (ten copies of one that makes ten copies of …) is refused
+        // before anything is built: the estimate is cheap and remembered per definition.
+        let estimate = self.estimate(def, 0);
+        if estimate.saturating_add(self.nodes.len() as u64) > self.options.limits.nodes as u64 {
+            self.nodes_limit(scope.file, node.span, Some((name, estimate)));
             return None;
         }
         if has_template(proto) {
@@ -1305,6 +1814,21 @@ impl<'c> Lowerer<'c> {
             let Some(ty) = FieldType::parse(&declaration.field_type.text) else {
                 continue;
             };
+            if matches!(declaration.keyword.text.as_str(), "eventIn" | "eventOut") {
+                self.strict_or_warn(
+                    scope.file,
+                    Diagnostic::error(
+                        field.name.span,
+                        format!(
+                            "'{}' is an {} of PROTO '{name}': it takes no value",
+                            field.name.text, declaration.keyword.text
+                        ),
+                    )
+                    .with_code("event-as-field"),
+                );
+                continue;
+            }
+            let site = self.value_site(field, scope);
             let value = self.lower_field_value(
                 &field.value,
                 ty,
@@ -1314,25 +1838,39 @@ impl<'c> Lowerer<'c> {
                 field.name.span,
             );
             if let Some(value) = value {
-                self.check_restriction(declaration, &value, def.file, scope.file, field.name.span);
+                self.check_restriction(declaration, &value, def.file, site.0, site.2);
                 bindings.insert(
                     field.name.text.clone(),
-                    (ty, Some(value), Some((scope.file, field.span))),
+                    Binding {
+                        ty,
+                        value: Some(value),
+                        site: Some(site),
+                        keyword: declaration.keyword.text.clone(),
+                    },
                 );
             }
         }
+        // From here on the instance is being expanded: its defaults may name PROTOs too (even
+        // itself, which is recursion).
+        self.frames.push(Frame {
+            name: name.clone(),
+            instance: (scope.file, node.span),
+            definition: def.file,
+            key: key.1,
+        });
         // Defaults, typed in the PROTO's own file.
         let mut default_scope = Scope {
             protos: self.visible_protos(def),
             ..Scope::new(def.file)
         };
         for declaration in &proto.interface {
-            if bindings.contains_key(&declaration.name.text) {
-                continue;
-            }
             let Some(ty) = FieldType::parse(&declaration.field_type.text) else {
                 continue;
             };
+            if let Some(bound) = bindings.get_mut(&declaration.name.text) {
+                bound.keyword = declaration.keyword.text.clone();
+                continue;
+            }
             let value = match &declaration.default {
                 Some(default) => {
                     let value = self.lower_field_value(
@@ -1356,10 +1894,17 @@ impl<'c> Lowerer<'c> {
                 }
                 None => None,
             };
-            bindings.insert(declaration.name.text.clone(), (ty, value, None));
+            bindings.insert(
+                declaration.name.text.clone(),
+                Binding {
+                    ty,
+                    value,
+                    site: None,
+                    keyword: declaration.keyword.text.clone(),
+                },
+            );
         }
         // The body, in a scope of its own.
-        self.instance_stack.push(name.clone());
         let visible = self.visible_protos(def);
         let mut nested_protos: Vec<(String, Rc<ProtoDef>)> = Vec::new();
         let mut body_scope = Scope {
@@ -1399,10 +1944,11 @@ impl<'c> Lowerer<'c> {
                         &format!("PROTO '{name}'"),
                     );
                 }
+                Item::Route(route) if found_root => self.route(route, &mut body_scope),
                 _ => {}
             }
         }
-        self.instance_stack.pop();
+        self.frames.pop();
         if !found_root {
             self.error(
                 def.file,
@@ -1414,15 +1960,253 @@ impl<'c> Lowerer<'c> {
             );
         }
         let root = root?;
-        self.nodes[root.index()].proto_names.push(name.clone());
+        let root_node = &mut self.nodes[root.index()];
+        root_node.proto_names.push(name.clone());
+        // The instance is where the user wrote the node; its body's authoring (which axes it
+        // was written in) is the innermost PROTO's, remembered before the origin moves.
+        let body_file = root_node.origin.file;
+        root_node.origin = Origin {
+            file: scope.file,
+            span: node.span,
+        };
+        let body = self
+            .file_authoring
+            .get(&body_file.0)
+            .copied()
+            .unwrap_or_default();
+        self.body_authoring.entry(root.0).or_insert(body);
+        self.instance_of.insert(root, def.clone());
         if instantiating != proto_authoring {
             self.instance_authoring.insert(root.0, instantiating);
         }
         Some(root)
     }
 
-    /// Webots' "PROTO parameter 'x' has no matching IS field." and IS targets that name no
-    /// interface field, once per PROTO definition.
+    /// Checks a ROUTE as VRML97 does (4.10): both nodes DEF'd before it, the source an
+    /// eventOut or exposedField, the target an eventIn or exposedField, the same type at both
+    /// ends. Nothing is simulated: regatta has no event model, and says so for a sound ROUTE.
+    fn route(&mut self, route: &syntax::Route, scope: &mut Scope) {
+        let from = self.route_end(&route.from_node, &route.from_field, true, scope);
+        let to = self.route_end(&route.to_node, &route.to_field, false, scope);
+        let (Some(from), Some(to)) = (from, to) else {
+            return;
+        };
+        if from != to {
+            self.strict_or_warn(
+                scope.file,
+                Diagnostic::error(
+                    route.span,
+                    format!("ROUTE from {from} to {to}: both ends must have the same type"),
+                )
+                .with_secondary(route.from_field.span, format!("{from}"))
+                .with_secondary(route.to_field.span, format!("{to}"))
+                .with_code("route-type"),
+            );
+            return;
+        }
+        self.error(
+            scope.file,
+            Diagnostic::warning(
+                route.span,
+                "ROUTEs are read but not simulated: regatta has no event model",
+            )
+            .with_code("route"),
+        );
+    }
+
+    /// The type of one end of a ROUTE, after reporting what is wrong with it.
+    fn route_end(
+        &mut self,
+        node: &syntax::Ident,
+        field: &syntax::Ident,
+        source: bool,
+        scope: &Scope,
+    ) -> Option<FieldType> {
+        let Some(&id) = scope.defs.get(&node.text) else {
+            if scope.skipped_defs.contains(&node.text) {
+                return None;
+            }
+            let diagnostic = Diagnostic::error(
+                node.span,
+                format!("no node was DEF'd as '{}' before this ROUTE", node.text),
+            )
+            .with_code("route-node");
+            self.strict_or_warn(scope.file, diagnostic);
+            return None;
+        };
+        // Every event and field the node has: (name, type, access).
+        let mut ends: Vec<(String, FieldType, String)> = Vec::new();
+        let node_type;
+        if let Some(def) = self.instance_of.get(&id).cloned() {
+            node_type = format!("PROTO '{}'", def.proto.name.text);
+            for declaration in &def.proto.interface {
+                if let Some(ty) = FieldType::parse(&declaration.field_type.text) {
+                    let access = match declaration.keyword.text.as_str() {
+                        "exposedField" | "eventIn" | "eventOut" => declaration.keyword.text.clone(),
+                        _ => "field".to_owned(),
+                    };
+                    ends.push((declaration.name.text.clone(), ty, access));
+                }
+            }
+        } else {
+            let spec = self.catalogue().spec(self.nodes[id.index()].spec);
+            node_type = format!("{} node", spec.name);
+            for f in &spec.fields {
+                let access = f
+                    .access
+                    .clone()
+                    .unwrap_or_else(|| "exposedField".to_owned());
+                ends.push((f.name.clone(), f.ty(), access));
+            }
+        }
+        let wanted = if source { "eventOut" } else { "eventIn" };
+        let name = field.text.as_str();
+        let mut found = None;
+        for (end, ty, access) in &ends {
+            let matches = if access == "exposedField" {
+                end == name
+                    || (source && name.strip_suffix("_changed") == Some(end.as_str()))
+                    || (!source && name.strip_prefix("set_") == Some(end.as_str()))
+            } else {
+                end == name
+            };
+            if matches {
+                found = Some((*ty, access.clone()));
+                break;
+            }
+        }
+        let Some((ty, access)) = found else {
+            let mut diagnostic = Diagnostic::error(
+                field.span,
+                format!("the {node_type} '{}' has no {wanted} '{name}'", node.text),
+            )
+            .with_code("route-field");
+            if let Some(close) = did_you_mean(name, ends.iter().map(|(n, _, _)| n.as_str())) {
+                diagnostic = diagnostic.with_note(format!("did you mean '{close}'?"));
+            }
+            self.strict_or_warn(scope.file, diagnostic);
+            return None;
+        };
+        if access != "exposedField" && access != wanted {
+            let role = if source { "send" } else { "receive" };
+            self.strict_or_warn(
+                scope.file,
+                Diagnostic::error(
+                    field.span,
+                    format!("'{name}' of '{}' is {}: it cannot {role} events", node.text, with_article(&access)),
+                )
+                .with_label(if source {
+                    "a ROUTE starts at an eventOut or exposedField"
+                } else {
+                    "a ROUTE ends at an eventIn or exposedField"
+                })
+                .with_note("VRML97 4.10: a ROUTE goes from an eventOut (or exposedField) to an eventIn (or exposedField)")
+                .with_code("route-access"),
+            );
+            return None;
+        }
+        Some(ty)
+    }
+
+    /// At most how many nodes an instance of `def` makes (saturating): the nodes of its body
+    /// and defaults, each PROTO instance in them counted by its own estimate. USE adds none.
+    fn estimate(&mut self, def: &Rc<ProtoDef>, depth: usize) -> u64 {
+        let key = (def.file.0, def.proto.span.start);
+        if let Some(&known) = self.estimates.get(&key) {
+            return known;
+        }
+        if depth > self.options.limits.proto_depth {
+            // Deeper than allowed: expansion stops there anyway, with its own message.
+            return 1;
+        }
+        // A PROTO that contains itself is reported as recursion; count it once meanwhile.
+        self.estimates.insert(key, 1);
+        let visible = self.visible_protos(def);
+        let mut nested: Vec<(String, Rc<ProtoDef>)> = Vec::new();
+        let mut total = 0u64;
+        for declaration in &def.proto.interface {
+            if let Some(syntax::FieldValue::Value(value)) = &declaration.default {
+                total = total.saturating_add(self.estimate_value(value, &visible, &nested, depth));
+            }
+        }
+        for item in &def.proto.body {
+            match item {
+                Item::Proto(proto) => nested.push((
+                    proto.name.text.clone(),
+                    Rc::new(ProtoDef {
+                        file: def.file,
+                        proto: proto.clone(),
+                        enclosing: def.enclosing.clone(),
+                    }),
+                )),
+                Item::Node(node) => {
+                    total =
+                        total.saturating_add(self.estimate_node(node, &visible, &nested, depth));
+                }
+                _ => {}
+            }
+        }
+        self.estimates.insert(key, total.max(1));
+        total.max(1)
+    }
+
+    fn estimate_node(
+        &mut self,
+        node: &syntax::Node,
+        visible: &ProtoTable,
+        nested: &[(String, Rc<ProtoDef>)],
+        depth: usize,
+    ) -> u64 {
+        let NodeKind::Instance { type_name, body } = &node.kind else {
+            return 0;
+        };
+        let proto = nested
+            .iter()
+            .rev()
+            .chain(visible.iter().rev())
+            .find(|(n, _)| *n == type_name.text)
+            .map(|(_, p)| p.clone());
+        let mut total = match proto {
+            Some(proto) => self.estimate(&proto, depth + 1),
+            None => 1,
+        };
+        if let Some(body) = body {
+            for item in &body.items {
+                if let BodyItem::Field(syntax::Field {
+                    value: syntax::FieldValue::Value(value),
+                    ..
+                }) = item
+                {
+                    total =
+                        total.saturating_add(self.estimate_value(value, visible, nested, depth));
+                }
+            }
+        }
+        total
+    }
+
+    fn estimate_value(
+        &mut self,
+        value: &syntax::Value,
+        visible: &ProtoTable,
+        nested: &[(String, Rc<ProtoDef>)],
+        depth: usize,
+    ) -> u64 {
+        let Items::Atoms(atoms) = &value.items else {
+            return 0;
+        };
+        let mut total = 0u64;
+        for atom in atoms {
+            if let Atom::Node(node) = atom {
+                total = total.saturating_add(self.estimate_node(node, visible, nested, depth));
+            }
+        }
+        total
+    }
+
+    /// Once per PROTO definition: Webots' "PROTO parameter 'x' has no matching IS field.",
+    /// and VRML97's name rules (no name declared twice; no `set_x` or `x_changed` beside an
+    /// exposedField `x`, which declares those events itself).
     fn check_interface_once(&mut self, def: &Rc<ProtoDef>) {
         let key = (def.file.0, def.proto.span.start);
         if !self.checked_protos.insert(key) {
@@ -1430,28 +2214,64 @@ impl<'c> Lowerer<'c> {
         }
         let mut targets: Vec<&syntax::Ident> = Vec::new();
         collect_is_targets(&def.proto.body, &mut targets);
-        // Template expressions use fields too.
+        let targets: BTreeSet<&str> = targets.iter().map(|t| t.text.as_str()).collect();
+        // Template expressions use fields too: every `fields.NAME.` of the body, in one pass.
         let text = self.sources[def.file.0 as usize].text.clone();
         let body_text = &text[def.proto.span.range()];
+        let in_templates: BTreeSet<&str> = body_text
+            .split("fields.")
+            .skip(1)
+            .filter_map(|rest| rest.split('.').next())
+            .collect();
+        let mut names: HashMap<&str, &syntax::Declaration> = HashMap::new();
         for declaration in &def.proto.interface {
+            let name = declaration.name.text.as_str();
             let is_event = matches!(
                 declaration.keyword.text.as_str(),
                 "eventIn" | "eventOut" | "unconnectedField"
             );
-            let in_template = body_text.contains(&format!("fields.{}.", declaration.name.text));
-            if !is_event && !in_template && !targets.iter().any(|t| t.text == declaration.name.text)
-            {
+            if !is_event && !in_templates.contains(name) && !targets.contains(name) {
                 self.error(
                     def.file,
                     Diagnostic::warning(
                         declaration.name.span,
-                        format!(
-                            "PROTO parameter '{}' has no matching IS field.",
-                            declaration.name.text
-                        ),
+                        format!("PROTO parameter '{name}' has no matching IS field."),
                     )
                     .with_code("unused-proto-field"),
                 );
+            }
+            if let Some(first) = names.insert(name, declaration) {
+                self.strict_or_warn(
+                    def.file,
+                    Diagnostic::error(
+                        declaration.name.span,
+                        format!(
+                            "'{name}' is declared twice in PROTO '{}'",
+                            def.proto.name.text
+                        ),
+                    )
+                    .with_secondary(first.name.span, "first declared here")
+                    .with_code("name-clash"),
+                );
+            }
+        }
+        for declaration in &def.proto.interface {
+            if declaration.keyword.text != "exposedField" {
+                continue;
+            }
+            let name = &declaration.name.text;
+            for implied in [format!("set_{name}"), format!("{name}_changed")] {
+                if let Some(other) = names.get(implied.as_str()) {
+                    self.strict_or_warn(
+                        def.file,
+                        Diagnostic::error(
+                            other.name.span,
+                            format!("'{implied}' clashes with the exposedField '{name}', which declares it"),
+                        )
+                        .with_secondary(declaration.name.span, format!("'{name}' is an exposedField: it has the events set_{name} and {name}_changed"))
+                        .with_code("name-clash"),
+                    );
+                }
             }
         }
     }
@@ -1534,19 +2354,40 @@ impl<'c> Lowerer<'c> {
             syntax::FieldValue::Missing { found } => {
                 let text = &self.sources[file.0 as usize].text;
                 let found_text = if (found.start as usize) < text.len() && !found.is_empty() {
-                    format!("'{}'", &text[found.range()])
+                    text[found.range()].to_owned()
                 } else {
-                    "end of file".to_owned()
+                    String::new()
                 };
-                let message = format!("Expected {}, found {found_text}.", ty.base.item_noun());
+                let bare_word = !found_text.is_empty()
+                    && found_text
+                        .chars()
+                        .all(|c| c.is_alphanumeric() || matches!(c, '_' | '-'));
+                let shown = if found_text.is_empty() {
+                    "end of file".to_owned()
+                } else {
+                    format!("'{}'", shorten(&found_text))
+                };
                 self.refined_missing.insert((file.0, field_span.start));
-                self.error(
-                    file,
-                    Diagnostic::error(field_span, message)
-                        .with_label(format!("'{field_name}' needs a {ty} value"))
-                        .with_secondary(*found, "found this instead")
-                        .with_code("missing-value"),
-                );
+                self.refined_missing.insert((file.0, found.start));
+                let diagnostic = if ty.base == BaseType::String && bare_word {
+                    Diagnostic::error(
+                        *found,
+                        format!(
+                            "Expected {}, found {shown}: strings are quoted.",
+                            ty.base.item_noun()
+                        ),
+                    )
+                    .with_label("this word needs quotes")
+                    .with_note(format!("write: {field_name} \"{found_text}\""))
+                } else {
+                    Diagnostic::error(
+                        field_span,
+                        format!("Expected {}, found {shown}.", ty.base.item_noun()),
+                    )
+                    .with_label(format!("'{field_name}' needs a {ty} value"))
+                    .with_secondary(*found, "found this instead")
+                };
+                self.error(file, diagnostic.with_code("missing-value"));
                 None
             }
             syntax::FieldValue::Is(target) => {
@@ -1558,54 +2399,147 @@ impl<'c> Lowerer<'c> {
                     );
                     return None;
                 };
-                match interface.get(&target.text) {
-                    Some((declared, bound, origin)) => {
-                        if *declared != ty {
-                            self.error(
-                                file,
-                                Diagnostic::error(target.span, format!("Type mismatch between '{}' PROTO parameter and field '{field_name}'.", target.text))
-                                    .with_label(format!("'{}' is {declared}, '{field_name}' is {ty}", target.text))
-                                    .with_code("is-type-mismatch"),
-                            );
-                            return None;
-                        }
-                        let value = bound.clone()?;
-                        if let Some(spec) = spec {
-                            // A value an instance passed in is blamed where the instance wrote
-                            // it; the field keeps its default.
-                            let (blamed_file, blamed_span) = origin.unwrap_or((file, target.span));
-                            if !self.check_ranges(&value, spec, blamed_file, blamed_span) {
-                                return None;
-                            }
-                        }
-                        Some(value)
-                    }
-                    None => {
-                        self.error(
-                            file,
-                            Diagnostic::error(
-                                target.span,
-                                format!(
-                                    "'{}' is not a field of this PROTO's interface",
-                                    target.text
-                                ),
-                            )
-                            .with_code("unknown-is"),
-                        );
-                        None
-                    }
+                let Some(binding) = interface.get(&target.text) else {
+                    self.error(
+                        file,
+                        Diagnostic::error(
+                            target.span,
+                            format!("'{}' is not a field of this PROTO's interface", target.text),
+                        )
+                        .with_code("unknown-is"),
+                    );
+                    return None;
+                };
+                if binding.ty != ty {
+                    self.error(
+                        file,
+                        Diagnostic::error(target.span, format!("Type mismatch between '{}' PROTO parameter and field '{field_name}'.", target.text))
+                            .with_label(format!("'{}' is {}, '{field_name}' is {ty}", target.text, binding.ty))
+                            .with_code("is-type-mismatch"),
+                    );
+                    return None;
                 }
-            }
-            syntax::FieldValue::Value(value) => {
-                let typed = self.lower_value(value, ty, spec, scope, field_name)?;
-                if let Some(spec) = spec {
-                    if !self.check_ranges(&typed, spec, file, value.span) {
+                if let Some(access) = spec.and_then(|s| s.access.as_deref()) {
+                    if !is_compatible(&binding.keyword, access) {
+                        self.strict_or_warn(
+                            file,
+                            Diagnostic::error(target.span, format!("{} cannot be IS'd to '{field_name}', which is {}", with_article(&binding.keyword), with_article(access)))
+                                .with_label(format!("'{}' is {}", target.text, with_article(&binding.keyword)))
+                                .with_note("VRML97 4.8.3: a field may be IS'd to a field or exposedField, an eventIn to an eventIn or exposedField, an eventOut to an eventOut or exposedField; an exposedField only to an exposedField")
+                                .with_code("is-access-mismatch"),
+                        );
                         return None;
                     }
                 }
-                Some(typed)
+                let value = binding.value.clone()?;
+                let Some(spec) = spec else {
+                    return Some(value);
+                };
+                // A value an instance passed in is blamed where the instance wrote it, with
+                // this IS beside it; the field keeps its default.
+                let (blamed_file, blamed_span) = binding
+                    .site
+                    .as_ref()
+                    .map(|(f, _, s)| (*f, *s))
+                    .unwrap_or((file, target.span));
+                if !spec.nodes.is_empty() {
+                    for &child in value.nodes() {
+                        let child_spec = self.catalogue().spec(self.nodes[child.index()].spec);
+                        if !child_spec.fits(&spec.nodes) {
+                            let mut diagnostic = self.wrong_class(
+                                child_spec,
+                                &spec.nodes,
+                                &format!("'{}'", target.text),
+                                blamed_span,
+                            );
+                            if blamed_file != file {
+                                diagnostic = diagnostic.with_secondary_in(
+                                    file.0 as usize,
+                                    target.span,
+                                    format!(
+                                        "PROTO '{}' passes it to '{field_name}' here",
+                                        self.frames.last().map_or("", |f| f.name.as_str())
+                                    ),
+                                );
+                            }
+                            self.strict_or_warn(blamed_file, diagnostic);
+                            return None;
+                        }
+                    }
+                }
+                if let Some(bad) = value
+                    .strings()
+                    .iter()
+                    .find(|s| !spec.values.is_empty() && !spec.values.contains(s))
+                {
+                    let allowed = spec
+                        .values
+                        .iter()
+                        .map(|v| format!("\"{v}\""))
+                        .collect::<Vec<_>>()
+                        .join(", ");
+                    let mut diagnostic = Diagnostic::error(
+                        blamed_span,
+                        format!("\"{bad}\" is not a valid value of '{field_name}'"),
+                    )
+                    .with_label(format!("expected one of {allowed}"))
+                    .with_code("range");
+                    if let Some(close) = did_you_mean(bad, spec.values.iter().map(String::as_str)) {
+                        diagnostic = diagnostic.with_note(format!("did you mean \"{close}\"?"));
+                    }
+                    if blamed_file != file {
+                        diagnostic = diagnostic.with_secondary_in(
+                            file.0 as usize,
+                            target.span,
+                            format!("'{}' goes to '{field_name}' here", target.text),
+                        );
+                    }
+                    self.error(blamed_file, diagnostic);
+                    return None;
+                }
+                if !self.check_ranges(&value, spec, blamed_file, blamed_span) {
+                    return None;
+                }
+                Some(value)
+            }
+            syntax::FieldValue::Value(value) => {
+                // A template over the instance's fields: what goes wrong with its result is
+                // the instance's value's doing.
+                let blame = self.template_blame(value, scope);
+                let saved = match blame {
+                    Some(_) => std::mem::replace(&mut self.blame, blame),
+                    None => self.blame,
+                };
+                let typed = self.lower_value(value, ty, spec, scope, field_name);
+                let typed = match (typed, spec) {
+                    (Some(typed), Some(spec)) => self
+                        .check_ranges(&typed, spec, file, value.span)
+                        .then_some(typed),
+                    (typed, _) => typed,
+                };
+                self.blame = saved;
+                typed
             }
         }
+    }
+
+    /// Where the user wrote the first instance field that a template of `value` reads.
+    fn template_blame(&self, value: &syntax::Value, scope: &Scope) -> Option<(FileId, Span)> {
+        let (Items::Atoms(atoms), Some(interface)) = (&value.items, &scope.interface) else {
+            return None;
+        };
+        let text = &self.sources[scope.file.0 as usize].text;
+        atoms.iter().find_map(|atom| {
+            let Atom::Template(template) = atom else {
+                return None;
+            };
+            let code = text.get(template.span.range())?;
+            code.split("fields.").skip(1).find_map(|rest| {
+                let name = rest.split('.').next()?;
+                let (file, _, span) = interface.get(name)?.site.as_ref()?;
+                Some((*file, *span))
+            })
+        })
     }
 
     fn lower_value(
@@ -1995,11 +2929,29 @@ impl<'c> Lowerer<'c> {
             if r[3] == 0.0 {
                 return Some([0.0, 0.0, 1.0, 0.0]);
             }
-            self.error(
-                file,
-                Diagnostic::error(span, "a rotation needs a non-zero axis").with_code("range"),
-            );
-            return None;
+            let diagnostic = Diagnostic::error(
+                span,
+                format!(
+                    "a rotation of {} about the axis 0 0 0 has no direction",
+                    r[3]
+                ),
+            )
+            .with_label("the axis is zero")
+            .with_code("zero-axis");
+            if self.options.strict {
+                self.error(
+                    file,
+                    diagnostic.with_note(
+                        "write an axis (0 1 0 for a heading), or 0 1 0 0 for no rotation",
+                    ),
+                );
+                return None;
+            }
+            // Lenient: what viewers do with such files.
+            let mut diagnostic = diagnostic.with_note("read as no rotation");
+            diagnostic.severity = regatta_parser::Severity::Warning;
+            self.error(file, diagnostic);
+            return Some([0.0, 0.0, 1.0, 0.0]);
         }
         Some([r[0] / length, r[1] / length, r[2] / length, r[3]])
     }
@@ -2113,12 +3065,220 @@ impl<'c> Lowerer<'c> {
     }
 }
 
+impl Lowerer<'_> {
+    /// USE shares nodes, so the scene is a DAG whose expanded tree may be exponentially larger
+    /// than the file: its size and depth are bounded here, at the first node that crosses
+    /// either bound (node ids are a topological order: children are made first).
+    fn check_expanded_size(&mut self) {
+        if self.limits_reported.contains("nodes") {
+            return;
+        }
+        let limit = self.options.limits.nodes as u64;
+        let depth_limit = self.options.limits.scene_depth() as u32;
+        let mut sizes = vec![0u64; self.nodes.len()];
+        let mut depths = vec![0u32; self.nodes.len()];
+        for index in 0..self.nodes.len() {
+            let (mut size, mut depth) = (1u64, 1u32);
+            for value in &self.nodes[index].fields {
+                for child in value.nodes() {
+                    size = size.saturating_add(sizes[child.index()]);
+                    depth = depth.max(depths[child.index()].saturating_add(1));
+                }
+            }
+            sizes[index] = size;
+            depths[index] = depth;
+            let origin = self.nodes[index].origin;
+            if size > limit {
+                self.nodes_limit(origin.file, origin.span, None);
+                return;
+            }
+            if depth > depth_limit && !self.limits_reported.contains("nesting") {
+                self.limit_crossed(
+                    "nesting",
+                    origin.file,
+                    Diagnostic::error(
+                        origin.span,
+                        format!(
+                            "nodes nested deeper than {depth_limit} levels once USE is expanded"
+                        ),
+                    )
+                    .with_label("this node's USEs reach that deep"),
+                );
+                return;
+            }
+        }
+        let total = self
+            .roots
+            .iter()
+            .fold(0u64, |sum, root| sum.saturating_add(sizes[root.index()]));
+        if total > limit {
+            if let Some(&last) = self.roots.last() {
+                let origin = self.nodes[last.index()].origin;
+                self.nodes_limit(origin.file, origin.span, None);
+            }
+        }
+    }
+
+    /// A robot's name identifies it in logs, CSV and plots: a second robot with a name already
+    /// taken is an error at its line; lenient mode renames it and says to what.
+    fn check_robot_names(&mut self) {
+        if self.limits_reported.contains("nodes") {
+            return;
+        }
+        let catalogue = self.catalogue();
+        let scene = Scene {
+            nodes: std::mem::take(&mut self.nodes),
+            roots: self.roots.clone(),
+            files: Vec::new(),
+            up_axis: self.up_axis,
+            objects: self.objects,
+        };
+        let robots: Vec<NodeId> = scene
+            .walk()
+            .into_iter()
+            .filter(|&id| {
+                catalogue
+                    .spec(scene.node(id).spec)
+                    .classes
+                    .iter()
+                    .any(|c| c == "robot")
+            })
+            .collect();
+        self.nodes = scene.nodes;
+        let mut taken: HashMap<String, NodeId> = HashMap::new();
+        let mut renames = Vec::new();
+        for &id in &robots {
+            let spec = catalogue.spec(self.nodes[id.index()].spec);
+            let Some(index) = spec.field_index("name") else {
+                continue;
+            };
+            let name = self.nodes[id.index()].fields[index]
+                .strings()
+                .first()
+                .cloned()
+                .unwrap_or_default();
+            match taken.get(&name) {
+                None => {
+                    taken.insert(name, id);
+                }
+                Some(&first) => renames.push((id, index, name, first)),
+            }
+        }
+        for (id, index, name, first) in renames {
+            let node = &self.nodes[id.index()];
+            let at = node.value_span_at(index).unwrap_or(node.origin);
+            let first_node = &self.nodes[first.index()];
+            let first_at = first_node.value_span_at(index).unwrap_or(first_node.origin);
+            let mut diagnostic = Diagnostic::error(
+                at.span,
+                format!("a robot named '{name}' already exists: robot names must be unique"),
+            )
+            .with_label("second robot with this name")
+            .with_code("duplicate-robot");
+            if first_at.file == at.file {
+                diagnostic = diagnostic.with_secondary(first_at.span, "first named here");
+            } else {
+                diagnostic = diagnostic.with_secondary_in(
+                    first_at.file.0 as usize,
+                    first_at.span,
+                    "first named here",
+                );
+            }
+            let new_name = (2..)
+                .map(|k| format!("{name}_{k}"))
+                .find(|candidate| !taken.contains_key(candidate))
+                .unwrap_or_default();
+            if self.options.strict {
+                self.error(
+                    at.file,
+                    diagnostic
+                        .with_note("logs, CSV and plots tell robots apart by name")
+                        .with_note(format!("give it a name of its own: name \"{new_name}\"")),
+                );
+                continue;
+            }
+            taken.insert(new_name.clone(), id);
+            diagnostic.severity = regatta_parser::Severity::Warning;
+            self.error(
+                at.file,
+                diagnostic.with_note(format!("renamed to '{new_name}'")),
+            );
+            self.nodes[id.index()].fields[index] = Value::String(new_name);
+        }
+    }
+}
+
+/// How messages name a file included from `from` as `url`: beside the including file's own
+/// name (relative paths stay relative, so messages do not depend on where the checkout is).
+fn included_name(from: &str, url: &str) -> String {
+    if from.starts_with('<') {
+        return url.to_owned();
+    }
+    let mut parts: Vec<&str> = from.split('/').collect();
+    parts.pop();
+    for part in url.split('/') {
+        match part {
+            "" | "." => {}
+            ".." if parts.last().is_some_and(|p| *p != ".." && !p.is_empty()) => {
+                parts.pop();
+            }
+            other => parts.push(other),
+        }
+    }
+    parts.join("/")
+}
+
 fn shorten(text: &str) -> String {
     let mut shown: String = text.chars().take(40).collect();
     if shown.len() < text.len() {
         shown.push('…');
     }
     shown
+}
+
+/// "a field", "an exposedField".
+fn with_article(word: &str) -> String {
+    let article = if word.starts_with(['a', 'e', 'i', 'o', 'u']) {
+        "an"
+    } else {
+        "a"
+    };
+    format!("{article} {word}")
+}
+
+/// Whether an interface field declared with `interface` (a PROTO keyword) may be IS'd to a
+/// node field of access `access` (VRML97 4.8.3, table 4.4).
+fn is_compatible(interface: &str, access: &str) -> bool {
+    let interface = match interface {
+        "exposedField" => "exposedField",
+        "eventIn" => "eventIn",
+        "eventOut" => "eventOut",
+        _ => "field",
+    };
+    match access {
+        "exposedField" => true,
+        "field" => interface == "field",
+        "eventIn" => interface == "eventIn",
+        "eventOut" => interface == "eventOut",
+        _ => true,
+    }
+}
+
+/// The span of each string of a written value.
+fn string_spans(value: &syntax::FieldValue) -> Vec<Span> {
+    match value {
+        syntax::FieldValue::Value(syntax::Value {
+            items: Items::Atoms(atoms),
+            ..
+        }) => atoms
+            .iter()
+            .filter_map(|a| match a {
+                Atom::String(s) => Some(s.span),
+                _ => None,
+            })
+            .collect(),
+        _ => Vec::new(),
+    }
 }
 
 fn body_item_span(item: &BodyItem) -> Span {

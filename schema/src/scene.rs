@@ -39,15 +39,24 @@ pub struct SceneNode {
     /// Whether each field was written (or bound through IS) rather than defaulted.
     pub written: Vec<bool>,
     /// Where each field's value was written (for a field bound through IS, where the PROTO
-    /// instance wrote it; `None`: defaulted), for messages about values that only later
-    /// checks reject.
+    /// instance wrote it, or the instance itself for a built-in PROTO's default; `None`:
+    /// defaulted), for messages about values that only later checks reject (a controller's
+    /// name and arguments, a network's sizes): they point at the user's line.
     pub value_spans: Vec<Option<Origin>>,
     pub def_name: Option<String>,
     /// The PROTO whose instance this node is the root of (innermost first when nested).
     pub proto_names: Vec<String>,
+    /// Where the node was written: for a PROTO's root, the user's instance.
     pub origin: Origin,
     /// The axes its own transform and its children are written in (see [`crate::webots`]).
     pub axes: crate::webots::Axes,
+}
+
+impl SceneNode {
+    /// Where field `index`'s value was written, if it was (see [`SceneNode::value_spans`]).
+    pub fn value_span_at(&self, index: usize) -> Option<Origin> {
+        self.value_spans.get(index).copied().flatten()
+    }
 }
 
 /// The axis convention of the file the scene was read from.
@@ -88,7 +97,7 @@ impl Scene {
         let node = self.node(id);
         self.spec(id)
             .field_index(name)
-            .and_then(|index| node.value_spans.get(index).copied().flatten())
+            .and_then(|index| node.value_span_at(index))
             .unwrap_or(node.origin)
     }
 

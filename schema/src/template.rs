@@ -150,7 +150,7 @@ impl ExprParser<'_> {
         let parts: Vec<&str> = word.split('.').collect();
         match parts.as_slice() {
             ["fields", name, "value" | "defaultValue", rest @ ..] => {
-                let (_, value, _) = self.fields.get(*name).ok_or_else(|| format!("this PROTO has no field '{name}'"))?;
+                let value = &self.fields.get(*name).ok_or_else(|| format!("this PROTO has no field '{name}'"))?.value;
                 let value = value.as_ref().ok_or_else(|| format!("field '{name}' has no value"))?;
                 let base = match value {
                     Value::Float(x) => Evaluated::Number(*x),
@@ -217,10 +217,13 @@ mod tests {
             multi: false,
             base: BaseType::Vec2f,
         };
-        fields.insert("height".to_owned(), (float, Some(Value::Float(0.04)), None));
+        fields.insert(
+            "height".to_owned(),
+            crate::lower::Binding::new(float, Some(Value::Float(0.04))),
+        );
         fields.insert(
             "size".to_owned(),
-            (vec2, Some(Value::Vec2([1.0, 2.0])), None),
+            crate::lower::Binding::new(vec2, Some(Value::Vec2([1.0, 2.0]))),
         );
         let eval = |t: &str| evaluate(t, &fields).unwrap();
         assert_eq!(

@@ -150,6 +150,15 @@ pub enum Value {
 }
 
 impl Value {
+    /// The strings of an SFString or MFString value, in order.
+    pub fn strings(&self) -> &[String] {
+        match self {
+            Value::String(s) => std::slice::from_ref(s),
+            Value::Strings(s) => s,
+            _ => &[],
+        }
+    }
+
     /// The nodes a value refers to, in order.
     pub fn nodes(&self) -> &[NodeId] {
         match self {

@@ -23,8 +23,11 @@ done
 count=0
 while IFS= read -r world; do
   count=$((count + 1))
-  # The two parser-test files that are broken on purpose are refused, as they must be.
-  if "$regatta" gltf --lenient "$world" -o "$out/corpus/$count.glb" 2>>"$out/export.log"; then
+  # The two parser-test files that are broken on purpose are refused, as they must be. A
+  # Webots project keeps its PROTOs beside worlds/: its folder is allowed, as a user would.
+  allow=()
+  case "$world" in */worlds/*) allow=(--allow-path "$(dirname "$(dirname "$world")")") ;; esac
+  if "$regatta" gltf --lenient "${allow[@]}" "$world" -o "$out/corpus/$count.glb" 2>>"$out/export.log"; then
     echo "$count $world" >>"$out/corpus/index.txt"
   fi
 done < <(find ../shared/corpus -name '*.wbt' -o -name '*.wrl' | sort)

@@ -65,8 +65,9 @@ def main() -> int:
         check(len(poses) == 500 == len(exported), f"500 poses read ({len(poses)}) and exported ({len(exported)})")
         check(topics.get("/khepera/retina") == 500, f"a retina message per step ({topics.get('/khepera/retina')})")
         same = all(
-            (t, x, z, h) == (float(row["t"]), float(row["x"]), float(row["z"]), float(row["heading"]))
-            for (t, x, z, h, _), row in zip(poses, exported)
+            (log_time, x, z, h) == (int(row["t_ns"]), float(row["x"]), float(row["z"]), float(row["heading"]))
+            and row["t"] == f"{log_time // 10**9}.{log_time % 10**9:09d}"
+            for (t, x, z, h, log_time), row in zip(poses, exported)
         )
         check(same, "poses decoded by Python equal regatta's export bit for bit")
         check(all(log_time == round(t * 1e9) for t, _, _, _, log_time in poses), "log times are simulated time")

@@ -14,7 +14,7 @@ use crate::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The world file.
+    /// The world file (`-` reads standard input).
     world: PathBuf,
     /// Seeds: a range `1..1000` (both ends included) or a list `1,5,9`.
     #[arg(long, default_value = "1..10", value_parser = parse_seeds)]
@@ -27,6 +27,10 @@ pub struct Args {
     /// string is quoted.
     #[arg(long = "set", value_name = "NODE.FIELD=VALUE", value_parser = parse_override)]
     overrides: Vec<Override>,
+    /// Run the robots with the network of WORLD's first robot that has one (its controller,
+    /// network with weights, and turret): an evolved controller in another arena.
+    #[arg(long, value_name = "WORLD")]
+    network_from: Option<PathBuf>,
     /// The fitness of each row: NAME[:key=value,...] (avoidance, regatta, phototaxis).
     #[arg(long, default_value = "regatta", value_parser = crate::run::parse_fitness)]
     fitness: Fitness,
@@ -89,8 +93,21 @@ pub(crate) fn progress_bar(total: u64, unit: &str) -> Option<indicatif::Progress
     Some(bar)
 }
 
+/// The overrides that move `world`'s neural robot into another world.
+pub(crate) fn network_from(world: &std::path::Path) -> anyhow::Result<Vec<Override>> {
+    let source = regatta_parser::SourceText::read(world)
+        .with_context(|| format!("cannot read {}", world.display()))?;
+    regatta_evolve::world::network_overrides(&source.text)
+        .with_context(|| format!("cannot take a network from {}", world.display()))
+}
+
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
-    let experiment = Experiment::load(&args.world, args.lenient, &args.overrides)
+    let mut overrides = match &args.network_from {
+        Some(world) => network_from(world)?,
+        None => Vec::new(),
+    };
+    overrides.extend(args.overrides.iter().cloned());
+    let experiment = Experiment::load(&args.world, args.lenient, &overrides)
         .with_context(|| format!("cannot load {}", args.world.display()))?;
     eprint!("{}", experiment.warnings);
     if !(args.duration >= 0.0 && args.duration.is_finite()) {

@@ -57,7 +57,7 @@ struct Row {
 }
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
-    let loaded = crate::world::load(&args.world, false, false)?;
+    let loaded = crate::world::load(&args.world, &Default::default(), false)?;
     let compiled = &loaded.compiled;
     let Some((robot, base)) =
         compiled

@@ -78,7 +78,7 @@ fn text_of(path: &std::path::Path) -> anyhow::Result<String> {
 }
 
 fn load(path: &std::path::Path) -> anyhow::Result<Compiled> {
-    Ok(crate::world::load(path, false, false)?.compiled)
+    Ok(crate::world::load(path, &Default::default(), false)?.compiled)
 }
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {

@@ -156,11 +156,7 @@ pub fn swarm_world(spec: &SwarmSpec) -> String {
 pub fn compile_text(name: &str, text: String) -> anyhow::Result<Compiled> {
     let checked = regatta_schema::check(
         regatta_parser::SourceText::from_bytes(name.into(), text.into_bytes()),
-        &regatta_schema::Options {
-            strict: true,
-            base_dir: None,
-            proto_path: Vec::new(),
-        },
+        &regatta_schema::Options::default(),
     );
     if checked.has_errors() {
         let first = checked

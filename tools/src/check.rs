@@ -1,12 +1,9 @@
-//! `regatta check`: parse and type world files, print diagnostics in rustc's style.
+//! `regatta check`: parse and type world files, check their controllers, and print
+//! diagnostics in rustc's style.
 
-use std::io::Read;
 use std::path::PathBuf;
 
-use anyhow::Context;
-use regatta_parser::SourceText;
-use regatta_schema::{check, check_file_with_proto_path, Options};
-
+use crate::world::{check_world, WorldOptions};
 use crate::Outcome;
 
 #[derive(clap::Args)]
@@ -14,9 +11,8 @@ pub struct Args {
     /// World files to check; `-` reads standard input.
     #[arg(required = true)]
     files: Vec<PathBuf>,
-    /// Treat unknown nodes and fields as warnings and skip them, as Webots does (for foreign files).
-    #[arg(long)]
-    lenient: bool,
+    #[command(flatten)]
+    world: WorldOptions,
     /// Print one line per diagnostic (`file:line:col: error: message`).
     #[arg(long)]
     short: bool,
@@ -26,38 +22,22 @@ pub struct Args {
 }
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
+    // Flags are checked once, before any file: a bad --limit is a usage error.
+    args.world.options()?;
     let mut any_error = false;
     let (mut errors, mut warnings) = (0usize, 0usize);
     for path in &args.files {
-        let checked = if path.as_os_str() == "-" {
-            let mut bytes = Vec::new();
-            std::io::stdin()
-                .read_to_end(&mut bytes)
-                .context("cannot read standard input")?;
-            let bytes = regatta_parser::source::inflate_if_gzip(bytes)
-                .context("standard input looks gzip-compressed but does not inflate")?;
-            let options = Options {
-                strict: !args.lenient,
-                base_dir: None,
-                proto_path: crate::world::proto_path(),
-            };
-            check(
-                SourceText::from_bytes("<stdin>".to_owned(), bytes),
-                &options,
-            )
-        } else {
-            match check_file_with_proto_path(path, !args.lenient, crate::world::proto_path()) {
-                Ok(checked) => checked,
-                Err(error) => {
-                    eprintln!("error: {error}");
-                    any_error = true;
-                    errors += 1;
-                    continue;
-                }
+        let mut checked = match check_world(path, &args.world) {
+            Ok(checked) => checked,
+            Err(error) => {
+                eprintln!("error: {error:#}");
+                any_error = true;
+                errors += 1;
+                continue;
             }
         };
-        let mut checked = checked;
-        crate::world::check_runtime(&mut checked);
+        regatta_runtime::check::check_scene(&mut checked);
+        crate::world::warn_about_cost(&mut checked);
         for diagnostic in &checked.diagnostics {
             if diagnostic.diagnostic.is_error() {
                 errors += 1;
@@ -69,26 +49,17 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         if !args.quiet {
             crate::world::print_substitutions(&checked);
         }
-        let shown: Vec<_> = checked
-            .diagnostics
-            .iter()
-            .filter(|d| !args.quiet || d.diagnostic.is_error())
-            .collect();
-        for diagnostic in shown {
-            let source = &checked.sources[diagnostic.file.0 as usize];
-            if args.short {
+        let keep = |d: &regatta_schema::FileDiagnostic| !args.quiet || d.diagnostic.is_error();
+        if args.short {
+            let map = checked.source_map();
+            for diagnostic in checked.diagnostics.iter().filter(|d| keep(d)) {
                 eprintln!(
                     "{}",
-                    diagnostic.diagnostic.short(&source.name, &source.text)
-                );
-            } else {
-                eprint!(
-                    "{}",
-                    diagnostic
-                        .diagnostic
-                        .render(&source.name, &source.text, color)
+                    map.short(diagnostic.file.0 as usize, &diagnostic.diagnostic)
                 );
             }
+        } else {
+            eprint!("{}", checked.render_where(keep, color));
         }
     }
     let files = args.files.len();

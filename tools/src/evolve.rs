@@ -4,8 +4,7 @@
 //! and the best candidate's log.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use anyhow::{bail, Context};
@@ -20,7 +19,8 @@ pub struct Args {
     /// The world whose NeuralNetwork is evolved (and the world best.wbt is written from).
     world: PathBuf,
     /// More worlds every candidate is evaluated in (repeatable); their networks must take
-    /// as many weights.
+    /// as many weights. A world with no network takes the first world's robot: its
+    /// controller, network and turret (the arenas as they are, one controller).
     #[arg(long = "world", value_name = "WORLD")]
     more_worlds: Vec<PathBuf>,
     /// NAME[:key=value,...]: avoidance, regatta, phototaxis.
@@ -93,13 +93,31 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let fitness = Fitness::parse(&args.fitness)?;
     let mut paths = vec![args.world.clone()];
     paths.extend(args.more_worlds.iter().cloned());
-    let experiments: Vec<Experiment> = paths
+    let mut experiments: Vec<Experiment> = paths
         .iter()
         .map(|path| {
             Experiment::load(path, args.lenient, &args.overrides)
                 .with_context(|| format!("cannot load {}", path.display()))
         })
         .collect::<anyhow::Result<_>>()?;
+    // A world whose robots have no network takes the first world's robot (controller,
+    // network, turret): the same controller sails every arena.
+    for index in 1..experiments.len() {
+        if experiments[index].network.is_some() || experiments[0].network.is_none() {
+            continue;
+        }
+        let mut overrides = regatta_evolve::world::network_overrides(&experiments[0].text)
+            .with_context(|| format!("cannot take the network of {}", experiments[0].name))?;
+        overrides.extend(args.overrides.iter().cloned());
+        let path = &paths[index];
+        experiments[index] = Experiment::load(path, args.lenient, &overrides)
+            .with_context(|| format!("cannot load {}", path.display()))?;
+        eprintln!(
+            "{}: its robots take {}'s network and turret",
+            path.display(),
+            experiments[0].name
+        );
+    }
     let dimension = experiments[0].parameter_count().with_context(|| {
         format!(
             "{} has no robot with controller \"neural\" and a NeuralNetwork to evolve",
@@ -166,11 +184,9 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         None => Evolution::new(settings, dimension),
     };
     let checkpoint_dir = args.checkpoint.clone().or_else(|| args.resume.clone());
-    let interrupted = Arc::new(AtomicBool::new(false));
-    {
-        let interrupted = interrupted.clone();
-        let _ = ctrlc::set_handler(move || interrupted.store(true, Ordering::SeqCst));
-    }
+    // SIGINT or SIGTERM ends the evolution after the generation in progress, with a
+    // checkpoint to resume from; the exit code says which signal it was.
+    let stop = crate::signals::Stop::install();
     let pool = regatta_evolve::thread_pool(args.jobs);
     let runs_per_generation =
         (evolution.population() * experiments.len() * evolution.settings.trials) as u64;
@@ -208,7 +224,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         if let Some(dir) = &checkpoint_dir {
             evolution.save(dir)?;
         }
-        if interrupted.load(Ordering::SeqCst) {
+        if stop.requested() {
             break;
         }
     }
@@ -238,7 +254,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         done.load(Ordering::Relaxed),
         done.load(Ordering::Relaxed) as f64 / wall.max(1e-9)
     );
-    Ok(Outcome::Clean)
+    Ok(stop.outcome().unwrap_or(Outcome::Clean))
 }
 
 /// best.wbt, fitness.csv, fitness.png (or .svg) and best.mcap in `out`.

@@ -13,16 +13,18 @@ use crate::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The world file.
+    /// The world file (`-` reads standard input).
     world: PathBuf,
-    /// Read a foreign file leniently (unknown nodes and fields skipped).
-    #[arg(long)]
-    lenient: bool,
+    #[command(flatten)]
+    options: crate::world::WorldOptions,
 }
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
-    let loaded = crate::world::load(&args.world, args.lenient, color)?;
-    print!("{}", explain(&args.world.display().to_string(), &loaded));
+    let loaded = crate::world::load(&args.world, &args.options, color)?;
+    print!(
+        "{}",
+        explain(&crate::world::world_name(&args.world), &loaded)
+    );
     Ok(Outcome::Clean)
 }
 

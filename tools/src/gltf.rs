@@ -12,7 +12,7 @@ use crate::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The world file.
+    /// The world file (`-` reads standard input).
     world: PathBuf,
     /// Output file: .glb (binary, one file) or .gltf (JSON, with a .bin beside it).
     #[arg(short, long)]
@@ -24,9 +24,8 @@ pub struct Args {
     /// A log recorded from this world: each robot's poses become an animation.
     #[arg(long)]
     log: Option<PathBuf>,
-    /// Read a foreign file leniently.
-    #[arg(long)]
-    lenient: bool,
+    #[command(flatten)]
+    options: crate::world::WorldOptions,
 }
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
@@ -43,7 +42,7 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
             args.output.display()
         ),
     };
-    let loaded = crate::world::load(&args.world, args.lenient, color)?;
+    let loaded = crate::world::load(&args.world, &args.options, color)?;
     let compiled = &loaded.compiled;
     let tracks = match &args.log {
         Some(log) => tracks_from_log(log, &args.world, compiled)?,

@@ -23,21 +23,40 @@ pub(crate) fn load(path: &Path) -> anyhow::Result<LogContents> {
     Ok(contents)
 }
 
-/// Checks and compiles the world embedded in a log.
-pub(crate) fn compile_embedded(run: &RunInfo) -> anyhow::Result<regatta_runtime::Compiled> {
+/// Checks and compiles the world embedded in a log. A log is input like any other: its world
+/// reads files (Inline, EXTERNPROTO) only under the recorded world's folder when that folder
+/// is inside the current directory (a user replaying their own runs), or under folders given
+/// with `--allow-path`; never elsewhere.
+pub(crate) fn compile_embedded(
+    run: &RunInfo,
+    world: &crate::world::WorldOptions,
+) -> anyhow::Result<regatta_runtime::Compiled> {
     let source = regatta_parser::SourceText::from_bytes(
         run.world_name.clone(),
         run.world_text.clone().into_bytes(),
     );
-    let base = Path::new(&run.world_name).parent().map(Path::to_owned);
-    let checked = regatta_schema::check(
-        source,
-        &regatta_schema::Options {
-            strict: !run.lenient,
-            base_dir: base,
-            proto_path: crate::world::proto_path(),
-        },
-    );
+    let mut options = world.options()?;
+    options.strict = !run.lenient;
+    let recorded_folder = Path::new(&run.world_name)
+        .parent()
+        .filter(|_| !run.world_name.starts_with('<'))
+        .map(|p| {
+            if p.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                p
+            }
+        })
+        .and_then(|p| p.canonicalize().ok());
+    let here = std::env::current_dir().and_then(|d| d.canonicalize()).ok();
+    if let (Some(folder), Some(here)) = (&recorded_folder, &here) {
+        if folder.starts_with(here) {
+            options.access.allow(folder)?;
+        }
+    }
+    options.base_dir = recorded_folder;
+    let mut checked = regatta_schema::check(source, &options);
+    regatta_runtime::check::check_scene(&mut checked);
     if checked.has_errors() {
         eprint!("{}", checked.render(false));
         bail!("the world embedded in the log no longer checks with this regatta");
@@ -67,6 +86,8 @@ pub struct ReplayArgs {
     verify: bool,
     /// The log.
     log: PathBuf,
+    #[command(flatten)]
+    world: crate::world::LogWorldOptions,
 }
 
 pub fn replay(args: ReplayArgs) -> anyhow::Result<Outcome> {
@@ -78,7 +99,7 @@ pub fn replay(args: ReplayArgs) -> anyhow::Result<Outcome> {
         .and_then(|end| end.get("steps"))
         .and_then(|s| s.parse().ok())
         .unwrap_or(contents.run.steps_requested);
-    let compiled = compile_embedded(&contents.run)?;
+    let compiled = compile_embedded(&contents.run, &args.world.into())?;
     let mut simulation = Simulation::new(&compiled, Some(contents.run.seed))?;
     let mut buffer = std::io::Cursor::new(Vec::new());
     let mut recorder = Recorder::new(&mut buffer, &mut simulation, &contents.run)?;
@@ -129,7 +150,8 @@ pub struct LogArgs {
 
 #[derive(clap::Subcommand)]
 enum LogCommand {
-    /// Write one CSV per channel kind (pose.csv: t,robot,x,z,heading; …).
+    /// Write one CSV per channel kind (pose.csv: step,t_ns,t,robot,x,z,heading; …) and
+    /// units.csv, the unit of every column.
     Export {
         /// The log.
         log: PathBuf,
@@ -151,6 +173,8 @@ enum LogCommand {
         /// NAME[:key=value,...]: avoidance, regatta, phototaxis.
         #[arg(long, value_parser = crate::run::parse_fitness)]
         fitness: regatta_evolve::Fitness,
+        #[command(flatten)]
+        world: crate::world::LogWorldOptions,
     },
 }
 
@@ -158,15 +182,23 @@ pub fn log(args: LogArgs) -> anyhow::Result<Outcome> {
     match args.what {
         LogCommand::Export { log, csv } => export(&log, &csv),
         LogCommand::Info { log } => info(&log),
-        LogCommand::Fitness { log, fitness } => log_fitness(&log, &fitness),
+        LogCommand::Fitness {
+            log,
+            fitness,
+            world,
+        } => log_fitness(&log, &fitness, &world.into()),
     }
 }
 
 /// `regatta log fitness`: a fitness computed from a log's channels, the same value a live
 /// run computes (both read the same per-step records).
-fn log_fitness(log: &Path, fitness: &regatta_evolve::Fitness) -> anyhow::Result<Outcome> {
+fn log_fitness(
+    log: &Path,
+    fitness: &regatta_evolve::Fitness,
+    world: &crate::world::WorldOptions,
+) -> anyhow::Result<Outcome> {
     let contents = load(log)?;
-    let compiled = compile_embedded(&contents.run)?;
+    let compiled = compile_embedded(&contents.run, world)?;
     let (time_step, robots) = regatta_evolve::record::records_from_log(&contents)
         .with_context(|| format!("cannot read {}", log.display()))?;
     let mut values = Vec::new();
@@ -226,18 +258,100 @@ pub(crate) fn robot_of<'a>(contents: &'a LogContents, topic: &'a str) -> (&'a st
     (name, kind)
 }
 
-/// A decoded message: its time, the CSV header after `t,robot`, and the row.
-type CsvRow = (f64, Vec<String>, Vec<String>);
+/// A decoded message: the CSV header after `step,t_ns,t,robot`, and the row.
+type CsvRow = (Vec<String>, Vec<String>);
 
-/// One CSV row (after `t,robot`) and its header, from a message of `kind`.
+/// The unit and meaning of each column of each file (`units.csv`, beside the data).
+const UNITS: &[(&str, &str, &str, &str)] = &[
+    (
+        "*",
+        "step",
+        "1",
+        "steps completed at t (t_ns / the basic time step)",
+    ),
+    ("*", "t_ns", "ns", "simulated time, exact"),
+    ("*", "t", "s", "simulated time, t_ns / 1e9 written exactly"),
+    ("*", "robot", "", "the robot's name"),
+    ("pose", "x", "m", "position of the robot's centre"),
+    ("pose", "z", "m", "position of the robot's centre"),
+    (
+        "pose",
+        "heading",
+        "rad",
+        "counter-clockwise from +x, seen from above",
+    ),
+    (
+        "wheels",
+        "command_*",
+        "pulses/10 ms",
+        "speed commanded to each wheel",
+    ),
+    (
+        "wheels",
+        "encoder_*",
+        "pulses",
+        "wheel encoder counts (1/12 mm)",
+    ),
+    (
+        "proximity",
+        "p0…p7",
+        "0…1023",
+        "IR proximity readings, K-Team's sensor order",
+    ),
+    (
+        "ambient",
+        "a0…a7",
+        "0…1023",
+        "ambient light readings (larger is darker)",
+    ),
+    ("retina", "dark", "", "whether every photodiode read 0"),
+    (
+        "retina",
+        "analog0…",
+        "photocurrent (0…150)",
+        "each photodiode's analog value",
+    ),
+    (
+        "retina",
+        "FILTER0…",
+        "photocurrent",
+        "each enabled filter's output",
+    ),
+    (
+        "retina",
+        "FILTER_digitalN",
+        "LSB",
+        "the converter's output over the region of interest",
+    ),
+    ("k213", "pixel0…", "0…255", "grey levels"),
+    ("k213", "light_level", "0…255", "the light-level sensor"),
+    (
+        "contacts",
+        "touching",
+        "",
+        "whether the robot touches something",
+    ),
+    ("contacts", "contacts", "1", "contacts begun so far"),
+    (
+        "contacts",
+        "with",
+        "",
+        "what the robot touches, names separated by ;",
+    ),
+    ("visits", "buoy", "1", "the buoy's index, in file order"),
+    ("visits", "name", "", "the buoy's name"),
+    ("visits", "visits", "1", "visits so far"),
+    ("controller", "error", "", "why a controller call failed"),
+];
+
+/// One CSV row (after `step,t_ns,t,robot`) and its header, from a message of `kind`.
 fn decode(kind: &str, data: &[u8]) -> Result<Option<CsvRow>, regatta_runtime::log::ShortMessage> {
     let mut r = CdrReader::new(data);
-    let t = r.f64()?;
+    r.f64()?;
     let numbered =
         |prefix: &str, n: usize| (0..n).map(|i| format!("{prefix}{i}")).collect::<Vec<_>>();
     Ok(Some(match kind {
         "pose" => (
-            t,
             vec!["x".into(), "z".into(), "heading".into()],
             vec![
                 r.f64()?.to_string(),
@@ -246,7 +360,6 @@ fn decode(kind: &str, data: &[u8]) -> Result<Option<CsvRow>, regatta_runtime::lo
             ],
         ),
         "wheels" => (
-            t,
             [
                 "command_left",
                 "command_right",
@@ -263,7 +376,6 @@ fn decode(kind: &str, data: &[u8]) -> Result<Option<CsvRow>, regatta_runtime::lo
             ],
         ),
         "proximity" | "ambient" => (
-            t,
             numbered(if kind == "proximity" { "p" } else { "a" }, 8),
             r.u16s(Some(8))?.iter().map(u16::to_string).collect(),
         ),
@@ -293,7 +405,7 @@ fn decode(kind: &str, data: &[u8]) -> Result<Option<CsvRow>, regatta_runtime::lo
                 );
                 row.extend(digital.iter().skip(k * roi).take(roi).map(u16::to_string));
             }
-            (t, header, row)
+            (header, row)
         }
         "k213" => {
             let pixels = r.u16s(None)?;
@@ -302,64 +414,105 @@ fn decode(kind: &str, data: &[u8]) -> Result<Option<CsvRow>, regatta_runtime::lo
             header.push("light_level".into());
             let mut row: Vec<String> = pixels.iter().map(u16::to_string).collect();
             row.push(light.to_string());
-            (t, header, row)
+            (header, row)
         }
         "contacts" => {
             let (touching, contacts) = (r.bool()?, r.u64()?);
             // Logs written before contacts said with what have no such field.
             let with = r.strings().unwrap_or_default();
             (
-                t,
                 vec!["touching".into(), "contacts".into(), "with".into()],
-                vec![
-                    touching.to_string(),
-                    contacts.to_string(),
-                    format!("\"{}\"", with.join(";").replace('"', "\"\"")),
-                ],
+                vec![touching.to_string(), contacts.to_string(), with.join(";")],
             )
         }
         "visits" => (
-            t,
             vec!["buoy".into(), "name".into(), "visits".into()],
-            vec![
-                r.u32()?.to_string(),
-                format!("\"{}\"", r.string()?.replace('"', "\"\"")),
-                r.u32()?.to_string(),
-            ],
+            vec![r.u32()?.to_string(), r.string()?, r.u32()?.to_string()],
         ),
-        "controller" => (
-            t,
-            vec!["error".into()],
-            vec![format!("\"{}\"", r.string()?.replace('"', "\"\""))],
-        ),
+        "controller" => (vec!["error".into()], vec![r.string()?]),
         _ => return Ok(None),
     }))
+}
+
+/// `t_ns` as seconds, written exactly (no binary-fraction noise: 32.000000000, not
+/// 32.00000000000001).
+fn seconds(t_ns: u64) -> String {
+    format!("{}.{:09}", t_ns / 1_000_000_000, t_ns % 1_000_000_000)
+}
+
+/// One open CSV file: its header (after the time columns) and its writer.
+struct CsvFile {
+    header: Vec<String>,
+    writer: csv::Writer<std::io::BufWriter<std::fs::File>>,
 }
 
 fn export(log: &Path, dir: &Path) -> anyhow::Result<Outcome> {
     let contents = load(log)?;
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let mut files: std::collections::BTreeMap<String, (Vec<String>, String)> = Default::default();
-    for (topic, _, data) in &contents.messages {
+    let time_step_ns = contents
+        .time_step
+        .map(|t| (t * 1e9).round() as u64)
+        .filter(|&t| t > 0);
+    if time_step_ns.is_none() {
+        eprintln!("warning: the log does not give its time step: the step column is left empty");
+    }
+    // One file per channel kind; a robot whose messages of a kind have other columns (a
+    // differently configured retina) gets a file of its own.
+    let mut files: std::collections::BTreeMap<String, CsvFile> = Default::default();
+    let mut order: Vec<String> = Vec::new();
+    for (topic, t_ns, data) in &contents.messages {
         let (robot, kind) = robot_of(&contents, topic);
-        let Some((t, header, row)) =
+        let Some((header, row)) =
             decode(kind, data).with_context(|| format!("a {topic} message is damaged"))?
         else {
             continue;
         };
-        let entry = files
-            .entry(kind.to_owned())
-            .or_insert_with(|| (header.clone(), String::new()));
-        entry
-            .1
-            .push_str(&format!("{t},{robot},{}\n", row.join(",")));
+        let mut name = kind.to_owned();
+        if files.get(&name).is_some_and(|f| f.header != header) {
+            name = format!("{kind}-{robot}");
+        }
+        if !files.contains_key(&name) {
+            let path = dir.join(format!("{name}.csv"));
+            let file = std::fs::File::create(&path)
+                .with_context(|| format!("cannot create {}", path.display()))?;
+            let mut writer = csv::Writer::from_writer(std::io::BufWriter::new(file));
+            let mut full = vec!["step", "t_ns", "t", "robot"];
+            full.extend(header.iter().map(String::as_str));
+            writer.write_record(&full)?;
+            files.insert(name.clone(), CsvFile { header, writer });
+            order.push(name.clone());
+        }
+        let file = files
+            .get_mut(&name)
+            .context("the CSV file was just opened")?;
+        let step = time_step_ns
+            .map(|dt| ((t_ns + dt / 2) / dt).to_string())
+            .unwrap_or_default();
+        let mut record = vec![step, t_ns.to_string(), seconds(*t_ns), robot.to_owned()];
+        record.extend(row);
+        file.writer.write_record(&record)?;
     }
-    for (kind, (header, body)) in &files {
-        let path = dir.join(format!("{kind}.csv"));
-        let text = format!("t,robot,{}\n{body}", header.join(","));
-        std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
-        println!("{}", path.display());
+    for name in &order {
+        if let Some(mut file) = files.remove(name) {
+            let path = dir.join(format!("{name}.csv"));
+            file.writer
+                .flush()
+                .with_context(|| format!("cannot write {}", path.display()))?;
+            println!("{}", path.display());
+        }
     }
+    let path = dir.join("units.csv");
+    let file = std::fs::File::create(&path)
+        .with_context(|| format!("cannot create {}", path.display()))?;
+    let mut units = csv::Writer::from_writer(file);
+    units.write_record(["file", "column", "unit", "meaning"])?;
+    for (file, column, unit, meaning) in UNITS {
+        units.write_record([file, column, unit, meaning])?;
+    }
+    units
+        .flush()
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    println!("{}", path.display());
     Ok(Outcome::Clean)
 }
 

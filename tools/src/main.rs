@@ -1,5 +1,6 @@
 //! `regatta`: the command line. Each subcommand lives in its own module; this file only
-//! dispatches and maps results to exit codes (0 clean, 1 errors found, 2 usage errors).
+//! dispatches and maps results to exit codes (0 clean, 1 errors found, 2 usage errors,
+//! 128 + n when signal n stopped a run: 130 for Ctrl-C, 143 for SIGTERM).
 
 mod batch;
 mod bench;
@@ -17,6 +18,7 @@ mod render;
 mod run;
 mod schema;
 mod serial;
+mod signals;
 mod vision;
 mod webots;
 mod world;
@@ -87,6 +89,8 @@ pub enum Outcome {
     Clean,
     /// The input had errors; they were printed.
     Errors,
+    /// A signal stopped the command, which finished its work cleanly (logs closed).
+    Signalled(i32),
 }
 
 /// Piping into `head` closes our standard output early: like other Unix tools, end quietly
@@ -99,8 +103,24 @@ fn restore_sigpipe() {
     }
 }
 
+/// The main thread's stack: the parser and the typing recurse once per nesting level, and
+/// `--limit nesting=N` may ask for 1024 levels (4096 once PROTOs are expanded).
+const STACK_SIZE: usize = 256 << 20;
+
 fn main() -> ExitCode {
     restore_sigpipe();
+    // Reserved address space, not memory: pages are touched only as deep as a run goes.
+    match std::thread::Builder::new()
+        .name("regatta".to_owned())
+        .stack_size(STACK_SIZE)
+        .spawn(run)
+    {
+        Ok(handle) => handle.join().unwrap_or(ExitCode::from(101)),
+        Err(_) => run(),
+    }
+}
+
+fn run() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(error) => {
@@ -141,6 +161,9 @@ fn main() -> ExitCode {
     match result {
         Ok(Outcome::Clean) => ExitCode::SUCCESS,
         Ok(Outcome::Errors) => ExitCode::from(1),
+        Ok(Outcome::Signalled(signal)) => {
+            ExitCode::from(u8::try_from(128 + signal.clamp(0, 127)).unwrap_or(1))
+        }
         Err(error) => {
             eprintln!("error: {error:#}");
             ExitCode::from(1)

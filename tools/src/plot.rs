@@ -79,6 +79,8 @@ pub struct PlotArgs {
     /// Kymograph rows at most (longer runs are averaged into this many).
     #[arg(long, default_value_t = 600)]
     rows: usize,
+    #[command(flatten)]
+    world: crate::world::LogWorldOptions,
 }
 
 /// Everything the figures need from one robot's messages.
@@ -101,7 +103,7 @@ struct RobotData {
 
 pub fn plot(args: PlotArgs) -> anyhow::Result<Outcome> {
     let contents = crate::logs::load(&args.log)?;
-    let compiled = crate::logs::compile_embedded(&contents.run)?;
+    let compiled = crate::logs::compile_embedded(&contents.run, &args.world.clone().into())?;
     if args.rows == 0 {
         bail!("--rows must be at least 1");
     }

@@ -16,7 +16,7 @@ use crate::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The world file.
+    /// The world file (`-` reads standard input).
     world: PathBuf,
     /// Only this robot (by name).
     #[arg(long)]
@@ -27,9 +27,8 @@ pub struct Args {
     /// PNG images, or one JSON object per robot on standard output.
     #[arg(long, value_enum, default_value_t = Format::Png)]
     format: Format,
-    /// Read a foreign file leniently.
-    #[arg(long)]
-    lenient: bool,
+    #[command(flatten)]
+    options: crate::world::WorldOptions,
     /// Render with the ray caster even where the column renderer applies (the reference).
     #[arg(long)]
     rays: bool,
@@ -49,7 +48,7 @@ const SCALE: u32 = 6;
 const STRIP_HEIGHT: u32 = 36;
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
-    let loaded = crate::world::load(&args.world, args.lenient, color)?;
+    let loaded = crate::world::load(&args.world, &args.options, color)?;
     let compiled = &loaded.compiled;
     let robots: Vec<usize> = match &args.robot {
         Some(name) => vec![crate::world::robot_named(compiled, &args.world, name)?],

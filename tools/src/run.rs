@@ -3,9 +3,6 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
-
 use anyhow::Context;
 use regatta_runtime::sim::Simulation;
 
@@ -13,7 +10,7 @@ use crate::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The world file.
+    /// The world file (`-` reads standard input).
     world: PathBuf,
     /// Simulated time to run (s).
     #[arg(long, conflicts_with = "steps")]
@@ -24,9 +21,11 @@ pub struct Args {
     /// Seed of every random stream (overrides WorldInfo.randomSeed).
     #[arg(long)]
     seed: Option<u64>,
-    /// Read a foreign file leniently.
+    #[command(flatten)]
+    options: crate::world::WorldOptions,
+    /// Run a world that has no robot (otherwise a mistake: nothing would move).
     #[arg(long)]
-    lenient: bool,
+    allow_empty: bool,
     /// Record every sensor and actuator to this MCAP file.
     #[arg(long, value_name = "FILE.mcap")]
     log: Option<PathBuf>,
@@ -68,17 +67,18 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
 }
 
 fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
-    let mut loaded = crate::world::load(&args.world, args.lenient, color)?;
+    let mut loaded = crate::world::load(&args.world, &args.options, color)?;
     crate::webots::refuse_unbuilt_robots(&loaded)?;
     crate::webots::resolve_controllers(
         &mut loaded.compiled,
         &args.controllers,
-        args.lenient,
+        args.options.lenient,
         None,
     )?;
     let compiled = &loaded.compiled;
-    let mut simulation = Simulation::new(compiled, args.seed)
-        .with_context(|| format!("cannot run {}", args.world.display()))?;
+    let name = crate::world::world_name(&args.world);
+    let mut simulation =
+        Simulation::new(compiled, args.seed).with_context(|| format!("cannot run {name}"))?;
     let backend = crate::vision::backend(args.renderer, compiled, &args.world)?;
     let vision = backend.as_ref().map(|b| b.describe());
     if let Some(backend) = backend {
@@ -98,26 +98,24 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 &args.world,
                 &loaded,
                 &mut simulation,
-                args.lenient,
+                args.options.lenient,
                 steps,
                 args.channels,
             )
         })
         .transpose()?;
-    // Ctrl-C ends the run between steps; the log is then closed properly and marked.
-    let interrupted = Arc::new(AtomicBool::new(false));
-    {
-        let interrupted = interrupted.clone();
-        let _ = ctrlc::set_handler(move || interrupted.store(true, Ordering::SeqCst));
-    }
+    // SIGINT and SIGTERM end the run between steps; the log is then closed properly and
+    // marked interrupted, and the exit code says which signal it was.
+    let stop = crate::signals::Stop::install();
     let mut observer = args.json.then(|| {
         regatta_evolve::experiment::sense_for_fitness(&mut simulation);
         regatta_evolve::Observer::new(&simulation, &args.fitness)
     });
     let progress = progress_bar(steps);
     let started = Instant::now();
+    let mut failure = None;
     for step in 0..steps {
-        if interrupted.load(Ordering::SeqCst) {
+        if stop.requested() {
             break;
         }
         simulation.step();
@@ -132,6 +130,24 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
         if let Some(observer) = &mut observer {
             observer.after_step(&simulation);
         }
+        // A controller that fails is a broken run: said once, and the run ends there (the
+        // log keeps the step with the failure).
+        if let Some((index, robot)) = simulation
+            .robots
+            .iter()
+            .enumerate()
+            .find(|(_, r)| r.updated.controller_error)
+        {
+            failure = Some(format!(
+                "robot '{}': controller \"{}\" failed at t = {:.3} s (step {}): {}",
+                robot.name,
+                compiled.rig.robots[index].controller,
+                simulation.time - simulation.time_step,
+                simulation.steps,
+                robot.last_controller_error.as_deref().unwrap_or("")
+            ));
+            break;
+        }
         if step % 1024 == 0 {
             if let Some(bar) = &progress {
                 if started.elapsed().as_secs_f64() > 1.0 {
@@ -143,7 +159,7 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
     if let Some(bar) = progress {
         bar.finish_and_clear();
     }
-    let was_interrupted = interrupted.load(Ordering::SeqCst);
+    let was_interrupted = stop.requested();
     if let Some(recorder) = recorder {
         recorder
             .finish(&simulation, was_interrupted)
@@ -152,7 +168,8 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
     let wall = started.elapsed().as_secs_f64();
     if was_interrupted {
         eprintln!(
-            "interrupted after {} steps{}",
+            "interrupted by {} after {} steps{}",
+            stop.name(),
             simulation.steps,
             if args.log.is_some() {
                 "; the log is complete and marked interrupted"
@@ -162,11 +179,11 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
         );
     }
     if let Some(observer) = &observer {
-        let summary = observer.summary(&simulation, &args.world.display().to_string(), Some(wall));
+        let summary = observer.summary(&simulation, &name, Some(wall));
         println!("{}", serde_json::to_string_pretty(&summary)?);
-        return Ok(Outcome::Clean);
+        return Ok(finish(failure, &simulation, &name, &args, &stop));
     }
-    println!("world {}: seed {}", args.world.display(), simulation.seed);
+    println!("world {name}: seed {}", simulation.seed);
     if let Some(vision) = vision {
         println!("vision rendered by {vision}");
     }
@@ -209,16 +226,38 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 fall.time, fall.pose.x, fall.pose.z
             );
         }
-        if robot.controller_errors > 0 {
-            print!(
-                "; controller errors {} (last: {})",
-                robot.controller_errors,
-                robot.last_controller_error.as_deref().unwrap_or("")
-            );
-        }
         println!();
     }
-    Ok(Outcome::Clean)
+    Ok(finish(failure, &simulation, &name, &args, &stop))
+}
+
+/// How a run ends once its summary is printed: a controller's failure (said once), a world
+/// without robots (an error unless `--allow-empty`), a signal, or clean.
+fn finish(
+    failure: Option<String>,
+    simulation: &Simulation,
+    name: &str,
+    args: &Args,
+    stop: &crate::signals::Stop,
+) -> Outcome {
+    if let Some(failure) = failure {
+        eprintln!("error: {failure}");
+        if args.log.is_some() {
+            eprintln!("the log is complete up to the failed step");
+        }
+        return Outcome::Errors;
+    }
+    if simulation.robots.is_empty() {
+        eprintln!(
+            "warning: {name} has no robot: the run only advanced time ({} steps); nothing moved and no sensor was read",
+            simulation.steps
+        );
+        if !args.allow_empty {
+            eprintln!("error: nothing to run; `--allow-empty` runs a world without robots");
+            return Outcome::Errors;
+        }
+    }
+    stop.outcome().unwrap_or(Outcome::Clean)
 }
 
 /// A progress bar on standard error when it is a terminal (hidden otherwise); it shows up only

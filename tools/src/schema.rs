@@ -1,15 +1,15 @@
-//! `regatta schema`: the node catalogue as a world author needs it.
+//! `regatta schema`: the node catalogue and the standard PROTOs as a world author needs them.
 
 use std::fmt::Write;
 
 use anyhow::bail;
-use regatta_schema::{catalogue::did_you_mean, Catalogue, NodeSpec};
+use regatta_schema::{catalogue::did_you_mean, standard_protos, Catalogue, NodeSpec, ProtoSpec};
 
 use crate::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Show only this node type (an alias such as Pose works too).
+    /// Show only this node type or standard PROTO (an alias such as Pose works too).
     node: Option<String>,
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Markdown)]
@@ -24,23 +24,77 @@ enum Format {
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let catalogue = Catalogue::get();
-    let specs: Vec<&NodeSpec> = match &args.node {
-        Some(name) => match catalogue.lookup(name) {
-            Some(id) => vec![catalogue.spec(id)],
-            None => {
-                let hint = did_you_mean(name, catalogue.names())
-                    .map(|c| format!(" (did you mean '{c}'?)"))
-                    .unwrap_or_default();
-                bail!("no node type named '{name}'{hint}; `regatta schema` lists them all");
+    let all_protos = standard_protos();
+    let (specs, protos): (Vec<&NodeSpec>, Vec<&ProtoSpec>) = match &args.node {
+        Some(name) => {
+            match (
+                catalogue.lookup(name),
+                all_protos.iter().find(|p| &p.name == name),
+            ) {
+                (_, Some(proto)) => (Vec::new(), vec![proto]),
+                (Some(id), None) => (vec![catalogue.spec(id)], Vec::new()),
+                (None, None) => {
+                    let names = catalogue
+                        .names()
+                        .chain(all_protos.iter().map(|p| p.name.as_str()));
+                    let hint = did_you_mean(name, names)
+                        .map(|c| format!(" (did you mean '{c}'?)"))
+                        .unwrap_or_default();
+                    bail!("no node type or PROTO named '{name}'{hint}; `regatta schema` lists them all");
+                }
             }
-        },
-        None => catalogue.nodes.iter().collect(),
+        }
+        None => (
+            catalogue.nodes.iter().collect(),
+            all_protos.iter().collect(),
+        ),
     };
     match args.format {
-        Format::Json => println!("{}", serde_json::to_string_pretty(&specs)?),
-        Format::Markdown => print!("{}", markdown(&specs)),
+        Format::Json => {
+            let mut entries: Vec<serde_json::Value> = Vec::new();
+            for spec in &specs {
+                entries.push(serde_json::to_value(spec)?);
+            }
+            for proto in &protos {
+                entries.push(serde_json::to_value(proto)?);
+            }
+            println!("{}", serde_json::to_string_pretty(&entries)?);
+        }
+        Format::Markdown => {
+            print!("{}", markdown(&specs));
+            if !protos.is_empty() && args.node.is_none() {
+                println!("# Standard PROTOs\n\nBuilt in: a world uses them without an EXTERNPROTO line.\n");
+            }
+            print!("{}", proto_markdown(&protos));
+        }
     }
     Ok(Outcome::Clean)
+}
+
+fn proto_markdown(protos: &[&ProtoSpec]) -> String {
+    let mut out = String::new();
+    for proto in protos {
+        let _ = writeln!(out, "## {} (PROTO)\n\n{}\n", proto.name, proto.doc);
+        let _ = writeln!(
+            out,
+            "A {} underneath; stands where {} nodes go.\n",
+            proto.root,
+            proto.classes.join(" or ")
+        );
+        let _ = writeln!(out, "| field | type | default | doc |\n|---|---|---|---|");
+        for field in &proto.fields {
+            let _ = writeln!(
+                out,
+                "| `{}` | {} | `{}` | {} |",
+                field.name,
+                field.type_name,
+                field.default.replace('|', "\\|"),
+                field.doc.replace('|', "\\|")
+            );
+        }
+        out.push('\n');
+    }
+    out
 }
 
 fn markdown(specs: &[&NodeSpec]) -> String {

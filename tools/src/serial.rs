@@ -2,10 +2,8 @@
 //! served world answers like a real robot on a pseudo-terminal or a TCP port; `drive` runs a
 //! built-in controller on a real robot, or on a served one, through the real-robot backend.
 
-use std::net::{TcpListener, TcpStream};
+use std::net::{IpAddr, Ipv4Addr, SocketAddr, TcpListener, TcpStream};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
@@ -19,7 +17,7 @@ use crate::Outcome;
 
 #[derive(clap::Args)]
 pub struct ServeArgs {
-    /// The world file.
+    /// The world file (`-` reads standard input).
     world: PathBuf,
     /// The robot that answers (by name; the first robot if not given). The others keep their
     /// built-in controllers.
@@ -28,9 +26,14 @@ pub struct ServeArgs {
     /// Answer on a new pseudo-terminal; its path is printed (a serial port for any program).
     #[arg(long, conflicts_with = "tcp", required_unless_present = "tcp")]
     pty: bool,
-    /// Answer on a TCP address (port 0 picks a free port; the address is printed).
-    #[arg(long, value_name = "HOST:PORT")]
+    /// Answer on a TCP port (0 picks a free one; the address is printed). `HOST:PORT` is
+    /// accepted when HOST is the --bind address or a loopback address.
+    #[arg(long, value_name = "PORT")]
     tcp: Option<String>,
+    /// The address to listen on: 127.0.0.1 (this machine only) unless another is given;
+    /// `--bind 0.0.0.0` answers anyone who can reach this machine.
+    #[arg(long, value_name = "ADDR", requires = "tcp")]
+    bind: Option<IpAddr>,
     /// Step the world in real time instead of one step per D (set speed) command.
     #[arg(long)]
     realtime: bool,
@@ -49,15 +52,41 @@ pub struct ServeArgs {
     /// The log's channels, as for `regatta run`.
     #[arg(long, value_name = "LIST", default_value = "all", requires = "log")]
     channels: regatta_runtime::log::Channels,
-    /// Read a foreign file leniently.
-    #[arg(long)]
-    lenient: bool,
+    #[command(flatten)]
+    options: crate::world::WorldOptions,
     #[command(flatten)]
     controllers: crate::webots::ControllerOverride,
 }
 
+/// Where `--tcp` and `--bind` say to listen: the --bind address (127.0.0.1 by default) and
+/// the port; a `HOST:PORT` form must not widen the audience behind the user's back.
+fn listen_address(tcp: &str, bind: Option<IpAddr>) -> anyhow::Result<SocketAddr> {
+    let loopback = IpAddr::V4(Ipv4Addr::LOCALHOST);
+    if let Ok(port) = tcp.parse::<u16>() {
+        return Ok(SocketAddr::new(bind.unwrap_or(loopback), port));
+    }
+    let address: SocketAddr = tcp.parse().with_context(|| {
+        format!("--tcp {tcp}: give a port (7000) or an address (127.0.0.1:7000)")
+    })?;
+    match bind {
+        Some(bind) if bind != address.ip() => bail!(
+            "--tcp {tcp} and --bind {bind} disagree; give the port alone with --bind"
+        ),
+        None if !address.ip().is_loopback() => bail!(
+            "--tcp {tcp} would answer other machines; regatta serve listens on 127.0.0.1 unless --bind {} says otherwise",
+            address.ip()
+        ),
+        _ => Ok(address),
+    }
+}
+
 pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
-    let mut loaded = crate::world::load(&args.world, args.lenient, color)?;
+    let address = args
+        .tcp
+        .as_deref()
+        .map(|tcp| listen_address(tcp, args.bind))
+        .transpose()?;
+    let mut loaded = crate::world::load(&args.world, &args.options, color)?;
     crate::webots::refuse_unbuilt_robots(&loaded)?;
     let served = match &args.robot {
         Some(name) => Some(crate::world::robot_named(
@@ -70,19 +99,20 @@ pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
     crate::webots::resolve_controllers(
         &mut loaded.compiled,
         &args.controllers,
-        args.lenient,
+        args.options.lenient,
         served,
     )?;
     let compiled = &loaded.compiled;
+    let world_name = crate::world::world_name(&args.world);
     let robot = match &args.robot {
         Some(name) => crate::world::robot_named(compiled, &args.world, name)?,
         None if compiled.rig.robots.is_empty() => {
-            bail!("{} has no robot to serve", args.world.display())
+            bail!("{world_name} has no robot to serve")
         }
         None => 0,
     };
-    let mut simulation = Simulation::new(compiled, args.seed)
-        .with_context(|| format!("cannot run {}", args.world.display()))?;
+    let mut simulation =
+        Simulation::new(compiled, args.seed).with_context(|| format!("cannot run {world_name}"))?;
     let max_steps = match (args.steps, args.duration) {
         (Some(steps), _) => Some(steps),
         (None, Some(duration)) => Some(crate::world::steps_for(duration, simulation.time_step)?),
@@ -97,17 +127,13 @@ pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
                 &args.world,
                 &loaded,
                 &mut simulation,
-                args.lenient,
+                args.options.lenient,
                 max_steps.unwrap_or(0),
                 args.channels,
             )
         })
         .transpose()?;
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
-    }
+    let stop = crate::signals::Stop::install();
     let pacing = if args.realtime {
         Pacing::RealTime
     } else {
@@ -126,46 +152,67 @@ pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
                 recorder.record(simulation).map_err(std::io::Error::other)
             }));
         }
+        server.on_lag = Some(Box::new(|lag: regatta_serial::server::Lag| {
+            eprintln!(
+                "warning: the world cannot keep up with real time: {} steps behind at t = {:.3} s (a step takes longer than {} ms of wall time); it catches up as fast as it can",
+                lag.steps_behind,
+                lag.time,
+                lag.period_ms
+            );
+        }));
         let serve_one = |server: &mut Server, link: &mut dyn Link| match pacing {
-            Pacing::LockStep => serve_lock_step(server, link, &stop),
-            Pacing::RealTime => serve_real_time(server, link, &stop),
+            Pacing::LockStep => serve_lock_step(server, link, stop.flag()),
+            Pacing::RealTime => serve_real_time(server, link, stop.flag()),
         };
-        let ended = if let Some(address) = &args.tcp {
+        let ended = if let Some(address) = address {
             let listener = TcpListener::bind(address)
                 .with_context(|| format!("cannot listen on {address}"))?;
             listener.set_nonblocking(true)?;
             println!(
-                "serving robot '{name}' of {} on tcp {} ({mode})",
-                args.world.display(),
+                "serving robot '{name}' of {world_name} on tcp {} ({mode})",
                 listener.local_addr()?
             );
             flush_stdout();
             loop {
-                if stop.load(Ordering::SeqCst) {
+                if stop.requested() {
                     break Ended::Stopped;
                 }
                 match listener.accept() {
                     Ok((mut stream, peer)) => {
-                        stream.set_nonblocking(false)?;
-                        stream.set_nodelay(true)?;
                         eprintln!("client {peer} connected");
-                        match serve_one(&mut server, &mut stream)? {
-                            Ended::Closed => eprintln!("client {peer} left"),
-                            other => break other,
+                        // One client's trouble is its own: a reset or a broken link ends its
+                        // session, never the server, and nothing of it reaches the next one.
+                        let outcome = stream
+                            .set_nonblocking(false)
+                            .and_then(|()| stream.set_nodelay(true))
+                            .and_then(|()| serve_one(&mut server, &mut stream));
+                        server.end_session();
+                        match outcome {
+                            Ok(Ended::Closed) => eprintln!("client {peer} left"),
+                            Ok(other) => break other,
+                            Err(error) => eprintln!("client {peer} lost: {error}"),
                         }
                     }
                     Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
                         std::thread::sleep(Duration::from_millis(20))
                     }
-                    Err(e) => return Err(e).context("cannot accept a client"),
+                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                    // Failures that concern one connection attempt (a client that reset
+                    // before it was accepted, a file-descriptor shortage) end no session.
+                    Err(e) => {
+                        eprintln!("warning: cannot accept a client: {e}");
+                        std::thread::sleep(Duration::from_millis(100));
+                    }
+                }
+                if server.hook_error.is_some() {
+                    break Ended::Done;
                 }
             }
         } else {
             let mut pty =
                 regatta_serial::link::Pty::open().context("cannot open a pseudo-terminal")?;
             println!(
-                "serving robot '{name}' of {} on {} ({mode})",
-                args.world.display(),
+                "serving robot '{name}' of {world_name} on {} ({mode})",
                 pty.slave_path()
             );
             flush_stdout();
@@ -199,7 +246,18 @@ pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
         "final pose of '{name}': x {:.9} z {:.9} heading {:.9}",
         pose.x, pose.z, pose.heading
     );
-    Ok(Outcome::Clean)
+    if ended == Ended::Stopped {
+        eprintln!(
+            "stopped by {}{}",
+            stop.name(),
+            if args.log.is_some() {
+                "; the log is complete and marked interrupted"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(stop.outcome().unwrap_or(Outcome::Clean))
 }
 
 fn flush_stdout() {
@@ -285,17 +343,13 @@ fn drive_link<L: Link>(
         if panoramic { ", Panoramic turret" } else { "" },
         if k213 { ", K213 turret" } else { "" },
     );
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
-    }
+    let stop = crate::signals::Stop::install();
     let period = Duration::from_millis(args.period);
     let started = Instant::now();
     let mut done = 0;
     let mut failure = None;
     for step in 0..args.steps {
-        if stop.load(Ordering::SeqCst) {
+        if stop.requested() {
             break;
         }
         if let Err(error) = controller.step(&mut robot) {
@@ -321,5 +375,5 @@ fn drive_link<L: Link>(
     if let Err(error) = stopped {
         eprintln!("warning: cannot stop the robot at the end: {error}");
     }
-    Ok(Outcome::Clean)
+    Ok(stop.outcome().unwrap_or(Outcome::Clean))
 }

@@ -4,7 +4,7 @@
 //! `--controller` override.
 
 use anyhow::bail;
-use regatta_runtime::webots_controllers::{resolve, Resolution};
+use regatta_runtime::webots_controllers::{resolve, Resolution, LENIENT_DEFAULT};
 use regatta_runtime::Compiled;
 
 use crate::world::Loaded;
@@ -21,10 +21,6 @@ pub struct ControllerOverride {
     #[arg(long = "controller-args", value_name = "ARGS")]
     pub args: Vec<String>,
 }
-
-/// The controller a DifferentialWheels robot runs when lenient mode replaces one regatta
-/// does not have: the Khepera's and e-puck's default in Webots is obstacle avoidance.
-const LENIENT_DEFAULT: &str = "braitenberg";
 
 /// Fails when the world has robots regatta could not build (their PROTO has no stand-in and
 /// was not found), naming each.

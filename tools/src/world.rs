@@ -1,12 +1,113 @@
 //! Loading a world for the commands that run it: check (printing diagnostics), then compile;
 //! and what those commands share once it is loaded (robot lookup, step counts, log recorders).
+//! [`WorldOptions`] are the flags of every command that reads a world: `--lenient`,
+//! `--allow-path DIR` and `--limit KEY=N`; `-` reads the world from standard input.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
+use regatta_parser::SourceText;
 use regatta_runtime::log::{Recorder, RunInfo};
 use regatta_runtime::{compile, Compiled};
-use regatta_schema::{check_file_with_proto_path, Checked};
+use regatta_schema::{check, check_path, Checked, FileAccess, FileDiagnostic, Limits, Options};
+
+/// How a world is read: the flags shared by every command that reads one.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct WorldOptions {
+    /// Read a foreign file leniently: unknown nodes and fields are skipped with a warning.
+    #[arg(long)]
+    pub lenient: bool,
+    /// Let the world read files under DIR too (repeatable). A world reads only files under
+    /// its own folder; one read from standard input reads none unless this names a folder.
+    #[arg(long = "allow-path", value_name = "DIR")]
+    pub allow_paths: Vec<PathBuf>,
+    /// Raise a limit (repeatable): nesting (64), include-depth (16), proto-depth (32),
+    /// nodes (1000000), file-size (256M).
+    #[arg(long = "limit", value_name = "KEY=N", value_parser = parse_limit)]
+    pub limits: Vec<String>,
+}
+
+/// Checks `--limit KEY=N` when the command line is read (a bad one is a usage error).
+fn parse_limit(assignment: &str) -> Result<String, String> {
+    Limits::default().set(assignment)?;
+    Ok(assignment.to_owned())
+}
+
+/// What the world embedded in a log may read (its mode comes from the log).
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct LogWorldOptions {
+    /// Let the log's world read files under DIR (repeatable); otherwise it reads files only
+    /// under its recorded folder, and only when that folder is inside the current directory.
+    #[arg(long = "allow-path", value_name = "DIR")]
+    pub allow_paths: Vec<PathBuf>,
+    /// Raise a limit (repeatable): nesting, include-depth, proto-depth, nodes, file-size.
+    #[arg(long = "limit", value_name = "KEY=N", value_parser = parse_limit)]
+    pub limits: Vec<String>,
+}
+
+impl From<LogWorldOptions> for WorldOptions {
+    fn from(options: LogWorldOptions) -> WorldOptions {
+        WorldOptions {
+            lenient: false,
+            allow_paths: options.allow_paths,
+            limits: options.limits,
+        }
+    }
+}
+
+impl WorldOptions {
+    /// The checking options these flags ask for.
+    pub fn options(&self) -> anyhow::Result<Options> {
+        let mut access = FileAccess::none();
+        for dir in &self.allow_paths {
+            access
+                .allow(dir)
+                .with_context(|| format!("--allow-path {}", dir.display()))?;
+        }
+        let mut limits = Limits::default();
+        for assignment in &self.limits {
+            limits
+                .set(assignment)
+                .map_err(|message| anyhow::anyhow!("--limit {assignment}: {message}"))?;
+        }
+        Ok(Options {
+            strict: !self.lenient,
+            access,
+            limits,
+            base_dir: None,
+            proto_path: proto_path(),
+        })
+    }
+}
+
+/// Whether `path` means standard input.
+pub fn is_stdin(path: &Path) -> bool {
+    path.as_os_str() == "-"
+}
+
+/// How messages and logs name a world given as `path`.
+pub fn world_name(path: &Path) -> String {
+    if is_stdin(path) {
+        "<stdin>".to_owned()
+    } else {
+        path.display().to_string()
+    }
+}
+
+/// Reads and checks the world at `path` (`-`: standard input), printing nothing.
+pub fn check_world(path: &Path, world: &WorldOptions) -> anyhow::Result<Checked> {
+    let options = world.options()?;
+    if is_stdin(path) {
+        let bytes =
+            regatta_parser::source::read_bytes(std::io::stdin().lock(), options.limits.file_size)
+                .map_err(|error| anyhow::anyhow!("standard input is not a world: {error}"))?;
+        return Ok(check(
+            SourceText::from_bytes("<stdin>".to_owned(), bytes),
+            &options,
+        ));
+    }
+    Ok(check_path(path, &options)?)
+}
 
 static PROTO_PATH: std::sync::OnceLock<Vec<std::path::PathBuf>> = std::sync::OnceLock::new();
 
@@ -37,38 +138,16 @@ pub struct Loaded {
     pub compiled: Compiled,
 }
 
-/// Adds what the runtime checks beyond the schema (each robot's network against its inputs
-/// and outputs), keeping the diagnostics in file and position order.
-pub fn check_runtime(checked: &mut Checked) {
-    let extra = regatta_runtime::neural::check_networks(&checked.scene);
-    if extra.is_empty() {
-        return;
-    }
-    checked.diagnostics.extend(extra);
-    checked
-        .diagnostics
-        .sort_by_key(|d| (d.file.0, d.diagnostic.span.start));
-}
-
-/// Checks `path` (printing warnings and errors to stderr) and compiles it; fails on errors.
-pub fn load(path: &Path, lenient: bool, color: bool) -> anyhow::Result<Loaded> {
-    let mut checked = check_file_with_proto_path(path, !lenient, proto_path())?;
+/// Checks `path` (printing errors, and warnings too in lenient mode, to stderr) and compiles
+/// it; fails on errors.
+pub fn load(path: &Path, world: &WorldOptions, color: bool) -> anyhow::Result<Loaded> {
+    let mut checked = check_world(path, world)?;
     print_substitutions(&checked);
-    check_runtime(&mut checked);
-    let shown: Vec<_> = checked
-        .diagnostics
-        .iter()
-        .filter(|d| d.diagnostic.is_error() || lenient)
-        .collect();
-    for diagnostic in &shown {
-        let source = &checked.sources[diagnostic.file.0 as usize];
-        eprint!(
-            "{}",
-            diagnostic
-                .diagnostic
-                .render(&source.name, &source.text, color)
-        );
-    }
+    regatta_runtime::check::check_scene(&mut checked);
+    eprint!(
+        "{}",
+        checked.render_where(|d| d.diagnostic.is_error() || world.lenient, color)
+    );
     if checked.has_errors() {
         let errors = checked
             .diagnostics
@@ -77,7 +156,7 @@ pub fn load(path: &Path, lenient: bool, color: bool) -> anyhow::Result<Loaded> {
             .count();
         bail!(
             "{} has {errors} error(s); `regatta check` lists them",
-            path.display()
+            world_name(path)
         );
     }
     let compiled = compile(&checked.scene);
@@ -96,9 +175,12 @@ pub fn robot_named(compiled: &Compiled, world: &Path, name: &str) -> anyhow::Res
             .iter()
             .map(|r| r.name.as_str())
             .collect();
+        let hint = regatta_schema::catalogue::did_you_mean(name, names.iter().copied())
+            .map(|close| format!("; did you mean '{close}'?"))
+            .unwrap_or_default();
         anyhow::anyhow!(
-            "{} has no robot named '{name}' (it has: {})",
-            world.display(),
+            "{} has no robot named '{name}' (it has: {}){hint}",
+            world_name(world),
             names.join(", ")
         )
     })
@@ -129,7 +211,7 @@ pub fn create_recorder(
     let file =
         std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
     let run = RunInfo {
-        world_name: world.display().to_string(),
+        world_name: world_name(world),
         world_text: loaded.checked.sources[0].text.to_string(),
         seed: simulation.seed,
         lenient,
@@ -142,6 +224,78 @@ pub fn create_recorder(
         simulation,
         &run,
     )?)
+}
+
+/// Rays traced per update above which `check` warns (about 10 ms per update at 20 ns a ray).
+const COSTLY_RAYS: f64 = 500_000.0;
+
+/// Warns about vision devices whose settings make a step slow, with the estimated cost per
+/// step: the rays (or column evaluations) of one update, times the updates per step, at
+/// about 20 ns per ray through a small scene's BVH. Only a world that checks is estimated.
+pub fn warn_about_cost(checked: &mut Checked) {
+    use regatta_runtime::compile::plan::RendererChoice;
+    if checked.has_errors() {
+        return;
+    }
+    let compiled = compile(&checked.scene);
+    let rays = compiled.plan.renderer == RendererChoice::Rays;
+    let time_step = compiled.settings.time_step;
+    let mut warnings = Vec::new();
+    for id in checked.scene.walk() {
+        let scene = &checked.scene;
+        let name = scene.type_name(id);
+        let (per_update, what) = match name {
+            "PanoramicTurret" => {
+                let samples = scene.int(id, "samples").max(1) as f64;
+                let stride = scene.int(id, "stride").max(1) as f64;
+                match (scene.string(id, "optics"), rays) {
+                    ("paper", _) => (1050.0 * samples * samples, "flat-view rays"),
+                    (_, true) => (150.0 * samples * samples, "rays"),
+                    (_, false) => (150.0 * samples / stride, "column evaluations"),
+                }
+            }
+            "LinearCamera" => {
+                let samples = scene.int(id, "samples").max(1) as f64;
+                let pixels = scene.int(id, "pixels").max(1) as f64;
+                if rays {
+                    (pixels * samples * samples, "rays")
+                } else {
+                    (pixels * samples, "column evaluations")
+                }
+            }
+            _ => continue,
+        };
+        if per_update <= COSTLY_RAYS {
+            continue;
+        }
+        let period = scene.float(id, "samplingPeriod");
+        let updates_per_step = if period <= time_step {
+            1.0
+        } else {
+            time_step / period
+        };
+        let seconds = per_update * updates_per_step * 20e-9;
+        let node = scene.node(id);
+        let samples_index = scene.spec(id).field_index("samples");
+        let at = samples_index
+            .and_then(|i| node.value_span_at(i))
+            .unwrap_or(node.origin);
+        warnings.push(FileDiagnostic {
+            file: at.file,
+            diagnostic: regatta_parser::Diagnostic::warning(
+                at.span,
+                format!(
+                    "this {name} costs about {:.0} ms per step ({per_update:.0} {what} per update)",
+                    seconds * 1000.0
+                ),
+            )
+            .with_label("these settings make every step slow")
+            .with_note("fewer samples, or exact optics with the column renderer, cost less; `regatta bench retina` measures time against error")
+            .with_code("costly-device"),
+        });
+    }
+    checked.diagnostics.extend(warnings);
+    checked.sort_diagnostics();
 }
 
 /// Robots whose controller (or its arguments) is not what their world gives, for the log.

@@ -4,18 +4,11 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 
-fn regatta() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_regatta"))
-}
+mod common;
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_owned()
-}
+use common::{regatta, root};
 
 fn run_with_stdin(args: &[&str], input: &[u8]) -> Output {
     let mut child = regatta()
@@ -30,9 +23,7 @@ fn run_with_stdin(args: &[&str], input: &[u8]) -> Output {
 }
 
 fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("regatta-cli-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::temp_dir(&format!("cli-{name}"))
 }
 
 #[test]
@@ -395,11 +386,31 @@ fn exported_csv_has_a_header_and_a_row_per_pose() {
     );
     let pose = std::fs::read_to_string(out.join("pose.csv")).unwrap();
     let mut lines = pose.lines();
-    assert_eq!(lines.next(), Some("t,robot,x,z,heading"));
-    assert_eq!(lines.count(), 100);
-    for name in ["wheels.csv", "proximity.csv", "ambient.csv", "retina.csv"] {
+    assert_eq!(lines.next(), Some("step,t_ns,t,robot,x,z,heading"));
+    // Integer steps and nanoseconds, and seconds written exactly: step 1 ends at 32 ms.
+    assert!(
+        lines
+            .next()
+            .unwrap()
+            .starts_with("1,32000000,0.032000000,khepera,"),
+        "{pose}"
+    );
+    assert_eq!(lines.count(), 99);
+    assert!(
+        pose.contains("\n100,3200000000,3.200000000,khepera,"),
+        "{pose}"
+    );
+    for name in [
+        "wheels.csv",
+        "proximity.csv",
+        "ambient.csv",
+        "retina.csv",
+        "units.csv",
+    ] {
         assert!(out.join(name).exists(), "{name}");
     }
+    let units = std::fs::read_to_string(out.join("units.csv")).unwrap();
+    assert!(units.contains("pose,heading,rad,"), "{units}");
     std::fs::remove_dir_all(dir).ok();
 }
 
@@ -479,9 +490,10 @@ fn plot_draws_the_top_view_and_a_kymograph() {
 }
 
 #[cfg(unix)]
-#[test]
-fn ctrl_c_ends_a_run_with_a_complete_log_marked_interrupted() {
-    let dir = temp_dir("interrupt");
+/// Runs a long logged run, sends it `signal` once it has started, and checks that it ends
+/// with 128 + signal and a complete log marked interrupted, which replays.
+fn a_signal_ends_a_run_with_a_complete_log(signal: i32, name: &str) {
+    let dir = temp_dir(&format!("interrupt-{signal}"));
     let log = dir.join("run.mcap");
     let child = regatta()
         .args(["run", "--steps", "100000000", "--log"])
@@ -491,19 +503,26 @@ fn ctrl_c_ends_a_run_with_a_complete_log_marked_interrupted() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(800));
+    // The log exists once the world is loaded and the handlers are installed.
+    let started = std::time::Instant::now();
+    while std::fs::metadata(&log).map_or(true, |m| m.len() == 0) && started.elapsed().as_secs() < 30
+    {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
     // SAFETY: sending a signal to our own child process.
     unsafe {
-        libc::kill(child.id() as i32, libc::SIGINT);
+        libc::kill(child.id() as i32, signal);
     }
     let output = child.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert_eq!(output.status.code(), Some(128 + signal), "{stderr}");
     assert!(
-        stderr.contains("interrupted after") && stderr.contains("marked interrupted"),
+        stderr.contains(&format!("interrupted by {name} after"))
+            && stderr.contains("marked interrupted"),
         "{stderr}"
     );
-    // Complete: no warning on reading; and it replays.
+    // Complete: no warning on reading (summary and footer written); and it replays.
     let export = regatta()
         .args(["log", "export"])
         .arg(&log)
@@ -512,7 +531,7 @@ fn ctrl_c_ends_a_run_with_a_complete_log_marked_interrupted() {
         .output()
         .unwrap();
     assert!(
-        !String::from_utf8_lossy(&export.stderr).contains("warning"),
+        export.status.success() && !String::from_utf8_lossy(&export.stderr).contains("warning"),
         "{}",
         String::from_utf8_lossy(&export.stderr)
     );
@@ -527,6 +546,16 @@ fn ctrl_c_ends_a_run_with_a_complete_log_marked_interrupted() {
         String::from_utf8_lossy(&replay.stdout)
     );
     std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn ctrl_c_ends_a_run_with_exit_130_and_a_complete_log() {
+    a_signal_ends_a_run_with_a_complete_log(libc::SIGINT, "SIGINT");
+}
+
+#[test]
+fn sigterm_ends_a_run_with_exit_143_and_a_complete_log() {
+    a_signal_ends_a_run_with_a_complete_log(libc::SIGTERM, "SIGTERM");
 }
 
 #[cfg(target_os = "linux")]
@@ -938,4 +967,147 @@ fn no_gpu_adapter_is_a_clear_error() {
     assert!(stderr.contains("no GPU adapter"), "{stderr}");
     assert!(stderr.contains("--renderer cpu"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn every_world_and_proto_in_the_repository_is_canonical() {
+    let mut files = Vec::new();
+    let mut folders = vec![root().join("worlds")];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(folder).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                folders.push(path);
+            } else if path
+                .extension()
+                .is_some_and(|e| e == "wbt" || e == "proto" || e == "wrl")
+            {
+                files.push(path);
+            }
+        }
+    }
+    assert!(files.len() >= 6, "{files:?}");
+    for file in files {
+        let output = regatta()
+            .args(["fmt", "--check"])
+            .arg(&file)
+            .output()
+            .unwrap();
+        assert_eq!(
+            output.status.code(),
+            Some(0),
+            "{} is not canonical: regatta fmt -w it",
+            file.display()
+        );
+    }
+}
+
+#[test]
+fn csv_quotes_what_needs_it_and_is_byte_identical_run_to_run() {
+    let dir = temp_dir("csv-quoting");
+    let world = dir.join("named.wbt");
+    std::fs::write(
+        &world,
+        "#VRML_SIM R2023b utf8\nWorldInfo { coordinateSystem \"NUE\" basicTimeStep 10 }\n\
+         Arena { }\nKhepera { name \"scout, \\\"the first\\\"\" controller \"braitenberg\" }\n\
+         Khepera { name \"second\" translation 0.2 0 0 }\n",
+    )
+    .unwrap();
+    let mut exports = Vec::new();
+    for k in 0..2 {
+        let log = dir.join(format!("run{k}.mcap"));
+        let run = regatta()
+            .args(["run", "--steps", "25", "--seed", "7", "--log"])
+            .arg(&log)
+            .arg(&world)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let out = dir.join(format!("csv{k}"));
+        let export = regatta()
+            .args(["log", "export"])
+            .arg(&log)
+            .arg("--csv")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(export.status.success());
+        exports.push(out);
+    }
+    let names: Vec<_> = std::fs::read_dir(&exports[0])
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert!(names.len() >= 5, "{names:?}");
+    for name in names {
+        assert_eq!(
+            std::fs::read(exports[0].join(&name)).unwrap(),
+            std::fs::read(exports[1].join(&name)).unwrap(),
+            "{name:?} differs between two runs of the same world and seed"
+        );
+    }
+    let pose = std::fs::read_to_string(exports[0].join("pose.csv")).unwrap();
+    // The comma and the quotes survive, quoted as RFC 4180 says; times are exact.
+    assert!(
+        pose.contains("\n1,10000000,0.010000000,\"scout, \"\"the first\"\"\","),
+        "{pose}"
+    );
+    assert!(
+        pose.contains("\n25,250000000,0.250000000,second,"),
+        "{pose}"
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn damaged_logs_are_refused_or_read_up_to_the_damage_never_a_crash() {
+    let dir = temp_dir("damaged");
+    let log = run_logged(&dir, "run.mcap", "200");
+    let bytes = std::fs::read(&log).unwrap();
+    // Deterministic damage all over the file: flipped bytes (chunk headers, lengths,
+    // compressed data, CRCs), and cuts.
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = |n: usize| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state % n as u64) as usize
+    };
+    for case in 0..24 {
+        let mut damaged = bytes.clone();
+        for _ in 0..1 + next(8) {
+            let at = next(damaged.len());
+            damaged[at] ^= 1 << next(8);
+        }
+        if case % 4 == 0 {
+            damaged.truncate(next(damaged.len()));
+        }
+        let path = dir.join("damaged.mcap");
+        std::fs::write(&path, &damaged).unwrap();
+        for args in [
+            vec!["log", "export", "{log}", "--csv", "{dir}/csv"],
+            vec!["replay", "--verify", "{log}"],
+            vec!["plot", "{log}", "--out", "{dir}/plots"],
+        ] {
+            let args: Vec<String> = args
+                .iter()
+                .map(|a| {
+                    a.replace("{log}", path.to_str().unwrap())
+                        .replace("{dir}", dir.to_str().unwrap())
+                })
+                .collect();
+            let output = regatta().args(&args).output().unwrap();
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            assert!(
+                matches!(output.status.code(), Some(0) | Some(1)) && !stderr.contains("panicked"),
+                "case {case}, {args:?}: {:?}\n{stderr}",
+                output.status
+            );
+        }
+    }
+    std::fs::remove_dir_all(dir).ok();
 }

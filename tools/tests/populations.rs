@@ -148,7 +148,10 @@ fn run_json_follows_its_schema_and_a_log_gives_the_live_fitness() {
         ]);
         if world.contains("regatta") {
             let visits = std::fs::read_to_string(csv.join("visits.csv")).unwrap();
-            assert!(visits.starts_with("t,robot,buoy,name,visits\n"), "{visits}");
+            assert!(
+                visits.starts_with("step,t_ns,t,robot,buoy,name,visits\n"),
+                "{visits}"
+            );
             let rows = visits.lines().count() - 1;
             assert_eq!(rows, value["robots"][0]["visits"].as_array().unwrap().len());
         }
@@ -312,4 +315,100 @@ fn evolve_is_deterministic_resumes_exactly_and_improves() {
     let value: Value = serde_json::from_str(&text).unwrap();
     assert_eq!(value["robots"][0]["controller"], "neural");
     assert!(std::fs::metadata(a.join("fitness.png")).unwrap().len() > 1000);
+}
+
+/// Cyclic visits of the first robot of a `run --json` or `batch --json` row.
+fn cyclic_visits(row: &str) -> u64 {
+    let value: Value = serde_json::from_str(row).unwrap();
+    assert_eq!(value["robots"][0]["controller"], "neural", "{row}");
+    value["robots"][0]["fitness"]["regatta"]["cyclic_visits"]
+        .as_u64()
+        .unwrap()
+}
+
+#[test]
+fn a_network_moves_into_other_arenas() {
+    // batch --network-from: the avoidance network (IR only) drives the two-buoy arena's robot.
+    let row = stdout_of(&[
+        "batch",
+        "worlds/regatta_two.wbt",
+        "--network-from",
+        "worlds/avoidance.wbt",
+        "--seeds",
+        "1",
+        "--duration",
+        "5",
+        "--json",
+    ]);
+    cyclic_visits(&row);
+    // evolve --world with an arena that has no network: its robot takes the first world's.
+    let dir = temp_dir("transplant");
+    let output = regatta()
+        .args([
+            "evolve",
+            "worlds/avoidance.wbt",
+            "--world",
+            "worlds/regatta_two.wbt",
+            "--fitness",
+            "avoidance",
+            "--population",
+            "4",
+            "--generations",
+            "1",
+            "--trials",
+            "1",
+            "--duration",
+            "2",
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(output.status.success());
+    assert!(String::from_utf8_lossy(&output.stderr)
+        .contains("worlds/regatta_two.wbt: its robots take worlds/avoidance.wbt's network"));
+    // A world with no network to take is a clear error.
+    let output = regatta()
+        .args([
+            "batch",
+            "worlds/regatta_two.wbt",
+            "--network-from",
+            "worlds/regatta.wbt",
+        ])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("no robot with a NeuralNetwork"));
+}
+
+#[test]
+fn the_evolved_regatta_beats_the_hand_tuned_one_and_sails_an_arena_it_never_saw() {
+    // worlds/regatta_evolved.wbt (examples/evolve_regatta.sh) in its own arena: at least the
+    // hand-tuned controller's 70 cyclic visits in ten minutes (worlds/regatta.wbt, seed 1).
+    let row = stdout_of(&[
+        "run",
+        "worlds/regatta_evolved.wbt",
+        "--duration",
+        "600",
+        "--json",
+    ]);
+    let own = cyclic_visits(&row);
+    assert!(own >= 70, "{own} cyclic visits");
+    // The five-buoy arena was not among its training layouts.
+    let row = stdout_of(&[
+        "batch",
+        "worlds/regatta_five.wbt",
+        "--network-from",
+        "worlds/regatta_evolved.wbt",
+        "--seeds",
+        "1",
+        "--duration",
+        "600",
+        "--json",
+    ]);
+    let unseen = cyclic_visits(&row);
+    // The hand-tuned controller makes 100 to 162 there (seeds 1 to 10).
+    assert!(unseen >= 100, "{unseen} cyclic visits");
 }

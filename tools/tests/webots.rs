@@ -25,9 +25,22 @@ fn run(world: &Path, extra: &[&str]) -> Output {
         .arg(world)
         .arg("--lenient")
         .args(duration)
+        .args(project_access(world))
         .args(extra)
         .output()
         .expect("regatta runs")
+}
+
+/// What a user gives a Webots project's world: its PROTOs live in `protos/` beside `worlds/`
+/// (`--allow-path ..`), and a world without robots is run on purpose (`--allow-empty`).
+fn project_access(world: &Path) -> Vec<String> {
+    let mut flags = vec!["--allow-empty".to_owned()];
+    let folder = world.parent().expect("a world is in a folder");
+    if folder.file_name().is_some_and(|n| n == "worlds") {
+        flags.push("--allow-path".to_owned());
+        flags.push(folder.parent().expect("a project").display().to_string());
+    }
+    flags
 }
 
 fn text(output: &Output) -> (String, String) {
@@ -96,6 +109,7 @@ fn khepera_and_epuck_worlds_run_with_every_robot_moving() {
                 .arg("run")
                 .arg(&world)
                 .args(["--lenient", "--steps", "0"])
+                .args(project_access(&world))
                 .output()
                 .expect("regatta runs");
             let start = positions(&text(&start).0);

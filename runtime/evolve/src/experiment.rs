@@ -95,8 +95,26 @@ impl Experiment {
         lenient: bool,
         overrides: &[Override],
     ) -> Result<Experiment, LoadError> {
+        if path.as_os_str() == "-" {
+            // Standard input: a world with no folder, which reads no file.
+            let bytes = regatta_parser::source::read_bytes(
+                std::io::stdin().lock(),
+                regatta_parser::source::MAX_FILE_SIZE,
+            )
+            .map_err(|error| {
+                LoadError::Read(regatta_parser::SourceError::Io {
+                    path: path.to_owned(),
+                    source: std::io::Error::other(error.to_string()),
+                })
+            })?;
+            let source = regatta_parser::SourceText::from_bytes("<stdin>".to_owned(), bytes);
+            return Experiment::from_text(&source.name, &source.text, None, lenient, overrides);
+        }
         let source = regatta_parser::SourceText::read(path)?;
-        let base = path.parent().map(Path::to_owned).unwrap_or_default();
+        let base = match path.parent() {
+            Some(parent) if !parent.as_os_str().is_empty() => parent.to_owned(),
+            _ => PathBuf::from("."),
+        };
         Experiment::from_text(&source.name, &source.text, Some(base), lenient, overrides)
     }
 
@@ -110,17 +128,22 @@ impl Experiment {
         overrides: &[Override],
     ) -> Result<Experiment, LoadError> {
         let text = apply_overrides(text, overrides)?;
+        // The world reads files under its own folder only (see regatta_schema::access).
+        let base_dir = base_dir.and_then(|dir| dir.canonicalize().ok());
+        let mut access = regatta_schema::FileAccess::none();
+        if let Some(dir) = &base_dir {
+            let _ = access.allow(dir);
+        }
         let mut checked = regatta_schema::check(
             regatta_parser::SourceText::from_bytes(name.to_owned(), text.clone().into_bytes()),
             &regatta_schema::Options {
                 strict: !lenient,
+                access,
                 base_dir,
-                proto_path: Vec::new(),
+                ..regatta_schema::Options::default()
             },
         );
-        checked
-            .diagnostics
-            .extend(regatta_runtime::neural::check_networks(&checked.scene));
+        regatta_runtime::check::check_scene(&mut checked);
         let render = |errors: bool| -> String {
             checked
                 .diagnostics
@@ -319,6 +342,8 @@ pub struct Observer {
     meters: Vec<Meters>,
     distance: Vec<f64>,
     last: Vec<DVec2>,
+    /// Each robot's reward in the last step: its contribution to the chosen fitness.
+    rewards: Vec<f64>,
 }
 
 impl Observer {
@@ -333,6 +358,7 @@ impl Observer {
                 .map(|_| Meters::new(fitness, landmarks))
                 .collect(),
             distance: vec![0.0; simulation.robots.len()],
+            rewards: vec![0.0; simulation.robots.len()],
             last: simulation
                 .robots
                 .iter()
@@ -344,12 +370,19 @@ impl Observer {
     /// Takes in the step just done.
     pub fn after_step(&mut self, simulation: &Simulation) {
         let (meters, distance, last) = (&mut self.meters, &mut self.distance, &mut self.last);
+        let (rewards, fitness) = (&mut self.rewards, &self.fitness);
         self.records.after_step(simulation, |robot, record| {
-            meters[robot].add(record);
+            rewards[robot] = meters[robot].add_rewarded(record, fitness);
             let here = DVec2::new(record.pose.x, record.pose.z);
             distance[robot] += (here - last[robot]).length();
             last[robot] = here;
         });
+    }
+
+    /// Each robot's reward in the last step (the chosen fitness's step contribution, see
+    /// [`crate::fitness::Meters::add_rewarded`]), robots in file order.
+    pub fn rewards(&self) -> &[f64] {
+        &self.rewards
     }
 
     /// The run so far as data; `wall_s` only where timing belongs (a single `run`).

@@ -5,13 +5,15 @@
 //!   steps, where V is the mean absolute speed of the two wheels, Δv the absolute difference
 //!   of their signed speeds (both normalised to 0 … 1 by `vmax`), and i the normalised
 //!   reading (0 … 1) of the IR sensor with the highest activity.
-//! - `regatta`: buoy visits that continue a cyclic order around the buoys, plus `other` per
-//!   visit to another buoy out of that order, minus `penalty` per second spent in contact.
+//! - `regatta`: buoy visits that continue a cyclic order around the buoys, minus `penalty`
+//!   (0.5) per second spent in contact. `other` (0 by default: the strict measure,
+//!   so that the value reads as visits) adds a shaping reward per visit to another buoy out
+//!   of that order, for an evolution that finds no cyclic visit to start from.
 //! - `phototaxis`: the time-weighted closeness to the brightest buoy, `max(0, 1 − d/range)`
 //!   averaged over the steps.
 //!
 //! A fitness is named, with optional parameters: `avoidance`, `avoidance:vmax=15`,
-//! `regatta:penalty=1,other=0`, `phototaxis:range=0.3`.
+//! `regatta:penalty=1,other=0.25`, `phototaxis:range=0.3`.
 
 use glam::DVec2;
 use regatta_runtime::compile::Landmark;
@@ -57,7 +59,7 @@ impl Fitness {
     pub const AVOIDANCE: Fitness = Fitness::Avoidance { vmax: 20.0 };
     pub const REGATTA: Fitness = Fitness::Regatta {
         penalty: 0.5,
-        other: 0.25,
+        other: 0.0,
     };
     pub const PHOTOTAXIS: Fitness = Fitness::Phototaxis { range: 0.5 };
 
@@ -148,7 +150,8 @@ impl AvoidanceMeter {
         }
     }
 
-    pub fn add(&mut self, record: &StepRecord) {
+    /// Takes in one step; returns its Φ (the step's reward: the fitness is their mean).
+    pub fn add(&mut self, record: &StepRecord) -> f64 {
         if let Some(readings) = record.proximity {
             self.i = readings.iter().copied().max().unwrap_or(0) as f64 / 1023.0;
         }
@@ -156,11 +159,13 @@ impl AvoidanceMeter {
         let (left, right) = (unit(record.command.0), unit(record.command.1));
         let v = (left.abs() + right.abs()) / 2.0;
         let dv = (left - right).abs() / 2.0;
-        self.sum_phi += v * (1.0 - dv.sqrt()) * (1.0 - self.i);
+        let phi = v * (1.0 - dv.sqrt()) * (1.0 - self.i);
+        self.sum_phi += phi;
         self.sum_v += v;
         self.sum_dv += dv;
         self.sum_i += self.i;
         self.steps += 1;
+        phi
     }
 
     pub fn terms(&self) -> AvoidanceTerms {
@@ -235,9 +240,13 @@ impl RegattaMeter {
         }
     }
 
-    pub fn add(&mut self, record: &StepRecord) {
+    /// Takes in one step; returns the change of the fitness it made (the step's reward: the
+    /// fitness is their sum).
+    pub fn add(&mut self, record: &StepRecord) -> f64 {
+        let mut change = 0.0;
         if record.touching {
             self.contact_time += record.time_step;
+            change -= self.penalty * record.time_step;
         }
         let n = self.place.len();
         for &buoy in record.entered {
@@ -254,8 +263,10 @@ impl RegattaMeter {
                     cyclic = neighbour && self.last_step.is_none_or(|s| s == step);
                     if cyclic {
                         self.cyclic += 1;
+                        change += 1.0;
                     } else {
                         self.other += 1;
+                        change += self.other_weight;
                     }
                     self.last_step = Some(step);
                 }
@@ -264,6 +275,7 @@ impl RegattaMeter {
             self.last = Some(buoy);
             self.visits.push((buoy, record.t, cyclic));
         }
+        change
     }
 
     pub fn terms(&self) -> RegattaTerms {
@@ -316,12 +328,17 @@ impl PhototaxisMeter {
         }
     }
 
-    pub fn add(&mut self, record: &StepRecord) {
+    /// Takes in one step; returns its closeness times its length (the step's reward: the
+    /// fitness is their sum over the time).
+    pub fn add(&mut self, record: &StepRecord) -> f64 {
         self.time += record.time_step;
-        if let Some((_, center)) = self.target {
-            let d = (DVec2::new(record.pose.x, record.pose.z) - center).length();
-            self.sum += (1.0 - d / self.range).max(0.0) * record.time_step;
-        }
+        let Some((_, center)) = self.target else {
+            return 0.0;
+        };
+        let d = (DVec2::new(record.pose.x, record.pose.z) - center).length();
+        let weighted = (1.0 - d / self.range).max(0.0) * record.time_step;
+        self.sum += weighted;
+        weighted
     }
 
     pub fn terms(&self) -> PhototaxisTerms {
@@ -373,7 +390,7 @@ impl Meters {
         };
         let (penalty, other) = match chosen {
             Fitness::Regatta { penalty, other } => (*penalty, *other),
-            _ => (0.5, 0.25),
+            _ => (0.5, 0.0),
         };
         let range = match chosen {
             Fitness::Phototaxis { range } => *range,
@@ -387,9 +404,20 @@ impl Meters {
     }
 
     pub fn add(&mut self, record: &StepRecord) {
-        self.avoidance.add(record);
-        self.regatta.add(record);
-        self.phototaxis.add(record);
+        self.add_rewarded(record, &Fitness::AVOIDANCE);
+    }
+
+    /// [`Meters::add`], returning the step's reward under `chosen` (each meter's `add` says
+    /// what that is).
+    pub fn add_rewarded(&mut self, record: &StepRecord, chosen: &Fitness) -> f64 {
+        let avoidance = self.avoidance.add(record);
+        let regatta = self.regatta.add(record);
+        let phototaxis = self.phototaxis.add(record);
+        match chosen {
+            Fitness::Avoidance { .. } => avoidance,
+            Fitness::Regatta { .. } => regatta,
+            Fitness::Phototaxis { .. } => phototaxis,
+        }
     }
 
     pub fn terms(&self) -> FitnessTerms {
@@ -518,6 +546,40 @@ mod tests {
             pair.add(&record((0, 0), None, &[buoy]));
         }
         assert_eq!(pair.terms().cyclic_visits, 3);
+    }
+
+    #[test]
+    fn rewards_add_up_to_the_fitness() {
+        let buoys = [
+            landmark(0.0, -0.3, 1.0),
+            landmark(-0.26, 0.15, 1.0),
+            landmark(0.26, 0.15, 1.0),
+        ];
+        let mut near = [0u16; 8];
+        near[2] = 300;
+        for chosen in [Fitness::AVOIDANCE, Fitness::REGATTA, Fitness::PHOTOTAXIS] {
+            let mut meters = Meters::new(&chosen, &buoys);
+            let mut rewards = 0.0;
+            for (k, buoy) in [0, 1, 2, 0, 2, 1].iter().enumerate() {
+                let mut r = record((12, 3 * k as i32), Some(near), std::slice::from_ref(buoy));
+                r.touching = k % 2 == 0;
+                r.pose.x = 0.05 * k as f64;
+                rewards += meters.add_rewarded(&r, &chosen);
+            }
+            let value = meters.terms().value(&chosen);
+            // Avoidance is the mean of its rewards, phototaxis their sum over the 3 s, the
+            // regatta their sum.
+            let expected = match chosen {
+                Fitness::Avoidance { .. } => rewards / 6.0,
+                Fitness::Phototaxis { .. } => rewards / 3.0,
+                Fitness::Regatta { .. } => rewards,
+            };
+            assert!(
+                (expected - value).abs() < 1e-12,
+                "{chosen:?}: {expected} {value}"
+            );
+            assert!(value != 0.0, "{chosen:?}");
+        }
     }
 
     #[test]

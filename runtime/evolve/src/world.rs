@@ -16,6 +16,8 @@ pub enum EditError {
     NoNetwork,
     #[error("the world does not parse: {0}")]
     Syntax(String),
+    #[error("the world has no robot with a NeuralNetwork in its 'network' field to take")]
+    NoNeuralRobot,
 }
 
 /// One `--set NODE.FIELD=VALUE`: every node of type (or DEF name) `node` in the world file
@@ -139,6 +141,69 @@ pub fn apply_overrides(text: &str, overrides: &[Override]) -> Result<String, Edi
     Ok(text)
 }
 
+/// The node value of `node`'s field `field`, if it is one: the node and its source text.
+fn node_field<'a>(node: &'a Node, field: &str, text: &'a str) -> Option<(&'a Node, &'a str)> {
+    let NodeKind::Instance {
+        body: Some(body), ..
+    } = &node.kind
+    else {
+        return None;
+    };
+    body.items.iter().rev().find_map(|item| match item {
+        BodyItem::Field(f) if f.name.text == field => match &f.value {
+            FieldValue::Value(v) => match &v.items {
+                regatta_parser::syntax::Items::Atoms(atoms) => match atoms.first() {
+                    Some(regatta_parser::syntax::Atom::Node(n)) => {
+                        Some((n, &text[n.span.start as usize..n.span.end as usize]))
+                    }
+                    _ => None,
+                },
+                _ => None,
+            },
+            _ => None,
+        },
+        _ => None,
+    })
+}
+
+/// The overrides that put the first robot of `source` (a world's text) that carries a
+/// `NeuralNetwork` into another world: every node of that robot's type gets controller
+/// "neural", the network (weights included) and the turret it reads, so that a network
+/// evolved or written for one arena runs in another exactly as it was built.
+pub fn network_overrides(source: &str) -> Result<Vec<Override>, EditError> {
+    let parsed = regatta_parser::parse(source);
+    if let Some(error) = parsed.diagnostics.iter().find(|d| d.is_error()) {
+        return Err(EditError::Syntax(error.message.clone()));
+    }
+    for node in world_nodes(&parsed.file) {
+        let NodeKind::Instance { type_name, .. } = &node.kind else {
+            continue;
+        };
+        let Some((network, network_text)) = node_field(node, "network", source) else {
+            continue;
+        };
+        if !matches!(&network.kind, NodeKind::Instance { type_name, .. } if type_name.text == "NeuralNetwork")
+        {
+            continue;
+        }
+        let set = |field: &str, value: &str| Override {
+            node: type_name.text.clone(),
+            field: field.to_owned(),
+            value: value.to_owned(),
+        };
+        let mut overrides = vec![
+            set("controller", "\"neural\""),
+            set("controllerArgs", "[ ]"),
+            set("network", network_text),
+        ];
+        if let Some((_, turret)) = node_field(node, "turret", source) {
+            overrides.push(set("turret", turret));
+        }
+        return Ok(overrides);
+    }
+    Err(EditError::NoNeuralRobot)
+}
+
 /// The weights as world-language numbers: Rust's shortest text that reads back to the same
 /// f64, so a written world runs exactly as the weights evaluated.
 pub fn weights_text(weights: &[f64]) -> String {
@@ -197,6 +262,27 @@ mod tests {
         );
         assert!(Override::parse("controllerArgs=2").is_err());
         assert!(Override::parse("Khepera.=2").is_err());
+    }
+
+    #[test]
+    fn a_robot_with_a_network_moves_into_another_world() {
+        let source = "Khepera { controller \"neural\" network NeuralNetwork { inputs [ \"bias\" ] weights [ 1 2 ] } turret PanoramicTurret { iBda 10 } }\n";
+        let overrides = network_overrides(source).unwrap();
+        let target = "Arena { }\nKhepera { controller \"regatta\" controllerArgs \"irGain=2\" turret PanoramicTurret { lambda 5 } }\n";
+        let out = apply_overrides(target, &overrides).unwrap();
+        assert_eq!(
+            out,
+            "Arena { }\nKhepera { network NeuralNetwork { inputs [ \"bias\" ] weights [ 1 2 ] } controller \"neural\" controllerArgs [ ] turret PanoramicTurret { iBda 10 } }\n"
+        );
+        assert_eq!(
+            network_overrides("Khepera { controller \"regatta\" }"),
+            Err(EditError::NoNeuralRobot)
+        );
+        // A world without that robot type says so.
+        assert_eq!(
+            apply_overrides("Arena { }", &overrides),
+            Err(EditError::NoSuchNode("Khepera".into()))
+        );
     }
 
     #[test]

@@ -183,6 +183,20 @@ pub enum Flow {
 /// What runs after each served step.
 pub type StepHook<'s> = Box<dyn FnMut(&Simulation) -> io::Result<()> + 's>;
 
+/// A real-time world that fell behind the clock.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lag {
+    /// Steps the world was behind when it was noticed.
+    pub steps_behind: u64,
+    /// Simulated time then (s).
+    pub time: f64,
+    /// The basic time step, in ms of wall time.
+    pub period_ms: f64,
+}
+
+/// Steps a real-time world may lag (a slow step, a busy machine) before it is said once.
+pub const LAG_WARNING_STEPS: u64 = 10;
+
 /// One served robot of a simulation.
 pub struct Server<'s, 'c> {
     pub simulation: &'s mut Simulation<'c>,
@@ -195,6 +209,9 @@ pub struct Server<'s, 'c> {
     pub on_step: Option<StepHook<'s>>,
     /// The error the hook returned, which ended serving.
     pub hook_error: Option<io::Error>,
+    /// Called once, the first time a real-time world falls behind the clock by more than
+    /// [`LAG_WARNING_STEPS`].
+    pub on_lag: Option<Box<dyn FnMut(Lag) + 's>>,
     splitter: LineSplitter,
     lines: Vec<Result<Vec<u8>, Malformed>>,
 }
@@ -217,9 +234,18 @@ impl<'s, 'c> Server<'s, 'c> {
             stats: ServeStats::default(),
             on_step: None,
             hook_error: None,
+            on_lag: None,
             splitter: LineSplitter::default(),
             lines: Vec::new(),
         }
+    }
+
+    /// Ends a client's session: its half-sent line is dropped and the robot stops, so that
+    /// nothing of one client reaches the next.
+    pub fn end_session(&mut self) {
+        self.splitter = LineSplitter::default();
+        self.lines.clear();
+        let _ = self.simulation.khepera(self.robot).set_speed(0, 0);
     }
 
     fn done(&self) -> bool {
@@ -377,10 +403,24 @@ pub fn serve_real_time(
         }
         // Catch up with the clock.
         let due = (start.elapsed().as_secs_f64() / period.as_secs_f64()) as u64;
-        while server.simulation.steps - first_step < due {
+        let behind = due.saturating_sub(server.simulation.steps - first_step);
+        if behind > LAG_WARNING_STEPS {
+            if let Some(mut warn) = server.on_lag.take() {
+                warn(Lag {
+                    steps_behind: behind,
+                    time: server.simulation.time,
+                    period_ms: period.as_secs_f64() * 1000.0,
+                });
+            }
+        }
+        // A world that cannot keep up still answers its client: at most a few steps between
+        // two reads of the link.
+        let mut caught_up = 0;
+        while server.simulation.steps - first_step < due && caught_up < LAG_WARNING_STEPS {
             if server.advance() == Flow::Done {
                 return Ok(Ended::Done);
             }
+            caught_up += 1;
         }
         let n = match link.read(&mut buffer) {
             Ok(0) => return Ok(Ended::Closed),

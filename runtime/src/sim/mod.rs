@@ -38,6 +38,11 @@ pub enum SimError {
     TimeStep(f64),
 }
 
+/// Most collision sub-steps in one step. A world whose robots could need more (a long time
+/// step at a high top speed) is refused when it is checked ([`crate::check`]), so the bound
+/// never cuts a step short and nothing tunnels at any accepted time step.
+pub const MAX_SUB_STEPS: usize = 4096;
+
 /// Largest penetration left after a step's collision handling (m).
 pub const PENETRATION_TOLERANCE: f64 = 1e-9;
 
@@ -692,7 +697,7 @@ impl<'c> Simulation<'c> {
             })
             .max()
             .unwrap_or(1)
-            .clamp(1, 256);
+            .clamp(1, MAX_SUB_STEPS);
         let h = dt / sub_steps as f64;
         for robot in &mut self.robots {
             robot.touched.clear();

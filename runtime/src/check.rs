@@ -1,0 +1,74 @@
+//! Checks of a typed scene that need the runtime's knowledge, run by `regatta check` and by
+//! every command before it runs a world: controllers and their arguments
+//! ([`crate::controllers::check_scene`]), each robot's network against its inputs and outputs
+//! ([`crate::neural::check_networks`]), and time steps the simulation cannot follow.
+
+use regatta_parser::Diagnostic;
+use regatta_schema::{Checked, FileDiagnostic, Value};
+
+use crate::sim::MAX_SUB_STEPS;
+
+/// Largest |gaussian| a Box–Muller draw from 53-bit uniforms can give (√(−2 ln 2⁻⁵³)).
+const GAUSSIAN_BOUND: f64 = 8.6;
+
+/// Adds every runtime diagnostic to `checked`.
+pub fn check_scene(checked: &mut Checked) {
+    crate::controllers::check_scene(checked);
+    let networks = crate::neural::check_networks(&checked.scene);
+    checked.diagnostics.extend(networks);
+    check_time_step(checked);
+    checked.sort_diagnostics();
+}
+
+/// Refuses a time step at which a robot could cross more than half its body radius in each of
+/// [`MAX_SUB_STEPS`] collision sub-steps: beyond it, bodies could pass through walls or each
+/// other. The bound is the robot's top speed (its commands' limit or `maxSpeed`, with the
+/// largest wheel noise a draw can give).
+fn check_time_step(checked: &mut Checked) {
+    let scene = &checked.scene;
+    let Some(&info) = scene.find("WorldInfo").first() else {
+        return;
+    };
+    let time_step = scene.float(info, "basicTimeStep") / 1000.0;
+    let mut worst: Option<(f64, String, f64)> = None;
+    for id in scene.find("DifferentialWheels") {
+        let top = (127.0 * 100.0 / scene.float(id, "encoderResolution"))
+            .min(scene.float(id, "maxSpeed"))
+            * (1.0 + GAUSSIAN_BOUND * scene.float(id, "wheelSpeedNoise"));
+        let radius = scene.float(id, "bodyRadius");
+        let longest = MAX_SUB_STEPS as f64 * 0.5 * radius / top;
+        if worst.as_ref().is_none_or(|(l, _, _)| longest < *l) {
+            let name = match scene.field(id, "name") {
+                Value::String(name) => name.clone(),
+                _ => String::new(),
+            };
+            worst = Some((longest, name, top));
+        }
+    }
+    let Some((longest, robot, top)) = worst else {
+        return;
+    };
+    if time_step <= longest {
+        return;
+    }
+    let node = scene.node(info);
+    let index = scene.spec(info).field_index("basicTimeStep");
+    let at = index
+        .and_then(|i| node.value_span_at(i))
+        .unwrap_or(node.origin);
+    checked.diagnostics.push(FileDiagnostic {
+        file: at.file,
+        diagnostic: Diagnostic::error(
+            at.span,
+            format!(
+                "a basicTimeStep of {} ms is too long to simulate without bodies passing through each other",
+                time_step * 1000.0
+            ),
+        )
+        .with_label(format!("at most {:.0} ms here", (longest * 1000.0).floor()))
+        .with_note(format!(
+            "robot '{robot}' may move at {top:.3} m/s: in one step it could cross more than {MAX_SUB_STEPS} half body radii, the collision sub-steps a step may take"
+        ))
+        .with_code("time-step"),
+    });
+}
