@@ -246,6 +246,8 @@ pub(super) struct Lit {
     pub(super) t0: f64,
     pub(super) t1: f64,
     pub(super) luminance: f64,
+    /// The look's object: ties in depth go by it.
+    pub(super) object: u32,
 }
 
 impl Extent for Lit {
@@ -262,8 +264,10 @@ impl Extent for Segment {
     }
 }
 
-/// A column's lit segments on the stack, sorted front to back on insertion. Segments come in
-/// object order, so equal depths keep object order, as in [`Segments`].
+/// A column's lit segments on the stack, sorted front to back on insertion, equal depths by
+/// object (an object's own segments in the order they come), as in [`Segments`]: the order
+/// and the segments kept do not depend on the order the objects come in. The sweep hands
+/// them nearest first, so that most insertions move nothing.
 pub(super) struct LitSegments {
     pub(super) items: [Lit; MAX_SEGMENTS],
     pub(super) len: usize,
@@ -279,10 +283,14 @@ impl LitSegments {
 
     #[inline]
     pub(super) fn insert(&mut self, segment: Lit) {
+        let behind = |before: &Lit| {
+            before.depth > segment.depth
+                || (before.depth == segment.depth && before.object > segment.object)
+        };
         let mut i = self.len;
         if i == MAX_SEGMENTS {
             // Full: the farthest goes, unless the new one is farther still.
-            if self.items[i - 1].depth <= segment.depth {
+            if !behind(&self.items[i - 1]) {
                 return;
             }
             i -= 1;
@@ -290,7 +298,7 @@ impl LitSegments {
             self.len += 1;
         }
         // Shifted one by one: a few moves, no call to memmove.
-        while i > 0 && self.items[i - 1].depth > segment.depth {
+        while i > 0 && behind(&self.items[i - 1]) {
             self.items[i] = self.items[i - 1];
             i -= 1;
         }
@@ -324,6 +332,7 @@ impl SegmentSink for LitSink<'_> {
             t0: segment.t0,
             t1: segment.t1,
             luminance,
+            object: segment.object,
         });
     }
 }

@@ -141,22 +141,75 @@ fn sort_small(values: &mut [f64]) {
     }
 }
 
+/// `x`'s place in [`f64::total_cmp`]'s order, as an unsigned integer.
+#[inline(always)]
+fn total_key(x: f64) -> u64 {
+    let bits = x.to_bits();
+    if bits >> 63 == 1 {
+        !bits
+    } else {
+        bits | 1 << 63
+    }
+}
+
+/// The number whose [`total_key`] is `key`.
+#[inline(always)]
+fn from_total_key(key: u64) -> f64 {
+    if key >> 63 == 1 {
+        f64::from_bits(key & !(1 << 63))
+    } else {
+        f64::from_bits(!key)
+    }
+}
+
+/// Sorts numbers in [`f64::total_cmp`]'s order, comparing integers (each number's key held
+/// in its own bits meanwhile): no per-comparison bit twiddling.
+fn sort_total(values: &mut [f64]) {
+    for value in values.iter_mut() {
+        *value = f64::from_bits(total_key(*value));
+    }
+    values.sort_unstable_by_key(|value| value.to_bits());
+    for value in values.iter_mut() {
+        *value = from_total_key(value.to_bits());
+    }
+}
+
 /// The angular sweep over one look: asked for the objects facing azimuth intervals `(a, b)`
 /// with `a` never decreasing, it keeps the objects whose intervals have opened and not yet
 /// closed, so each answer costs the objects open there, not every object. Its answers are
-/// exactly [`EyeObject::meets`]'s, in object order.
+/// exactly [`EyeObject::meets`]'s, nearest first (by the distance to their footprint's
+/// centre; ties by object order): a column's segments then mostly come front to back, and
+/// sorting them moves little.
 #[derive(Default)]
 pub(super) struct Sweep {
-    /// Objects with an ordinary interval, by their interval's start.
-    order: Vec<u32>,
+    /// Objects with an ordinary interval (their start's [`total_key`], their index), by
+    /// their interval's start.
+    order: Vec<(u64, u32)>,
     /// How many of `order` have opened.
     opened: usize,
-    /// Objects open now (and those whose interval passes ±π, always), ascending.
-    open: Vec<u32>,
+    /// Objects open now (and those whose interval passes ±π, always), as (rank, index),
+    /// by rank.
+    open: Vec<(u32, u32)>,
+    /// Objects nearest first, each its distance key above its index.
+    nearest: Vec<u64>,
+    /// Each object's place in `nearest`.
+    rank: Vec<u32>,
     /// The last query's start.
     last: f64,
     /// Few objects: each query tests them all.
     brute: bool,
+}
+
+/// The squared distance from the eye to a footprint's centre, to single precision (an
+/// order, not a measure), above `index`: sorted, nearest first, ties by index.
+#[inline]
+fn nearness_key(relative: &Relative, index: usize) -> u64 {
+    let distance2 = match *relative {
+        Relative::Circle { oc, .. } => oc.length_squared(),
+        Relative::Rect { pu, pv, .. } => pu * pu + pv * pv,
+    };
+    // A non-negative float's bits rise with it (a NaN sorts last).
+    ((distance2 as f32).to_bits() as u64) << 32 | index as u64
 }
 
 impl Sweep {
@@ -169,21 +222,35 @@ impl Sweep {
         if self.brute {
             return;
         }
+        self.nearest.clear();
+        self.nearest.extend(
+            look.objects
+                .iter()
+                .enumerate()
+                .map(|(index, object)| nearness_key(&object.relative, index)),
+        );
+        self.nearest.sort_unstable();
+        self.rank.clear();
+        self.rank.resize(look.objects.len(), 0);
+        for (rank, &key) in self.nearest.iter().enumerate() {
+            self.rank[key as u32 as usize] = rank as u32;
+        }
         for (index, object) in look.objects.iter().enumerate() {
             if object.wraps {
-                self.open.push(index as u32);
+                self.open.push((self.rank[index], index as u32));
             } else {
-                self.order.push(index as u32);
+                self.order.push((total_key(object.lo), index as u32));
             }
         }
-        let objects = &look.objects;
-        self.order
-            .sort_unstable_by(|&x, &y| objects[x as usize].lo.total_cmp(&objects[y as usize].lo));
+        self.open.sort_unstable();
+        // Objects with equal starts open together, so their order here does not matter.
+        self.order.sort_unstable_by_key(|&(key, _)| key);
         self.opened = 0;
         self.last = f64::NEG_INFINITY;
     }
 
-    /// The objects whose azimuth interval meets `(a, b)`, in object order, into `out`.
+    /// The objects whose azimuth interval meets `(a, b)`, nearest first (object order where
+    /// there are few), into `out`.
     #[inline]
     pub(super) fn facing_over(&mut self, look: &Look, a: f64, b: f64, out: &mut Vec<u32>) {
         if self.brute {
@@ -196,26 +263,27 @@ impl Sweep {
         self.last = a;
         let objects = &look.objects;
         // Intervals that closed at or before `a` meet nothing from here on.
-        self.open.retain(|&i| {
-            let o = &objects[i as usize];
+        self.open.retain(|&(_, index)| {
+            let o = &objects[index as usize];
             o.wraps || o.hi > a
         });
-        while let Some(&next) = self.order.get(self.opened) {
+        while let Some(&(_, next)) = self.order.get(self.opened) {
             if objects[next as usize].lo >= b {
                 break;
             }
             self.opened += 1;
             if objects[next as usize].hi > a {
-                let at = self.open.partition_point(|&i| i < next);
-                self.open.insert(at, next);
+                let rank = self.rank[next as usize];
+                let at = self.open.partition_point(|&(r, _)| r < rank);
+                self.open.insert(at, (rank, next));
             }
         }
         out.clear();
         out.extend(
             self.open
                 .iter()
-                .copied()
-                .filter(|&i| objects[i as usize].meets(a, b)),
+                .filter(|&&(_, index)| objects[index as usize].meets(a, b))
+                .map(|&(_, index)| index),
         );
     }
 }
@@ -455,7 +523,7 @@ impl ColumnScene<'_> {
         if breaks.len() <= FEW {
             sort_small(breaks);
         } else {
-            breaks.sort_unstable_by(f64::total_cmp);
+            sort_total(breaks);
         }
         // Objects may share an edge: one is enough.
         breaks.dedup();
@@ -496,5 +564,35 @@ impl ColumnScene<'_> {
                     && hider.y0 / entry <= hidden.y0
                     && hider.y1 / entry >= hidden.y1
             })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sorting_by_keys_is_total_cmp_order() {
+        let mut values = vec![
+            0.5,
+            -0.0,
+            0.0,
+            -1.5,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            3.25e-300,
+            -3.25e-300,
+            1.0,
+            -2.0,
+            0.5,
+        ];
+        for i in 0..200 {
+            values.push(libm::sin(i as f64 * 1.7) * 3.0);
+        }
+        let mut expected = values.clone();
+        expected.sort_by(f64::total_cmp);
+        sort_total(&mut values);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&values), bits(&expected));
     }
 }
