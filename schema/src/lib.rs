@@ -26,5 +26,5 @@ pub use lower::{
 pub use protos::{
     standard_proto, standard_protos, ProtoField, ProtoSpec, BUILTIN_PROTOS, WEBOTS_STANDINS,
 };
-pub use scene::{FileId, NodeId, Scene, SceneNode, UpAxis};
+pub use scene::{Fields, FileId, NodeId, Scene, SceneNode, UpAxis, Written};
 pub use value::{BaseType, FieldType, Value};

@@ -24,7 +24,7 @@ use regatta_parser::{Diagnostic, SourceMap, SourceText, Span};
 use crate::access::{FileAccess, Limits, Refusal};
 use crate::catalogue::{did_you_mean, Catalogue, FieldSpec, SpecId};
 use crate::protos::{BUILTIN_PROTOS, WEBOTS_STANDINS};
-use crate::scene::{FileId, NodeId, Origin, Scene, SceneNode, UpAxis};
+use crate::scene::{Fields, FileId, NodeId, Origin, Scene, SceneNode, UpAxis, Written};
 use crate::value::{BaseType, FieldType, Image, Value};
 
 /// Deepest nesting of PROTO instances, by default (see [`Limits`]).
@@ -1538,13 +1538,8 @@ impl<'c> Lowerer<'c> {
     ) -> Option<NodeId> {
         let catalogue = self.catalogue();
         let spec = catalogue.spec(spec_id);
-        let mut fields: Vec<Value> = spec
-            .fields
-            .iter()
-            .map(|f| f.default_value.clone().unwrap_or(Value::Bool(false)))
-            .collect();
-        let mut written = vec![false; fields.len()];
-        let mut value_spans = vec![None; fields.len()];
+        let mut fields = Fields::defaults(spec_id, spec.fields.len());
+        let mut written = Written::none(spec.fields.len());
         // Each url of a `file` field, with where it was written and the file it is relative to.
         let mut urls: Vec<(usize, String, FileId, Span)> = Vec::new();
         let mut seen: HashMap<&str, Span> = HashMap::new();
@@ -1589,15 +1584,14 @@ impl<'c> Lowerer<'c> {
                                 urls.push((index, url.clone(), site.0, span));
                             }
                         }
-                        fields[index] = value;
-                        written[index] = true;
+                        written.set(index);
                         // A value written here points at itself; one bound through IS at the
                         // instance that gave it.
                         let span = match &field.value {
                             syntax::FieldValue::Value(value) => value.span,
                             _ => site.2,
                         };
-                        value_spans[index] = Some(Origin { file: site.0, span });
+                        fields.set(index, value, Some(Origin { file: site.0, span }));
                     }
                 }
                 BodyItem::Declaration(declaration) => self.strict_or_warn(
@@ -1633,9 +1627,11 @@ impl<'c> Lowerer<'c> {
         self.alloc(
             SceneNode {
                 spec: spec_id,
-                fields,
+                fields: {
+                    fields.shrink_to_fit();
+                    fields
+                },
                 written,
-                value_spans,
                 def_name: None,
                 proto_names: Vec::new(),
                 origin,
@@ -1720,19 +1716,14 @@ impl<'c> Lowerer<'c> {
             (None, None) => {}
         }
         let spec = self.catalogue().spec(group);
-        let mut group_fields: Vec<Value> = spec
-            .fields
-            .iter()
-            .map(|f| f.default_value().clone())
-            .collect();
-        group_fields[0] = Value::Nodes(children);
-        let mut written = vec![false; group_fields.len()];
-        written[0] = true;
+        let mut group_fields = Fields::defaults(group, spec.fields.len());
+        group_fields.set(0, Value::Nodes(children), None);
+        let mut written = Written::none(spec.fields.len());
+        written.set(0);
         self.alloc(
             SceneNode {
                 spec: group,
                 written,
-                value_spans: vec![None; group_fields.len()],
                 fields: group_fields,
                 def_name: None,
                 proto_names: vec!["Inline".to_owned()],

@@ -34,15 +34,10 @@ pub struct Origin {
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneNode {
     pub spec: SpecId,
-    /// One value per catalogue field, in catalogue order.
-    pub fields: Vec<Value>,
+    /// One value per catalogue field, in catalogue order (defaults shared with the catalogue).
+    pub fields: Fields,
     /// Whether each field was written (or bound through IS) rather than defaulted.
-    pub written: Vec<bool>,
-    /// Where each field's value was written (for a field bound through IS, where the PROTO
-    /// instance wrote it, or the instance itself for a built-in PROTO's default; `None`:
-    /// defaulted), for messages about values that only later checks reject (a controller's
-    /// name and arguments, a network's sizes): they point at the user's line.
-    pub value_spans: Vec<Option<Origin>>,
+    pub written: Written,
     pub def_name: Option<String>,
     /// The PROTO whose instance this node is the root of (innermost first when nested).
     pub proto_names: Vec<String>,
@@ -53,11 +48,252 @@ pub struct SceneNode {
 }
 
 impl SceneNode {
-    /// Where field `index`'s value was written, if it was (see [`SceneNode::value_spans`]).
+    /// Where field `index`'s value was written, if it was: for a field bound through IS,
+    /// where the PROTO instance wrote it, or the instance itself for a built-in PROTO's
+    /// default; `None`: defaulted. Messages about values that only later checks reject (a
+    /// controller's name and arguments, a network's sizes) point at the user's line.
     pub fn value_span_at(&self, index: usize) -> Option<Origin> {
-        self.value_spans.get(index).copied().flatten()
+        self.fields.span(index)
     }
 }
+
+/// A node's field values: the ones it has of its own, sparse, in front of its type's
+/// defaults, which every node of the type shares with the catalogue. A swarm's thousand
+/// robots each hold only what their instances wrote, not every field of every part.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fields {
+    spec: u32,
+    len: u32,
+    /// Values of the node's own, by ascending field index.
+    own: Vec<OwnValue>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+struct OwnValue {
+    index: u32,
+    /// Where the value was written (see [`SceneNode::value_span_at`]).
+    span: Option<Origin>,
+    value: Value,
+}
+
+impl Fields {
+    /// Every field of type `spec` (with `len` fields) at its default.
+    pub fn defaults(spec: SpecId, len: usize) -> Fields {
+        Fields {
+            spec: spec as u32,
+            len: len as u32,
+            own: Vec::new(),
+        }
+    }
+
+    /// How many fields the node's type has.
+    pub fn len(&self) -> usize {
+        self.len as usize
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    fn position(&self, index: usize) -> Result<usize, usize> {
+        self.own.binary_search_by_key(&(index as u32), |own| own.index)
+    }
+
+    /// Gives field `index` a value of its own, written at `span`.
+    pub fn set(&mut self, index: usize, value: Value, span: Option<Origin>) {
+        assert!(index < self.len(), "field {index} out of range");
+        let own = OwnValue {
+            index: index as u32,
+            span,
+            value,
+        };
+        match self.position(index) {
+            Ok(at) => self.own[at] = own,
+            Err(at) => self.own.insert(at, own),
+        }
+    }
+
+    /// Where field `index`'s value was written, if it was.
+    pub fn span(&self, index: usize) -> Option<Origin> {
+        self.position(index).ok().and_then(|at| self.own[at].span)
+    }
+
+    /// Drops spare capacity (the scene keeps its nodes for as long as it lives).
+    pub fn shrink_to_fit(&mut self) {
+        self.own.shrink_to_fit();
+    }
+
+    /// The values in catalogue order.
+    pub fn iter(&self) -> FieldsIter<'_> {
+        FieldsIter {
+            fields: self,
+            indices: 0..self.len(),
+        }
+    }
+}
+
+impl std::ops::Index<usize> for Fields {
+    type Output = Value;
+
+    fn index(&self, index: usize) -> &Value {
+        match self.position(index) {
+            Ok(at) => &self.own[at].value,
+            Err(_) => {
+                assert!(index < self.len(), "field {index} out of range");
+                Catalogue::get().spec(self.spec as SpecId).fields[index].default_value()
+            }
+        }
+    }
+}
+
+impl std::ops::IndexMut<usize> for Fields {
+    /// A value of the node's own (a copy of the default, the first time), keeping where
+    /// any earlier value was written.
+    fn index_mut(&mut self, index: usize) -> &mut Value {
+        let at = match self.position(index) {
+            Ok(at) => at,
+            Err(at) => {
+                let value = self[index].clone();
+                self.own.insert(
+                    at,
+                    OwnValue {
+                        index: index as u32,
+                        span: None,
+                        value,
+                    },
+                );
+                at
+            }
+        };
+        &mut self.own[at].value
+    }
+}
+
+impl<'a> IntoIterator for &'a Fields {
+    type Item = &'a Value;
+    type IntoIter = FieldsIter<'a>;
+
+    fn into_iter(self) -> FieldsIter<'a> {
+        self.iter()
+    }
+}
+
+/// A node's values in catalogue order (see [`Fields::iter`]).
+#[derive(Clone, Debug)]
+pub struct FieldsIter<'a> {
+    fields: &'a Fields,
+    indices: std::ops::Range<usize>,
+}
+
+impl<'a> Iterator for FieldsIter<'a> {
+    type Item = &'a Value;
+
+    fn next(&mut self) -> Option<&'a Value> {
+        self.indices.next().map(|index| &self.fields[index])
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        self.indices.size_hint()
+    }
+}
+
+impl DoubleEndedIterator for FieldsIter<'_> {
+    fn next_back(&mut self) -> Option<Self::Item> {
+        self.indices.next_back().map(|index| &self.fields[index])
+    }
+}
+
+impl ExactSizeIterator for FieldsIter<'_> {}
+
+/// Which fields of a node were written, one bit per field (the catalogue checks that no
+/// type has more than 64 fields).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Written {
+    bits: u64,
+    len: u8,
+}
+
+impl Written {
+    /// No field of `len` written yet.
+    pub fn none(len: usize) -> Written {
+        assert!(len <= 64, "a node type has at most 64 fields");
+        Written {
+            bits: 0,
+            len: len as u8,
+        }
+    }
+
+    pub fn set(&mut self, index: usize) {
+        assert!(index < self.len(), "field {index} out of range");
+        self.bits |= 1 << index;
+    }
+
+    pub fn get(&self, index: usize) -> bool {
+        index < self.len() && self.bits & (1 << index) != 0
+    }
+
+    pub fn len(&self) -> usize {
+        self.len as usize
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Whether each field was written, in catalogue order.
+    pub fn iter(&self) -> WrittenIter {
+        WrittenIter {
+            bits: self.bits,
+            indices: 0..self.len(),
+        }
+    }
+}
+
+impl IntoIterator for &Written {
+    type Item = &'static bool;
+    type IntoIter = WrittenIter;
+
+    fn into_iter(self) -> WrittenIter {
+        self.iter()
+    }
+}
+
+/// Whether each field was written, in catalogue order (see [`Written::iter`]).
+#[derive(Clone, Debug)]
+pub struct WrittenIter {
+    bits: u64,
+    indices: std::ops::Range<usize>,
+}
+
+impl WrittenIter {
+    fn bit(&self, index: usize) -> &'static bool {
+        if self.bits & (1 << index) != 0 {
+            &true
+        } else {
+            &false
+        }
+    }
+}
+
+impl Iterator for WrittenIter {
+    type Item = &'static bool;
+
+    fn next(&mut self) -> Option<&'static bool> {
+        self.indices.next().map(|index| self.bit(index))
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        self.indices.size_hint()
+    }
+}
+
+impl DoubleEndedIterator for WrittenIter {
+    fn next_back(&mut self) -> Option<&'static bool> {
+        self.indices.next_back().map(|index| self.bit(index))
+    }
+}
+
+impl ExactSizeIterator for WrittenIter {}
 
 /// The axis convention of the file the scene was read from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
