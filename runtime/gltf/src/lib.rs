@@ -711,7 +711,7 @@ impl<'a> Builder<'a> {
                     aimed(sensor.position, DVec3::X, sensor.direction),
                     json!({
                         "type": "DistanceSensor",
-                        "lookupTable": sensor.lookup,
+                        "lookupTable": &*sensor.lookup,
                         "numberOfRays": sensor.rays,
                         "aperture": sensor.aperture,
                         "range": sensor.range,
@@ -726,7 +726,7 @@ impl<'a> Builder<'a> {
                     aimed(sensor.position, DVec3::X, sensor.direction),
                     json!({
                         "type": "LightSensor",
-                        "lookupTable": sensor.lookup,
+                        "lookupTable": &*sensor.lookup,
                         "occlusion": sensor.occlusion,
                         "samplingPeriod": sensor.period,
                     }),

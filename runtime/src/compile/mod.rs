@@ -10,6 +10,8 @@ pub mod plan;
 pub mod rig;
 pub mod triangulate;
 
+use std::sync::Arc;
+
 use glam::{DMat3, DVec3};
 use regatta_schema::webots::{Authoring, Objects};
 use regatta_schema::{NodeId, Scene, Value};
@@ -82,6 +84,8 @@ pub fn compile(scene: &Scene) -> Compiled {
         materials: Vec::new(),
         landmarks: Vec::new(),
         group: None,
+        tables: Shared::default(),
+        turns: Shared::default(),
         body: Authoring::World,
     };
     let root = scene.root_rotation();
@@ -132,6 +136,9 @@ struct Compiler<'s> {
     landmarks: Vec<Landmark>,
     /// The group the walk is inside.
     group: Option<GroupId>,
+    /// Sensor tables already made, to share: a swarm's thousands of sensors have a few.
+    tables: Shared<[f64; 3]>,
+    turns: Shared<(f64, f64, f64)>,
     /// Who wrote the children being walked (their parent's body), for the turns between
     /// axis conventions.
     body: Authoring,
@@ -530,15 +537,15 @@ impl Compiler<'_> {
                     name: scene.string(node, "name").to_owned(),
                     position,
                     direction,
-                    lookup: lookup_table(scene, node),
+                    lookup: self.tables.share(lookup_table(scene, node)),
                     rays: scene.int(node, "numberOfRays").max(1) as usize,
                     aperture: scene.float(node, "aperture"),
                     range: scene.float(node, "range"),
                     period: scene.float(node, "samplingPeriod"),
-                    ray_turns: DistanceSensorRig::turns(
+                    ray_turns: self.turns.share(DistanceSensorRig::turns(
                         scene.int(node, "numberOfRays").max(1) as usize,
                         scene.float(node, "aperture"),
-                    ),
+                    )),
                 };
                 self.rig.robots[robot].distance_sensors.push(rig);
             }
@@ -548,7 +555,7 @@ impl Compiler<'_> {
                     name: scene.string(node, "name").to_owned(),
                     position,
                     direction,
-                    lookup: lookup_table(scene, node),
+                    lookup: self.tables.share(lookup_table(scene, node)),
                     occlusion: scene.bool(node, "occlusion"),
                     period: scene.float(node, "samplingPeriod"),
                 };
@@ -771,6 +778,43 @@ fn lookup_table(scene: &Scene, node: NodeId) -> Vec<[f64; 3]> {
     match scene.field(node, "lookupTable") {
         Value::Vec3s(rows) => rows.clone(),
         _ => Vec::new(),
+    }
+}
+
+/// Sensor tables made so far, each once: a new table bit-identical to one of them is shared.
+struct Shared<T> {
+    made: std::collections::HashMap<Vec<[u64; 3]>, Arc<[T]>>,
+}
+
+impl<T> Default for Shared<T> {
+    fn default() -> Self {
+        Shared {
+            made: Default::default(),
+        }
+    }
+}
+
+impl<T: Copy + Bits> Shared<T> {
+    fn share(&mut self, table: Vec<T>) -> Arc<[T]> {
+        let key: Vec<[u64; 3]> = table.iter().map(Bits::bits).collect();
+        self.made.entry(key).or_insert_with(|| table.into()).clone()
+    }
+}
+
+/// The exact bits of a table row: rows are shared only when they are the same to the bit.
+trait Bits {
+    fn bits(&self) -> [u64; 3];
+}
+
+impl Bits for [f64; 3] {
+    fn bits(&self) -> [u64; 3] {
+        self.map(f64::to_bits)
+    }
+}
+
+impl Bits for (f64, f64, f64) {
+    fn bits(&self) -> [u64; 3] {
+        [self.0.to_bits(), self.1.to_bits(), self.2.to_bits()]
     }
 }
 

@@ -1,6 +1,8 @@
 //! The sensor rig: every robot with its parameters and its devices, their mount poses in the
 //! robot's frame (+x forward, +y up, −z left).
 
+use std::sync::Arc;
+
 use glam::DVec3;
 
 use crate::retina::{FilterKind, FilterSet};
@@ -96,14 +98,16 @@ pub struct DistanceSensorRig {
     pub name: String,
     pub position: DVec3,
     pub direction: DVec3,
-    /// Rows (distance m, value, relative noise), distances increasing.
-    pub lookup: Vec<[f64; 3]>,
+    /// Rows (distance m, value, relative noise), distances increasing (shared by the
+    /// sensors whose tables are the same, as a swarm's are).
+    pub lookup: Arc<[[f64; 3]]>,
     pub rays: usize,
     pub aperture: f64,
     pub range: f64,
     pub period: f64,
-    /// (offset angle, cos, sin) of each ray, spread evenly over the aperture.
-    pub ray_turns: Vec<(f64, f64, f64)>,
+    /// (offset angle, cos, sin) of each ray, spread evenly over the aperture (shared like
+    /// `lookup`).
+    pub ray_turns: Arc<[(f64, f64, f64)]>,
 }
 
 impl DistanceSensorRig {
@@ -129,7 +133,8 @@ pub struct LightSensorRig {
     pub name: String,
     pub position: DVec3,
     pub direction: DVec3,
-    pub lookup: Vec<[f64; 3]>,
+    /// Rows (irradiance, value, relative noise), shared like [`DistanceSensorRig::lookup`].
+    pub lookup: Arc<[[f64; 3]]>,
     pub occlusion: bool,
     pub period: f64,
 }

@@ -184,7 +184,7 @@ fn sample(
 ) -> u16 {
     let far = lookup(&sensor.lookup, f64::INFINITY);
     let (mut value_sum, mut noise_sum, mut weight_sum) = (0.0, 0.0, 0.0);
-    for &(_, cos, sin) in &sensor.ray_turns {
+    for &(_, cos, sin) in sensor.ray_turns.iter() {
         let weight = cos;
         let (value, noise) = match hit((cos, sin)) {
             Some((nearest, reflectance)) => {
