@@ -133,8 +133,8 @@ impl Catalogue {
         let mut by_name = BTreeMap::new();
         for (id, spec) in nodes.iter_mut().enumerate() {
             // A node's written fields are one bit each (`scene::Written`).
-            if spec.fields.len() > 64 {
-                return Err(format!("{}: more than 64 fields", spec.name));
+            if spec.fields.len() > 56 {
+                return Err(format!("{}: more than 56 fields", spec.name));
             }
             for field in &mut spec.fields {
                 field.field_type = Some(FieldType::parse(&field.type_name).ok_or_else(|| {

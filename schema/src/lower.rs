@@ -24,7 +24,9 @@ use regatta_parser::{Diagnostic, SourceMap, SourceText, Span};
 use crate::access::{FileAccess, Limits, Refusal};
 use crate::catalogue::{did_you_mean, Catalogue, FieldSpec, SpecId};
 use crate::protos::{BUILTIN_PROTOS, WEBOTS_STANDINS};
-use crate::scene::{Fields, FileId, NodeId, Origin, Scene, SceneNode, UpAxis, Written};
+use crate::scene::{
+    FieldsBuilder, FileId, NodeId, Origin, Scene, SceneNode, SharedFields, UpAxis, Written,
+};
 use crate::value::{BaseType, FieldType, Image, Value};
 
 /// Deepest nesting of PROTO instances, by default (see [`Limits`]).
@@ -434,6 +436,8 @@ struct Lowerer<'c> {
     nodes: Vec<SceneNode>,
     /// Whether each node is, or holds, a robot (a robot must not be USEd twice).
     holds_robot: Vec<bool>,
+    /// Field values of nodes made so far, for the next instance of a PROTO to share.
+    shared_fields: SharedFields,
     sources: Vec<Source>,
     /// What each file's urls resolve against, by file id.
     file_bases: Vec<UrlBase>,
@@ -510,6 +514,7 @@ impl<'c> Lowerer<'c> {
             catalogue: None,
             nodes: Vec::new(),
             holds_robot: Vec::new(),
+            shared_fields: SharedFields::default(),
             sources: Vec::new(),
             file_bases: Vec::new(),
             parse_diagnostics: Vec::new(),
@@ -736,6 +741,8 @@ impl<'c> Lowerer<'c> {
                 .unwrap_or(body);
             node.axes = crate::webots::Axes { own, body };
         }
+        // The scene lives on through compilation: no spare room.
+        self.nodes.shrink_to_fit();
         let scene = Scene {
             nodes: self.nodes,
             roots: self.roots,
@@ -1538,7 +1545,7 @@ impl<'c> Lowerer<'c> {
     ) -> Option<NodeId> {
         let catalogue = self.catalogue();
         let spec = catalogue.spec(spec_id);
-        let mut fields = Fields::defaults(spec_id, spec.fields.len());
+        let mut fields = FieldsBuilder::new(spec_id, spec.fields.len());
         let mut written = Written::none(spec.fields.len());
         // Each url of a `file` field, with where it was written and the file it is relative to.
         let mut urls: Vec<(usize, String, FileId, Span)> = Vec::new();
@@ -1624,13 +1631,11 @@ impl<'c> Lowerer<'c> {
                 self.refuse(*file, *span, url, refusal, UrlUse::Image(&spec.name));
             }
         }
+        let fields = fields.finish(origin, &mut self.shared_fields);
         self.alloc(
             SceneNode {
                 spec: spec_id,
-                fields: {
-                    fields.shrink_to_fit();
-                    fields
-                },
+                fields,
                 written,
                 def_name: None,
                 proto_names: Vec::new(),
@@ -1716,15 +1721,16 @@ impl<'c> Lowerer<'c> {
             (None, None) => {}
         }
         let spec = self.catalogue().spec(group);
-        let mut group_fields = Fields::defaults(group, spec.fields.len());
+        let mut group_fields = FieldsBuilder::new(group, spec.fields.len());
         group_fields.set(0, Value::Nodes(children), None);
         let mut written = Written::none(spec.fields.len());
         written.set(0);
+        let fields = group_fields.finish(origin, &mut self.shared_fields);
         self.alloc(
             SceneNode {
                 spec: group,
                 written,
-                fields: group_fields,
+                fields,
                 def_name: None,
                 proto_names: vec!["Inline".to_owned()],
                 origin,

@@ -4,6 +4,8 @@
 //! PROTOs expanded and USE resolved to the DEF'd node's handle, so the scene is a DAG. It is
 //! always y-up, in metres, radians and seconds: z-up files are turned by [`Scene::root_rotation`].
 
+use std::sync::Arc;
+
 use regatta_parser::Span;
 
 use crate::catalogue::{Catalogue, NodeSpec, SpecId};
@@ -59,33 +61,117 @@ impl SceneNode {
 
 /// A node's field values: the ones it has of its own, sparse, in front of its type's
 /// defaults, which every node of the type shares with the catalogue. A swarm's thousand
-/// robots each hold only what their instances wrote, not every field of every part.
+/// robots each hold only what their instances wrote, not every field of every part, and the
+/// parts a PROTO's body writes the same way for every instance share one copy of their values
+/// (see [`SharedFields`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Fields {
     spec: u32,
     len: u32,
     /// Values of the node's own, by ascending field index.
-    own: Vec<OwnValue>,
+    own: Arc<[OwnValue]>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
-struct OwnValue {
+pub(crate) struct OwnValue {
     index: u32,
     /// Where the value was written (see [`SceneNode::value_span_at`]).
     span: Option<Origin>,
     value: Value,
 }
 
-impl Fields {
+impl OwnValue {
+    /// The same to the bit (where `==` takes 0.0 for −0.0).
+    fn same(&self, other: &OwnValue) -> bool {
+        self.index == other.index && self.span == other.span && same_bits(&self.value, &other.value)
+    }
+}
+
+/// Whether two values are the same to the bit.
+fn same_bits(a: &Value, b: &Value) -> bool {
+    fn floats(a: &[f64], b: &[f64]) -> bool {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+    }
+    match (a, b) {
+        (Value::Float(x), Value::Float(y)) => x.to_bits() == y.to_bits(),
+        (Value::Vec2(x), Value::Vec2(y)) => floats(x, y),
+        (Value::Vec3(x), Value::Vec3(y)) => floats(x, y),
+        (Value::Rotation(x), Value::Rotation(y)) => floats(x, y),
+        (Value::Floats(x), Value::Floats(y)) => floats(x, y),
+        (Value::Vec2s(x), Value::Vec2s(y)) => floats(x.as_flattened(), y.as_flattened()),
+        (Value::Vec3s(x), Value::Vec3s(y)) => floats(x.as_flattened(), y.as_flattened()),
+        (Value::Rotations(x), Value::Rotations(y)) => floats(x.as_flattened(), y.as_flattened()),
+        // No floats inside: equality is identity.
+        _ => a == b,
+    }
+}
+
+/// The values a node is given while it is typed, before it becomes [`Fields`].
+pub(crate) struct FieldsBuilder {
+    spec: u32,
+    len: u32,
+    own: Vec<OwnValue>,
+}
+
+impl FieldsBuilder {
     /// Every field of type `spec` (with `len` fields) at its default.
-    pub fn defaults(spec: SpecId, len: usize) -> Fields {
-        Fields {
+    pub(crate) fn new(spec: SpecId, len: usize) -> FieldsBuilder {
+        FieldsBuilder {
             spec: spec as u32,
             len: len as u32,
             own: Vec::new(),
         }
     }
 
+    /// Gives field `index` a value of its own, written at `span` (a later value replaces an
+    /// earlier one).
+    pub(crate) fn set(&mut self, index: usize, value: Value, span: Option<Origin>) {
+        assert!(index < self.len as usize, "field {index} out of range");
+        let own = OwnValue {
+            index: index as u32,
+            span,
+            value,
+        };
+        match self.own.binary_search_by_key(&own.index, |own| own.index) {
+            Ok(at) => self.own[at] = own,
+            Err(at) => self.own.insert(at, own),
+        }
+    }
+
+    /// The node's fields, sharing the values of the last node made at `key` when they are
+    /// the same to the bit.
+    pub(crate) fn finish(self, key: Origin, shared: &mut SharedFields) -> Fields {
+        let own = match shared.made.get(&(key.file, key.span, self.spec)) {
+            Some(made)
+                if made.len() == self.own.len()
+                    && made.iter().zip(&self.own).all(|(a, b)| a.same(b)) =>
+            {
+                made.clone()
+            }
+            _ => {
+                let own: Arc<[OwnValue]> = self.own.into();
+                if !own.is_empty() {
+                    shared.made.insert((key.file, key.span, self.spec), own.clone());
+                }
+                own
+            }
+        };
+        Fields {
+            spec: self.spec,
+            len: self.len,
+            own,
+        }
+    }
+}
+
+/// The values of nodes made so far, by where the node was written: a PROTO's body makes its
+/// nodes again for every instance, and those it writes without IS come out the same.
+#[derive(Debug, Default)]
+pub(crate) struct SharedFields {
+    made: std::collections::HashMap<(FileId, Span, u32), Arc<[OwnValue]>>,
+}
+
+impl Fields {
     /// How many fields the node's type has.
     pub fn len(&self) -> usize {
         self.len as usize
@@ -99,28 +185,9 @@ impl Fields {
         self.own.binary_search_by_key(&(index as u32), |own| own.index)
     }
 
-    /// Gives field `index` a value of its own, written at `span`.
-    pub fn set(&mut self, index: usize, value: Value, span: Option<Origin>) {
-        assert!(index < self.len(), "field {index} out of range");
-        let own = OwnValue {
-            index: index as u32,
-            span,
-            value,
-        };
-        match self.position(index) {
-            Ok(at) => self.own[at] = own,
-            Err(at) => self.own.insert(at, own),
-        }
-    }
-
     /// Where field `index`'s value was written, if it was.
     pub fn span(&self, index: usize) -> Option<Origin> {
         self.position(index).ok().and_then(|at| self.own[at].span)
-    }
-
-    /// Drops spare capacity (the scene keeps its nodes for as long as it lives).
-    pub fn shrink_to_fit(&mut self) {
-        self.own.shrink_to_fit();
     }
 
     /// The values in catalogue order.
@@ -147,25 +214,27 @@ impl std::ops::Index<usize> for Fields {
 }
 
 impl std::ops::IndexMut<usize> for Fields {
-    /// A value of the node's own (a copy of the default, the first time), keeping where
-    /// any earlier value was written.
+    /// A value of the node's own (a copy of the default, the first time; a copy of a shared
+    /// value), keeping where any earlier value was written.
     fn index_mut(&mut self, index: usize) -> &mut Value {
+        let mut own = self.own.to_vec();
         let at = match self.position(index) {
             Ok(at) => at,
             Err(at) => {
-                let value = self[index].clone();
-                self.own.insert(
+                own.insert(
                     at,
                     OwnValue {
                         index: index as u32,
                         span: None,
-                        value,
+                        value: self[index].clone(),
                     },
                 );
                 at
             }
         };
-        &mut self.own[at].value
+        self.own = own.into();
+        let own = Arc::get_mut(&mut self.own).expect("a fresh copy is not shared");
+        &mut own[at].value
     }
 }
 
@@ -205,45 +274,41 @@ impl DoubleEndedIterator for FieldsIter<'_> {
 
 impl ExactSizeIterator for FieldsIter<'_> {}
 
-/// Which fields of a node were written, one bit per field (the catalogue checks that no
-/// type has more than 64 fields).
+/// Which fields of a node were written, one bit per field, and in the top byte how many
+/// fields there are (the catalogue checks that no type has more than 56).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Written {
-    bits: u64,
-    len: u8,
-}
+pub struct Written(u64);
 
 impl Written {
+    const LEN_SHIFT: u32 = 56;
+
     /// No field of `len` written yet.
     pub fn none(len: usize) -> Written {
-        assert!(len <= 64, "a node type has at most 64 fields");
-        Written {
-            bits: 0,
-            len: len as u8,
-        }
+        assert!(len <= Self::LEN_SHIFT as usize, "a node type has at most 56 fields");
+        Written((len as u64) << Self::LEN_SHIFT)
     }
 
     pub fn set(&mut self, index: usize) {
         assert!(index < self.len(), "field {index} out of range");
-        self.bits |= 1 << index;
+        self.0 |= 1 << index;
     }
 
     pub fn get(&self, index: usize) -> bool {
-        index < self.len() && self.bits & (1 << index) != 0
+        index < self.len() && self.0 & (1 << index) != 0
     }
 
     pub fn len(&self) -> usize {
-        self.len as usize
+        (self.0 >> Self::LEN_SHIFT) as usize
     }
 
     pub fn is_empty(&self) -> bool {
-        self.len == 0
+        self.len() == 0
     }
 
     /// Whether each field was written, in catalogue order.
     pub fn iter(&self) -> WrittenIter {
         WrittenIter {
-            bits: self.bits,
+            bits: self.0,
             indices: 0..self.len(),
         }
     }
