@@ -225,11 +225,16 @@ pub struct Panoramic {
     i_bda: Vec<(FilterKind, f64)>,
     /// The enabled filters, built for the retina's length, in the order of `i_bda`.
     filters: Vec<Filter>,
-    luminance: Vec<f64>,
 }
 
 impl Panoramic {
     pub fn new(rig: &PanoramicRig) -> Panoramic {
+        Panoramic::new_like(rig, None)
+    }
+
+    /// [`Panoramic::new`], sharing `like`'s filters and calibration when its filter settings
+    /// are the same (a swarm's turrets all are): the result is the same, built once.
+    pub fn new_like(rig: &PanoramicRig, like: Option<&Panoramic>) -> Panoramic {
         let settings = FilterSettings {
             filters: rig.filters,
             lambda: rig.lambda,
@@ -237,6 +242,15 @@ impl Panoramic {
             bits: rig.bits,
             i_bda: rig.i_bda,
         };
+        if let Some(like) = like.filter(|like| like.settings.same_bits(&settings)) {
+            return Panoramic {
+                rig: rig.clone(),
+                strip: like.strip.clone(),
+                settings,
+                i_bda: like.i_bda.clone(),
+                filters: like.filters.clone(),
+            };
+        }
         let i_bda = rig
             .filters
             .iter()
@@ -259,7 +273,6 @@ impl Panoramic {
             settings,
             i_bda,
             filters,
-            luminance: vec![0.0; PIXELS],
         }
     }
 
@@ -292,6 +305,10 @@ impl Panoramic {
         let eye = DVec3::new(pose.x, floor_y + self.rig.height, pose.z);
         out.flat_views.clear();
         out.warped.clear();
+        // The photocurrents go straight to the output: every optics writes all the pixels.
+        let mut luminance = std::mem::take(&mut out.luminance);
+        luminance.clear();
+        luminance.resize(PIXELS, 0.0);
         match self.rig.optics {
             Optics::Exact => renderer.integrate_of(
                 view,
@@ -300,7 +317,7 @@ impl Panoramic {
                 &self.strip,
                 self.rig.samples,
                 self.rig.stride,
-                &mut self.luminance,
+                &mut luminance,
             ),
             Optics::Paper => paper(
                 renderer,
@@ -309,12 +326,11 @@ impl Panoramic {
                 pose.heading,
                 self.rig.samples,
                 self.rig.quantize_views,
-                &mut self.luminance,
+                &mut luminance,
                 out,
             ),
         }
-        out.luminance.clear();
-        out.luminance.extend_from_slice(&self.luminance);
+        out.luminance = luminance;
         self.process(out);
     }
 

@@ -174,7 +174,8 @@ pub struct Chain {
     one_minus_a: f64,
     a_n: f64,
     period: f64,
-    powers: Vec<f64>,
+    /// Shared by the chain's copies (a filter's two chains, the turrets of a swarm).
+    powers: std::sync::Arc<[f64]>,
 }
 
 /// Independent blocks a recursion is cut into, so that their dependency chains overlap.
@@ -192,7 +193,8 @@ impl Chain {
             period: -libm::expm1(-2.0 * n / lambda),
             powers: (0..len + 2)
                 .map(|k| libm::exp(-(k as f64) / lambda))
-                .collect(),
+                .collect::<Vec<f64>>()
+                .into(),
         }
     }
 
@@ -539,6 +541,18 @@ pub struct FilterSettings {
     pub bits: u32,
     /// `None`: calibrated as the paper says.
     pub i_bda: Option<f64>,
+}
+
+impl FilterSettings {
+    /// The same to the bit (where `==` takes 0.0 for −0.0): what builds the same filters.
+    pub fn same_bits(&self, other: &FilterSettings) -> bool {
+        self.filters == other.filters
+            && self.lambda.to_bits() == other.lambda.to_bits()
+            && self.bandpass.0.to_bits() == other.bandpass.0.to_bits()
+            && self.bandpass.1.to_bits() == other.bandpass.1.to_bits()
+            && self.bits == other.bits
+            && self.i_bda.map(f64::to_bits) == other.i_bda.map(f64::to_bits)
+    }
 }
 
 /// One filter with its chains built for one image length: what a turret runs every update.

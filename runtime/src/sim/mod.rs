@@ -323,7 +323,9 @@ impl<'c> Simulation<'c> {
         let renderer = (compiled.plan.renderer != crate::compile::plan::RendererChoice::None)
             .then(|| Renderer::new(&compiled.graph, &compiled.plan, false));
         let broad = BroadPhase::new(compiled, &slab);
-        let mut robots = Vec::with_capacity(compiled.rig.robots.len());
+        let mut robots: Vec<RobotState> = Vec::with_capacity(compiled.rig.robots.len());
+        // The last turret built: the next with the same settings shares its filters.
+        let mut last_panoramic: Option<usize> = None;
         for (index, rig) in compiled.rig.robots.iter().enumerate() {
             let controller =
                 controllers::build_for(rig).map_err(|source| SimError::Controller {
@@ -352,7 +354,12 @@ impl<'c> Simulation<'c> {
                 wheel_stream: Stream::new(seed, index, kind::WHEELS, 0),
                 panoramic: match &rig.turret {
                     Some(TurretRig::Panoramic(p)) => Some(PanoramicState {
-                        model: Panoramic::new(p),
+                        model: Panoramic::new_like(
+                            p,
+                            last_panoramic
+                                .and_then(|r| robots[r].panoramic.as_ref())
+                                .map(|state| &state.model),
+                        ),
                         output: RetinaOutput::default(),
                         due: 0.0,
                         sensed: true,
@@ -401,6 +408,9 @@ impl<'c> Simulation<'c> {
                 vision_requested: false,
                 fell: None,
             });
+            if robots[index].panoramic.is_some() {
+                last_panoramic = Some(index);
+            }
         }
         let camera_caster = compiled
             .rig
