@@ -154,6 +154,13 @@ impl Catalogue {
         for id in 0..catalogue.nodes.len() {
             for index in 0..catalogue.nodes[id].fields.len() {
                 let value = crate::lower::type_default(&catalogue, id, index)?;
+                // A node's children are among its own values (`scene::Fields::own`).
+                if !value.nodes().is_empty() {
+                    return Err(format!(
+                        "{}.{}: a default holds no node",
+                        catalogue.nodes[id].name, catalogue.nodes[id].fields[index].name
+                    ));
+                }
                 catalogue.nodes[id].fields[index].default_value = Some(value);
             }
         }

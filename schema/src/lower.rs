@@ -1280,7 +1280,7 @@ impl<'c> Lowerer<'c> {
         let holds_robot = spec.classes.iter().any(|c| c == "robot")
             || node
                 .fields
-                .iter()
+                .own()
                 .any(|v| v.nodes().iter().any(|c| self.holds_robot[c.index()]));
         let id = NodeId(self.nodes.len() as u32);
         self.nodes.push(node);
@@ -3410,7 +3410,7 @@ impl Lowerer<'_> {
         let mut depths = vec![0u32; self.nodes.len()];
         for index in 0..self.nodes.len() {
             let (mut size, mut depth) = (1u64, 1u32);
-            for value in &self.nodes[index].fields {
+            for value in self.nodes[index].fields.own() {
                 for child in value.nodes() {
                     size = size.saturating_add(sizes[child.index()]);
                     depth = depth.max(depths[child.index()].saturating_add(1));

@@ -190,6 +190,12 @@ impl Fields {
         self.position(index).ok().and_then(|at| self.own[at].span)
     }
 
+    /// The values the node has of its own, in catalogue order: all its children among them,
+    /// since no default holds a node.
+    pub fn own(&self) -> impl DoubleEndedIterator<Item = &Value> + '_ {
+        self.own.iter().map(|own| &own.value)
+    }
+
     /// The values in catalogue order.
     pub fn iter(&self) -> FieldsIter<'_> {
         FieldsIter {
@@ -495,7 +501,7 @@ impl Scene {
                 continue;
             }
             order.push(id);
-            for value in self.node(id).fields.iter().rev() {
+            for value in self.node(id).fields.own().rev() {
                 stack.extend(value.nodes().iter().rev());
             }
         }
