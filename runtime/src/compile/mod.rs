@@ -100,6 +100,11 @@ pub fn compile(scene: &Scene) -> Compiled {
     find_floors(&mut compiler.graph, &mut compiler.rig);
     let settings = world_settings(scene);
     let plan = Plan::new(&compiler.graph, &compiler.rig);
+    // The graph lives as long as the simulation: no spare room (a swarm's vectors are long).
+    compiler.graph.primitives.shrink_to_fit();
+    compiler.graph.groups.shrink_to_fit();
+    compiler.graph.materials.shrink_to_fit();
+    compiler.rig.robots.shrink_to_fit();
     Compiled {
         graph: compiler.graph,
         rig: compiler.rig,
