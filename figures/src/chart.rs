@@ -243,6 +243,8 @@ where
     let mut context = ChartBuilder::on(root)
         .caption(&chart.title, ("sans-serif", style::TITLE).into_font())
         .margin(24)
+        // Room for the last tick label, centred on the right edge of the plot.
+        .margin_right(48)
         .x_label_area_size(90)
         .y_label_area_size(120)
         .build_cartesian_2d(x, y)?;
