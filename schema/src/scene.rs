@@ -151,7 +151,9 @@ impl FieldsBuilder {
             _ => {
                 let own: Arc<[OwnValue]> = self.own.into();
                 if !own.is_empty() {
-                    shared.made.insert((key.file, key.span, self.spec), own.clone());
+                    shared
+                        .made
+                        .insert((key.file, key.span, self.spec), own.clone());
                 }
                 own
             }
@@ -182,7 +184,8 @@ impl Fields {
     }
 
     fn position(&self, index: usize) -> Result<usize, usize> {
-        self.own.binary_search_by_key(&(index as u32), |own| own.index)
+        self.own
+            .binary_search_by_key(&(index as u32), |own| own.index)
     }
 
     /// Where field `index`'s value was written, if it was.
@@ -290,7 +293,10 @@ impl Written {
 
     /// No field of `len` written yet.
     pub fn none(len: usize) -> Written {
-        assert!(len <= Self::LEN_SHIFT as usize, "a node type has at most 56 fields");
+        assert!(
+            len <= Self::LEN_SHIFT as usize,
+            "a node type has at most 56 fields"
+        );
         Written((len as u64) << Self::LEN_SHIFT)
     }
 
