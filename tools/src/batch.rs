@@ -43,9 +43,8 @@ pub struct Args {
     /// One CSV row per run, with a header.
     #[arg(long)]
     csv: bool,
-    /// Read a foreign file leniently.
-    #[arg(long)]
-    lenient: bool,
+    #[command(flatten)]
+    reading: crate::world::WorldOptions,
 }
 
 /// The seeds of a batch.
@@ -107,8 +106,13 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         None => Vec::new(),
     };
     overrides.extend(args.overrides.iter().cloned());
-    let experiment = Experiment::load(&args.world, args.lenient, &overrides)
-        .with_context(|| format!("cannot load {}", args.world.display()))?;
+    let experiment = Experiment::load_with(
+        &args.world,
+        &args.reading.options()?,
+        &overrides,
+        regatta_evolve::Driven::Nobody,
+    )
+    .with_context(|| format!("cannot load {}", args.world.display()))?;
     eprint!("{}", experiment.warnings);
     if !(args.duration >= 0.0 && args.duration.is_finite()) {
         bail!("--duration must be a non-negative number of seconds");

@@ -68,9 +68,8 @@ pub struct Args {
     /// Set a field in every world: NODE.FIELD=VALUE (repeatable).
     #[arg(long = "set", value_name = "NODE.FIELD=VALUE", value_parser = crate::batch::parse_override)]
     overrides: Vec<Override>,
-    /// Read foreign files leniently.
-    #[arg(long)]
-    lenient: bool,
+    #[command(flatten)]
+    reading: crate::world::WorldOptions,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -91,13 +90,16 @@ fn check_fitness(text: &str) -> Result<String, String> {
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let fitness = Fitness::parse(&args.fitness)?;
+    let reading = args.reading.options()?;
+    let load = |path: &Path, overrides: &[Override]| {
+        Experiment::load_with(path, &reading, overrides, regatta_evolve::Driven::Nobody)
+    };
     let mut paths = vec![args.world.clone()];
     paths.extend(args.more_worlds.iter().cloned());
     let mut experiments: Vec<Experiment> = paths
         .iter()
         .map(|path| {
-            Experiment::load(path, args.lenient, &args.overrides)
-                .with_context(|| format!("cannot load {}", path.display()))
+            load(path, &args.overrides).with_context(|| format!("cannot load {}", path.display()))
         })
         .collect::<anyhow::Result<_>>()?;
     // A world whose robots have no network takes the first world's robot (controller,
@@ -110,8 +112,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             .with_context(|| format!("cannot take the network of {}", experiments[0].name))?;
         overrides.extend(args.overrides.iter().cloned());
         let path = &paths[index];
-        experiments[index] = Experiment::load(path, args.lenient, &overrides)
-            .with_context(|| format!("cannot load {}", path.display()))?;
+        experiments[index] =
+            load(path, &overrides).with_context(|| format!("cannot load {}", path.display()))?;
         eprintln!(
             "{}: its robots take {}'s network and turret",
             path.display(),
@@ -243,6 +245,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         );
     }
     write_outputs(
+        &reading,
         &evolution,
         &experiments[0],
         &fitness,
@@ -259,6 +262,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
 
 /// best.wbt, fitness.csv, fitness.png (or .svg) and best.mcap in `out`.
 fn write_outputs(
+    reading: &regatta_schema::Options,
     evolution: &Evolution,
     experiment: &Experiment,
     fitness: &Fitness,
@@ -292,12 +296,13 @@ fn write_outputs(
     println!("{}", world_path.display());
     // The best candidate's run, logged: the world just written, under its generation's
     // first trial seed (what `regatta run best.wbt --seed S --log` records too).
-    let best_world = Experiment::from_text(
+    let best_world = Experiment::from_text_with(
         &world_path.display().to_string(),
         &text,
         Path::new(&experiment.name).parent().map(Path::to_owned),
-        experiment.lenient,
+        reading,
         &[],
+        regatta_evolve::Driven::Nobody,
     )?;
     let mut simulation = best_world.simulation(best.seed, None)?;
     let log_path = out.join("best.mcap");

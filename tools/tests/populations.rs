@@ -412,3 +412,72 @@ fn the_evolved_regatta_beats_the_hand_tuned_one_and_sails_an_arena_it_never_saw(
     // The hand-tuned controller makes 100 to 162 there (seeds 1 to 10).
     assert!(unseen >= 100, "{unseen} cyclic visits");
 }
+
+/// `batch` and `evolve` read worlds as `run` does: a file outside the world's folder only
+/// with `--allow-path`, and the limits `--limit` sets.
+#[test]
+fn batch_and_evolve_take_the_reading_options_of_run() {
+    let dir = temp_dir("reading");
+    std::fs::create_dir_all(dir.join("worlds")).unwrap();
+    std::fs::create_dir_all(dir.join("parts")).unwrap();
+    let world = std::fs::read_to_string(root().join("worlds/regatta_neural.wbt")).unwrap();
+    std::fs::write(
+        dir.join("worlds/w.wbt"),
+        format!("{world}Inline {{\n  url \"../parts/box.wrl\"\n}}\n"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("parts/box.wrl"),
+        "#VRML V2.0 utf8\nTransform {\n  translation 0.3 0 0.3\n  children [\n    Shape {\n      \
+         geometry Box {\n        size 0.05 0.05 0.05\n      }\n    }\n  ]\n}\n",
+    )
+    .unwrap();
+    let output = |args: &[&str]| regatta().args(args).current_dir(&dir).output().unwrap();
+    let batch = [
+        "batch",
+        "worlds/w.wbt",
+        "--seeds",
+        "1..2",
+        "--duration",
+        "1",
+    ];
+    let evolve = [
+        "evolve",
+        "worlds/w.wbt",
+        "--fitness",
+        "avoidance",
+        "--generations",
+        "1",
+        "--population",
+        "4",
+        "--trials",
+        "1",
+        "--duration",
+        "1",
+        "--out",
+        "out",
+    ];
+    for command in [&batch[..], &evolve[..]] {
+        let refused = output(command);
+        assert!(!refused.status.success(), "{command:?} read ../parts");
+        let stderr = String::from_utf8_lossy(&refused.stderr);
+        assert!(
+            stderr.contains("leads outside the world's folder"),
+            "{stderr}"
+        );
+
+        let allowed = output(&[command, &["--allow-path", "parts"]].concat());
+        assert!(
+            allowed.status.success(),
+            "{command:?} --allow-path parts: {}",
+            String::from_utf8_lossy(&allowed.stderr)
+        );
+
+        let limited =
+            output(&[command, &["--allow-path", "parts", "--limit", "nodes=10"]].concat());
+        assert!(!limited.status.success(), "{command:?} --limit nodes=10");
+        let stderr = String::from_utf8_lossy(&limited.stderr);
+        assert!(stderr.contains("more than the limit of 10"), "{stderr}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

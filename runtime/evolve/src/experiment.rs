@@ -119,6 +119,15 @@ impl Driven<'_> {
     }
 }
 
+/// The reading options of a world read with only a strict or lenient choice: its own folder,
+/// default limits, no PROTO path.
+fn reading(lenient: bool) -> regatta_schema::Options {
+    regatta_schema::Options {
+        strict: !lenient,
+        ..regatta_schema::Options::default()
+    }
+}
+
 impl Experiment {
     /// Reads, edits (`--set`), checks and compiles a world file.
     pub fn load(
@@ -136,11 +145,23 @@ impl Experiment {
         overrides: &[Override],
         driven: Driven<'_>,
     ) -> Result<Experiment, LoadError> {
+        Experiment::load_with(path, &reading(lenient), overrides, driven)
+    }
+
+    /// [`Experiment::load_driven`] with every reading option of the command line: strict or
+    /// lenient, folders the world may read beside its own (`--allow-path`), limits
+    /// (`--limit`) and the PROTO path. The world's own folder is always added to the access.
+    pub fn load_with(
+        path: &Path,
+        options: &regatta_schema::Options,
+        overrides: &[Override],
+        driven: Driven<'_>,
+    ) -> Result<Experiment, LoadError> {
         if path.as_os_str() == "-" {
             // Standard input: a world with no folder, which reads no file.
             let bytes = regatta_parser::source::read_bytes(
                 std::io::stdin().lock(),
-                regatta_parser::source::MAX_FILE_SIZE,
+                options.limits.file_size,
             )
             .map_err(|error| {
                 LoadError::Read(regatta_parser::SourceError::Io {
@@ -149,25 +170,25 @@ impl Experiment {
                 })
             })?;
             let source = regatta_parser::SourceText::from_bytes("<stdin>".to_owned(), bytes);
-            return Experiment::from_text_driven(
+            return Experiment::from_text_with(
                 &source.name,
                 &source.text,
                 None,
-                lenient,
+                options,
                 overrides,
                 driven,
             );
         }
-        let source = regatta_parser::SourceText::read(path)?;
+        let source = regatta_parser::SourceText::read_limited(path, options.limits.file_size)?;
         let base = match path.parent() {
             Some(parent) if !parent.as_os_str().is_empty() => parent.to_owned(),
             _ => PathBuf::from("."),
         };
-        Experiment::from_text_driven(
+        Experiment::from_text_with(
             &source.name,
             &source.text,
             Some(base),
-            lenient,
+            options,
             overrides,
             driven,
         )
@@ -194,20 +215,34 @@ impl Experiment {
         overrides: &[Override],
         driven: Driven<'_>,
     ) -> Result<Experiment, LoadError> {
+        Experiment::from_text_with(name, text, base_dir, &reading(lenient), overrides, driven)
+    }
+
+    /// [`Experiment::from_text_driven`] with every reading option (see
+    /// [`Experiment::load_with`]); `options.base_dir` is replaced by `base_dir`.
+    pub fn from_text_with(
+        name: &str,
+        text: &str,
+        base_dir: Option<PathBuf>,
+        options: &regatta_schema::Options,
+        overrides: &[Override],
+        driven: Driven<'_>,
+    ) -> Result<Experiment, LoadError> {
+        let lenient = !options.strict;
         let text = apply_overrides(text, overrides)?;
-        // The world reads files under its own folder only (see regatta_schema::access).
+        // The world reads files under its own folder, and the folders the options allow,
+        // only (see regatta_schema::access).
         let base_dir = base_dir.and_then(|dir| dir.canonicalize().ok());
-        let mut access = regatta_schema::FileAccess::none();
+        let mut access = options.access.clone();
         if let Some(dir) = &base_dir {
             let _ = access.allow(dir);
         }
         let mut checked = regatta_schema::check(
             regatta_parser::SourceText::from_bytes(name.to_owned(), text.clone().into_bytes()),
             &regatta_schema::Options {
-                strict: !lenient,
                 access,
                 base_dir,
-                ..regatta_schema::Options::default()
+                ..options.clone()
             },
         );
         regatta_runtime::check::check_scene(&mut checked);
