@@ -29,6 +29,9 @@ pub struct Grid {
     spans: Vec<[u32; 4]>,
     /// Counting buffer of the rebuild.
     cursor: Vec<u32>,
+    /// Every item lies in one cell (points, such as robots' centres): a query meets each
+    /// item once without asking where its box starts.
+    single_cells: bool,
 }
 
 impl Grid {
@@ -97,11 +100,14 @@ impl Grid {
     /// Files every item anew: `bounds(i)` is item `i`'s box (min, max).
     pub fn rebuild(&mut self, items: usize, mut bounds: impl FnMut(usize) -> (DVec2, DVec2)) {
         self.spans.clear();
+        let mut single_cells = true;
         for item in 0..items {
             let (min, max) = bounds(item);
             let span = self.span(min, max);
+            single_cells &= span[0] == span[2] && span[1] == span[3];
             self.spans.push(span);
         }
+        self.single_cells = single_cells;
         let cells = self.columns * self.rows;
         self.starts.clear();
         self.starts.resize(cells + 1, 0);
@@ -143,6 +149,14 @@ impl Grid {
             for column in c0..=c1 {
                 let cell = row as usize * self.columns + column as usize;
                 let (start, end) = (self.starts[cell] as usize, self.starts[cell + 1] as usize);
+                if self.single_cells {
+                    let items = &self.entries[start..end];
+                    if let (Some(&first), Some(&last)) = (items.first(), out.last()) {
+                        sorted &= last < first;
+                    }
+                    out.extend_from_slice(items);
+                    continue;
+                }
                 for &item in &self.entries[start..end] {
                     // An item in several cells is reported from the first of them in range.
                     let span = &self.spans[item as usize];

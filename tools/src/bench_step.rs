@@ -30,7 +30,7 @@ pub struct Args {
     /// controller, Panoramic turrets, N/10 light buoys): cost per step against N.
     #[arg(long, value_delimiter = ',')]
     robots: Vec<usize>,
-    /// Swarms: no turrets (IR proximity and ambient light only).
+    /// Swarms: no turrets (IR proximity and ambient light only; the braitenberg controller).
     #[arg(long)]
     ir_only: bool,
     /// Swarms: buoys in each world instead of N/10 (the arena grows to hold them).

@@ -1,7 +1,8 @@
 //! `regatta bench step --robots 1,10,100,1000`: how a step's cost grows with the group.
 //!
 //! The worlds are generated, not read: N Kheperas running the `regatta` controller, each with
-//! a Panoramic turret (exact optics, odd filter; `--ir-only` takes it off), and N/10 light
+//! a Panoramic turret (exact optics, odd filter; `--ir-only` takes it off and runs the
+//! `braitenberg` obstacle avoider, which needs no turret), and N/10 light
 //! buoys (at least 3), at 10 robots per square metre on a square arena whose side grows as
 //! √N. Robots stand on a jittered grid with seeded headings; buoys are scattered (seeded) where
 //! they touch nothing. Per N: steps/s, robot-steps/s, µs per robot-step, peak memory (a child
@@ -138,15 +139,20 @@ pub fn swarm_world(spec: &SwarmSpec) -> String {
             "Buoy {{\n  translation {x:.6} 0 {z:.6}\n  irReflectance 1\n}}"
         );
     }
-    let turret = if spec.ir_only {
-        String::new()
+    // Without a turret the regatta controller has nothing to steer by: IR-only robots run
+    // the Braitenberg obstacle avoider, which reads what they have.
+    let (controller, turret) = if spec.ir_only {
+        ("braitenberg", String::new())
     } else {
-        "\n  turret PanoramicTurret {\n    optics \"exact\"\n    filters [\n      \"odd\"\n    ]\n    lambda 5\n  }".to_owned()
+        (
+            "regatta",
+            "\n  turret PanoramicTurret {\n    optics \"exact\"\n    filters [\n      \"odd\"\n    ]\n    lambda 5\n  }".to_owned(),
+        )
     };
     for (i, (x, z, heading)) in robots.into_iter().enumerate() {
         let _ = writeln!(
             out,
-            "Khepera {{\n  translation {x:.6} 0 {z:.6}\n  rotation 0 1 0 {heading:.6}\n  name \"k{i}\"\n  controller \"regatta\"{turret}\n}}"
+            "Khepera {{\n  translation {x:.6} 0 {z:.6}\n  rotation 0 1 0 {heading:.6}\n  name \"k{i}\"\n  controller \"{controller}\"{turret}\n}}"
         );
     }
     out
@@ -239,6 +245,17 @@ pub fn measure(spec: &SwarmSpec, budget: Budget) -> anyhow::Result<Row> {
     let profiled_steps = (steps / 4).clamp(1, 20_000);
     simulation.run(profiled_steps);
     let phases = simulation.phase_times().unwrap_or_default();
+    // A controller that fails leaves its robot standing: the figures would time a still crowd.
+    if let Some(robot) = simulation.robots.iter().find(|r| r.controller_errors > 0) {
+        bail!(
+            "a controller failed while timing {} robots: {}",
+            spec.robots,
+            robot
+                .last_controller_error
+                .as_deref()
+                .unwrap_or("unknown error")
+        );
+    }
     Ok(Row {
         robots: spec.robots,
         buoys: compiled.landmarks.len(),
@@ -283,12 +300,12 @@ pub fn fitted_exponent(rows: &[Row]) -> Option<(f64, usize, usize)> {
 /// The table's lines.
 pub fn print_table(rows: &[Row], threads: usize, ir_only: bool) {
     println!(
-        "swarm step bench: {} thread(s), {}; 10 robots/m², regatta controller",
+        "swarm step bench: {} thread(s), {}; 10 robots/m²",
         threads,
         if ir_only {
-            "IR only (no turret)"
+            "IR only (no turret), braitenberg controller"
         } else {
-            "Panoramic turrets (exact optics, odd filter)"
+            "Panoramic turrets (exact optics, odd filter), regatta controller"
         }
     );
     println!(

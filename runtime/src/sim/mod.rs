@@ -174,6 +174,8 @@ pub struct RobotState {
     ir_due: Vec<f64>,
     ambient_due: Vec<f64>,
     ir_streams: Vec<Stream>,
+    /// Each IR sensor's (mean, spread) with nothing in range ([`sensors::nothing_in_range`]).
+    ir_nothing: Vec<(f64, f64)>,
     ambient_streams: Vec<Stream>,
     wheel_stream: Stream,
     pub panoramic: Option<PanoramicState>,
@@ -345,6 +347,11 @@ impl<'c> Simulation<'c> {
                 ambient: [0; 8],
                 ir_due: vec![0.0; rig.distance_sensors.len()],
                 ambient_due: vec![0.0; rig.light_sensors.len()],
+                ir_nothing: rig
+                    .distance_sensors
+                    .iter()
+                    .map(sensors::nothing_in_range)
+                    .collect(),
                 ir_streams: (0..rig.distance_sensors.len())
                     .map(|s| Stream::new(seed, index, kind::PROXIMITY, s))
                     .collect(),
@@ -1125,10 +1132,27 @@ impl SenseShared<'_, '_> {
                     let reach = sensors::ir_reach(&rig.distance_sensors) + self.broad.max_radius;
                     let (lo, hi) = broad_phase::square(DVec2::new(placement.x, placement.z), reach);
                     self.broad.robots.query(lo, hi, &mut robot.nearby_robots);
+                    // The grid's square holds its corners too: only robots whose bodies come
+                    // within reach are worth a sensor's test (in a crowd, most sensors then
+                    // have none and trace nothing).
+                    let center = DVec2::new(placement.x, placement.z);
+                    let sensor_reach = sensors::ir_reach(&rig.distance_sensors);
+                    let rigs = &compiled.rig.robots;
+                    robot.nearby_robots.retain(|&other| {
+                        let place = &self.placements[other as usize];
+                        other as usize != index
+                            && DVec2::new(place.x, place.z).distance(center)
+                                <= sensor_reach + rigs[other as usize].body_radius
+                    });
                 }
                 nearby_found = true;
             }
             robot.updated.proximity = true;
+            if robot.nearby.is_empty() && robot.nearby_robots.is_empty() {
+                robot.proximity[s] =
+                    sensors::proximity_of_nothing(robot.ir_nothing[s], &mut robot.ir_streams[s]);
+                continue;
+            }
             robot.proximity[s] = sensors::proximity(
                 self.slab,
                 &robot.nearby,

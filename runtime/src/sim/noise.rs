@@ -10,7 +10,21 @@ use rand_xoshiro::Xoshiro256StarStar;
 pub struct Stream {
     rng: Xoshiro256StarStar,
     /// Box–Muller makes pairs; the second waits here.
-    spare: Option<f64>,
+    spare: Spare,
+}
+
+/// The second number of a Box–Muller pair.
+#[derive(Clone, Copy, Debug)]
+enum Spare {
+    None,
+    /// Computed with the first.
+    Ready(f64),
+    /// Its uniforms drawn by [`Stream::skip_gaussian`], its value not yet needed: a sensor
+    /// whose noise is zero advances its stream without the transcendental functions.
+    Drawn {
+        u1: f64,
+        u2: f64,
+    },
 }
 
 /// Mixes the seed with a stream's identity (SplitMix64's finaliser over an FNV-1a hash of
@@ -46,7 +60,7 @@ impl Stream {
                 seed,
                 &[robot as u64, kind, device as u64],
             )),
-            spare: None,
+            spare: Spare::None,
         }
     }
 
@@ -57,17 +71,40 @@ impl Stream {
 
     /// Standard normal, by Box–Muller with `libm` (platform-independent).
     pub fn gaussian(&mut self) -> f64 {
-        if let Some(spare) = self.spare.take() {
-            return spare;
+        match std::mem::replace(&mut self.spare, Spare::None) {
+            Spare::Ready(value) => value,
+            Spare::Drawn { u1, u2 } => Self::box_muller(u1, u2).1,
+            Spare::None => {
+                let u1 = 1.0 - self.uniform(); // (0, 1]: the log is finite
+                let u2 = self.uniform();
+                let (first, second) = Self::box_muller(u1, u2);
+                self.spare = Spare::Ready(second);
+                first
+            }
         }
-        let u1 = 1.0 - self.uniform(); // (0, 1]: the log is finite
-        let u2 = self.uniform();
+    }
+
+    /// Advances the stream past one [`Stream::gaussian`] without computing it: the numbers
+    /// that follow are the same as if it had been drawn.
+    pub fn skip_gaussian(&mut self) {
+        match std::mem::replace(&mut self.spare, Spare::None) {
+            Spare::Ready(_) | Spare::Drawn { .. } => {}
+            Spare::None => {
+                let u1 = 1.0 - self.uniform();
+                let u2 = self.uniform();
+                self.spare = Spare::Drawn { u1, u2 };
+            }
+        }
+    }
+
+    /// Both numbers of a Box–Muller pair (cosine first).
+    #[inline]
+    fn box_muller(u1: f64, u2: f64) -> (f64, f64) {
         let radius = libm::sqrt(-2.0 * libm::log(u1));
         let angle = 2.0 * std::f64::consts::PI * u2;
         // One range reduction for both (the same values as `sin` and `cos` apart).
         let (sin, cos) = libm::sincos(angle);
-        self.spare = Some(radius * sin);
-        radius * cos
+        (radius * cos, radius * sin)
     }
 }
 
@@ -94,6 +131,24 @@ mod tests {
             mean.abs() < 0.03 && (variance - 1.0).abs() < 0.05,
             "{mean} {variance}"
         );
+    }
+
+    /// Skipping a draw leaves the stream where drawing it would have: any pattern of skips
+    /// and draws gives the same drawn numbers as drawing everything.
+    #[test]
+    fn skipping_a_gaussian_changes_nothing_that_follows() {
+        let mut all = Stream::new(5, 2, kind::PROXIMITY, 1);
+        let mut some = Stream::new(5, 2, kind::PROXIMITY, 1);
+        let mut pattern = Stream::new(9, 0, kind::WHEELS, 0);
+        for _ in 0..10_000 {
+            let value = all.gaussian();
+            if pattern.uniform() < 0.4 {
+                some.skip_gaussian();
+            } else {
+                assert_eq!(some.gaussian().to_bits(), value.to_bits());
+            }
+        }
+        assert_eq!(all.uniform().to_bits(), some.uniform().to_bits());
     }
 
     /// `gaussian` takes sine and cosine from one `sincos`: the noise must stay what separate

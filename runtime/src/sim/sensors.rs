@@ -172,16 +172,39 @@ pub fn proximity(
     })
 }
 
+/// A proximity sensor's (mean, spread) when every ray misses: what [`proximity`] reads with
+/// nothing in range, worked out once per sensor.
+pub fn nothing_in_range(sensor: &DistanceSensorRig) -> (f64, f64) {
+    sums(sensor, |_| None)
+}
+
+/// One proximity reading when nothing at all is within the robot's IR reach, from the
+/// sensor's [`nothing_in_range`] (the same reading [`proximity`] gives with empty lists).
+#[inline]
+pub fn proximity_of_nothing((mean, spread): (f64, f64), stream: &mut Stream) -> u16 {
+    reading(mean, spread, stream)
+}
+
 /// One reading from the rays' hits: `hit(cos, sin)` of each ray's turn gives its nearest hit
-/// (distance, reflectance) within range, if any. The response is weighted by each ray's
-/// cosine; the hit's depth along the sensor's axis reads the table (a wall square ahead is at
-/// one depth for every ray and reads the table's value).
+/// (distance, reflectance) within range, if any.
 #[inline]
 fn sample(
     sensor: &DistanceSensorRig,
     stream: &mut Stream,
-    mut hit: impl FnMut((f64, f64)) -> Option<(f64, f64)>,
+    hit: impl FnMut((f64, f64)) -> Option<(f64, f64)>,
 ) -> u16 {
+    let (mean, spread) = sums(sensor, hit);
+    reading(mean, spread, stream)
+}
+
+/// The weighted mean and relative spread of the rays' responses. Each ray is weighted by its
+/// cosine; the hit's depth along the sensor's axis reads the table (a wall square ahead is at
+/// one depth for every ray and reads the table's value).
+#[inline]
+fn sums(
+    sensor: &DistanceSensorRig,
+    mut hit: impl FnMut((f64, f64)) -> Option<(f64, f64)>,
+) -> (f64, f64) {
     let far = lookup(&sensor.lookup, f64::INFINITY);
     let (mut value_sum, mut noise_sum, mut weight_sum) = (0.0, 0.0, 0.0);
     for &(_, cos, sin) in sensor.ray_turns.iter() {
@@ -197,10 +220,19 @@ fn sample(
         noise_sum += weight * noise * value;
         weight_sum += weight;
     }
-    let mean = value_sum / weight_sum;
-    let spread = noise_sum / weight_sum;
-    let reading = mean + spread * stream.gaussian();
-    to_reading(reading)
+    (value_sum / weight_sum, noise_sum / weight_sum)
+}
+
+/// The reading, noise drawn from the sensor's stream.
+#[inline]
+fn reading(mean: f64, spread: f64, stream: &mut Stream) -> u16 {
+    if spread == 0.0 {
+        // `mean + 0 · g` is `mean` whatever g is (the table's far row has no noise): the
+        // stream moves on as if it had been drawn.
+        stream.skip_gaussian();
+        return to_reading(mean);
+    }
+    to_reading(mean + spread * stream.gaussian())
 }
 
 /// One ambient light reading, 0…1023; `grid` files the slab's obstacles.
@@ -237,6 +269,11 @@ pub fn ambient(
             * (light.intensity * normal.dot(to_light).max(0.0) + light.ambient_intensity);
     }
     let (value, noise) = lookup(&sensor.lookup, irradiance);
+    if noise == 0.0 {
+        // `value · (1 + 0 · g)` is `value`: the stream moves on as if it had been drawn.
+        stream.skip_gaussian();
+        return to_reading(value);
+    }
     let reading = value * (1.0 + noise * stream.gaussian());
     to_reading(reading)
 }
