@@ -144,23 +144,32 @@ impl Grid {
             return;
         }
         let [c0, r0, c1, r1] = self.span(min, max);
+        let (c0, r0, c1, r1) = (c0 as usize, r0 as usize, c1 as usize, r1 as usize);
         let mut sorted = true;
-        for row in r0..=r1 {
-            for column in c0..=c1 {
-                let cell = row as usize * self.columns + column as usize;
-                let (start, end) = (self.starts[cell] as usize, self.starts[cell + 1] as usize);
-                if self.single_cells {
-                    let items = &self.entries[start..end];
-                    if let (Some(&first), Some(&last)) = (items.first(), out.last()) {
-                        sorted &= last < first;
-                    }
-                    out.extend_from_slice(items);
-                    continue;
+        // Exclusive ranges and row slices: the loops are short, so their overhead shows.
+        for row in r0..r1 + 1 {
+            let base = row * self.columns;
+            if self.single_cells {
+                // One item per entry: a row's cells are one run of entries, ascending within
+                // each cell.
+                let items = &self.entries
+                    [self.starts[base + c0] as usize..self.starts[base + c1 + 1] as usize];
+                if let Some(&last) = out.last() {
+                    sorted &= items.first().is_none_or(|&first| last < first);
                 }
+                sorted &= c0 == c1 || items.is_sorted();
+                out.extend_from_slice(items);
+                continue;
+            }
+            for column in c0..c1 + 1 {
+                let cell = base + column;
+                let (start, end) = (self.starts[cell] as usize, self.starts[cell + 1] as usize);
                 for &item in &self.entries[start..end] {
                     // An item in several cells is reported from the first of them in range.
                     let span = &self.spans[item as usize];
-                    if span[0].max(c0) == column && span[1].max(r0) == row {
+                    if span[0].max(c0 as u32) as usize == column
+                        && span[1].max(r0 as u32) as usize == row
+                    {
                         sorted &= out.last().is_none_or(|&last| last < item);
                         out.push(item);
                     }

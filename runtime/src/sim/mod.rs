@@ -176,6 +176,11 @@ pub struct RobotState {
     ir_streams: Vec<Stream>,
     /// Each IR sensor's (mean, spread) with nothing in range ([`sensors::nothing_in_range`]).
     ir_nothing: Vec<(f64, f64)>,
+    /// How far from the centre any IR sensor reaches ([`sensors::ir_reach`]).
+    ir_reach: f64,
+    /// The IR sensors' period when they all share one (read here, not from the rig, in the
+    /// step loop).
+    ir_period: Option<f64>,
     ambient_streams: Vec<Stream>,
     wheel_stream: Stream,
     pub panoramic: Option<PanoramicState>,
@@ -352,6 +357,12 @@ impl<'c> Simulation<'c> {
                     .iter()
                     .map(sensors::nothing_in_range)
                     .collect(),
+                ir_reach: sensors::ir_reach(&rig.distance_sensors),
+                ir_period: rig.distance_sensors.first().map(|s| s.period).filter(|&p| {
+                    rig.distance_sensors
+                        .iter()
+                        .all(|s| s.period.to_bits() == p.to_bits())
+                }),
                 ir_streams: (0..rig.distance_sensors.len())
                     .map(|s| Stream::new(seed, index, kind::PROXIMITY, s))
                     .collect(),
@@ -1109,13 +1120,30 @@ impl SenseShared<'_, '_> {
         robot.vision_requested = false;
         let proximity_sensors = if senses.proximity { 8 } else { 0 };
         let mut nearby_found = false;
+        // Sensors that share a period and a due time are due alike: one division for all.
+        let mut last_due: Option<(u64, f64, bool, f64)> = None;
         for (s, sensor) in rig
             .distance_sensors
             .iter()
             .enumerate()
             .take(proximity_sensors)
         {
-            if !due(&mut robot.ir_due[s], t, sensor.period) {
+            let period = robot.ir_period.unwrap_or(sensor.period);
+            let before = robot.ir_due[s];
+            let is_due = match last_due {
+                Some((bits, last_period, was_due, after))
+                    if bits == before.to_bits() && last_period.to_bits() == period.to_bits() =>
+                {
+                    robot.ir_due[s] = after;
+                    was_due
+                }
+                _ => {
+                    let is_due = due(&mut robot.ir_due[s], t, period);
+                    last_due = Some((before.to_bits(), period, is_due, robot.ir_due[s]));
+                    is_due
+                }
+            };
+            if !is_due {
                 continue;
             }
             if !nearby_found {
@@ -1124,19 +1152,19 @@ impl SenseShared<'_, '_> {
                     self.slab,
                     &self.broad.statics,
                     placement,
-                    &rig.distance_sensors,
+                    robot.ir_reach,
                     &mut robot.nearby,
                 );
                 robot.nearby_robots.clear();
                 if self.placements.len() > 1 {
-                    let reach = sensors::ir_reach(&rig.distance_sensors) + self.broad.max_radius;
+                    let reach = robot.ir_reach + self.broad.max_radius;
                     let (lo, hi) = broad_phase::square(DVec2::new(placement.x, placement.z), reach);
                     self.broad.robots.query(lo, hi, &mut robot.nearby_robots);
                     // The grid's square holds its corners too: only robots whose bodies come
                     // within reach are worth a sensor's test (in a crowd, most sensors then
                     // have none and trace nothing).
                     let center = DVec2::new(placement.x, placement.z);
-                    let sensor_reach = sensors::ir_reach(&rig.distance_sensors);
+                    let sensor_reach = robot.ir_reach;
                     let rigs = &compiled.rig.robots;
                     robot.nearby_robots.retain(|&other| {
                         let place = &self.placements[other as usize];

@@ -57,17 +57,17 @@ pub fn ir_reach(sensors: &[DistanceSensorRig]) -> f64 {
     reach * (1.0 + 1e-9) + 1e-9
 }
 
-/// The slab's obstacles that any of a robot's IR sensors could see: those within
-/// [`ir_reach`] of the robot's centre (a superset of what each sensor's own test keeps, by the
-/// triangle inequality), ascending, into `nearby`; `grid` files the slab's obstacles.
+/// The slab's obstacles that any of a robot's IR sensors could see: those within `reach`
+/// (the robot's [`ir_reach`]) of the robot's centre (a superset of what each sensor's own
+/// test keeps, by the triangle inequality), ascending, into `nearby`; `grid` files the slab's
+/// obstacles.
 pub fn nearby_obstacles(
     slab: &Slab,
     grid: &Grid,
     placement: &Placement,
-    sensors: &[DistanceSensorRig],
+    reach: f64,
     nearby: &mut Vec<u32>,
 ) {
-    let reach = ir_reach(sensors);
     let center = DVec2::new(placement.x, placement.z);
     if slab.obstacles.len() <= 16 {
         // A few: each tested (the same list the grid would give).
@@ -117,20 +117,34 @@ pub fn proximity(
             }
         }
     }
-    // Other robots' bodies at the sensor's height and within its range, likewise.
-    let robot_near = |other: usize, place: &Placement| {
-        other != robot
+    // Other robots' bodies at the sensor's height and within its range, likewise, gathered
+    // once (each ray tries them all).
+    let mut bodies = [(DVec2::ZERO, 0.0, 0.0); 16];
+    let mut body_count = 0;
+    let mut body_overflow = Vec::new();
+    for &other in robots {
+        let other = other as usize;
+        let place = &placements[other];
+        let center = DVec2::new(place.x, place.z);
+        if other != robot
             && height >= place.floor_y
             && height <= place.floor_y + rigs[other].body_height
-            && DVec2::new(place.x, place.z).distance(origin2) <= reach + rigs[other].body_radius
-    };
-    let candidates_near = || {
-        robots
-            .iter()
-            .map(|&o| (o as usize, &placements[o as usize]))
-            .filter(|&(o, p)| robot_near(o, p))
-    };
-    if count == 0 && candidates_near().next().is_none() {
+            && center.distance(origin2) <= reach + rigs[other].body_radius
+        {
+            let body = (
+                center,
+                rigs[other].body_radius,
+                slab.robot_reflectance.get(other).copied().unwrap_or(1.0),
+            );
+            if body_count < bodies.len() {
+                bodies[body_count] = body;
+                body_count += 1;
+            } else {
+                body_overflow.push(body);
+            }
+        }
+    }
+    if count == 0 && body_count == 0 {
         // Every ray misses: the same sums with no ray traced.
         return sample(sensor, stream, |_| None);
     }
@@ -140,6 +154,7 @@ pub fn proximity(
         .iter()
         .chain(&overflow)
         .map(|&i| &slab.obstacles[i as usize]);
+    let bodies = bodies[..body_count].iter().chain(&body_overflow);
     sample(sensor, stream, |(cos, sin)| {
         // Counter-clockwise seen from above, in (x, z): the same sense as headings.
         let ray = DVec2::new(
@@ -156,15 +171,12 @@ pub fn proximity(
                 }
             }
         }
-        for (other, place) in candidates_near() {
-            let body = Footprint::Circle {
-                center: DVec2::new(place.x, place.z),
-                radius: rigs[other].body_radius,
-            };
+        for &(center, radius, body_reflectance) in bodies.clone() {
+            let body = Footprint::Circle { center, radius };
             if let Some(t) = body.ray(origin2, ray) {
                 if t < nearest {
                     nearest = t;
-                    reflectance = slab.robot_reflectance.get(other).copied().unwrap_or(1.0);
+                    reflectance = body_reflectance;
                 }
             }
         }
