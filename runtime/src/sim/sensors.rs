@@ -100,7 +100,7 @@ pub fn proximity(
     // Only obstacles at the sensor's height and within its range can answer any of its rays
     // (a hit is never nearer than the obstacle; the margin keeps rounding on the safe side).
     let reach = sensor.range * (1.0 + 1e-9) + 1e-12;
-    let mut near = [0u32; 32];
+    let mut near = [0u32; 16];
     let mut count = 0;
     let mut overflow = Vec::new();
     for &index in nearby {
@@ -117,34 +117,20 @@ pub fn proximity(
             }
         }
     }
-    // Other robots' bodies at the sensor's height and within its range, likewise, gathered
-    // once (each ray tries them all).
-    let mut bodies = [(DVec2::ZERO, 0.0, 0.0); 16];
-    let mut body_count = 0;
-    let mut body_overflow = Vec::new();
-    for &other in robots {
-        let other = other as usize;
-        let place = &placements[other];
-        let center = DVec2::new(place.x, place.z);
-        if other != robot
+    // Other robots' bodies at the sensor's height and within its range, likewise.
+    let robot_near = |other: usize, place: &Placement| {
+        other != robot
             && height >= place.floor_y
             && height <= place.floor_y + rigs[other].body_height
-            && center.distance(origin2) <= reach + rigs[other].body_radius
-        {
-            let body = (
-                center,
-                rigs[other].body_radius,
-                slab.robot_reflectance.get(other).copied().unwrap_or(1.0),
-            );
-            if body_count < bodies.len() {
-                bodies[body_count] = body;
-                body_count += 1;
-            } else {
-                body_overflow.push(body);
-            }
-        }
-    }
-    if count == 0 && body_count == 0 {
+            && DVec2::new(place.x, place.z).distance(origin2) <= reach + rigs[other].body_radius
+    };
+    let candidates_near = || {
+        robots
+            .iter()
+            .map(|&o| (o as usize, &placements[o as usize]))
+            .filter(|&(o, p)| robot_near(o, p))
+    };
+    if count == 0 && candidates_near().next().is_none() {
         // Every ray misses: the same sums with no ray traced.
         return sample(sensor, stream, |_| None);
     }
@@ -154,7 +140,6 @@ pub fn proximity(
         .iter()
         .chain(&overflow)
         .map(|&i| &slab.obstacles[i as usize]);
-    let bodies = bodies[..body_count].iter().chain(&body_overflow);
     sample(sensor, stream, |(cos, sin)| {
         // Counter-clockwise seen from above, in (x, z): the same sense as headings.
         let ray = DVec2::new(
@@ -171,12 +156,15 @@ pub fn proximity(
                 }
             }
         }
-        for &(center, radius, body_reflectance) in bodies.clone() {
-            let body = Footprint::Circle { center, radius };
+        for (other, place) in candidates_near() {
+            let body = Footprint::Circle {
+                center: DVec2::new(place.x, place.z),
+                radius: rigs[other].body_radius,
+            };
             if let Some(t) = body.ray(origin2, ray) {
                 if t < nearest {
                     nearest = t;
-                    reflectance = body_reflectance;
+                    reflectance = slab.robot_reflectance.get(other).copied().unwrap_or(1.0);
                 }
             }
         }
