@@ -83,7 +83,7 @@ impl Grid {
         // point first, so that one signed conversion does (an unsigned one costs a dozen
         // instructions on x86-64).
         if x >= 1.0 {
-            let last = (limit - 1) as f64;
+            let last = (limit - 1) as i64 as f64;
             (if x < last { x } else { last }) as i64 as u32
         } else {
             0
