@@ -333,6 +333,34 @@ mod tests {
         }
     }
 
+    /// Points (one cell each, as robots' centres are filed) take the query's shortcuts: a
+    /// row's cells copied as one run, a one-cell query copied whole. Each must still find
+    /// every point in the box, once, ascending.
+    #[test]
+    fn point_queries_find_every_point_once_in_order() {
+        let points: Vec<DVec2> = boxes().iter().map(|b| (b.0 + b.1) * 0.5).collect();
+        let mut grid = Grid::new(DVec2::ZERO, DVec2::splat(10.0), 0.7, points.len());
+        grid.rebuild(points.len(), |i| (points[i], points[i]));
+        assert!(grid.single_cells);
+        let mut out = Vec::new();
+        let mut one_cell = 0;
+        for (k, centre) in points.iter().enumerate() {
+            // Boxes from far inside a cell to several cells wide.
+            let half = DVec2::splat([0.01, 0.2, 0.9, 2.5][k % 4]);
+            let query = (*centre - half, *centre + half);
+            let [c0, r0, c1, r1] = grid.span(query.0, query.1);
+            one_cell += usize::from(c0 == c1 && r0 == r1);
+            grid.query(query.0, query.1, &mut out);
+            assert!(out.windows(2).all(|w| w[0] < w[1]), "ascending, once each");
+            for (i, point) in points.iter().enumerate() {
+                if meets((*point, *point), query) {
+                    assert!(out.contains(&(i as u32)), "{i} missed");
+                }
+            }
+        }
+        assert!(one_cell > 0, "some queries fall in one cell");
+    }
+
     #[test]
     fn segment_queries_find_every_box_the_segment_crosses() {
         let items = boxes();
