@@ -1,11 +1,9 @@
 //! Tokens of the world language, produced on demand (no token vector, to keep memory low on
 //! multi-megabyte meshes). Whitespace includes the comma; comments are recorded as trivia.
 
-use nom::bytes::complete::take_while1;
-use nom::{IResult, Parser};
-
 use crate::diagnostic::Diagnostic;
-use crate::syntax::Span;
+use crate::span::Span;
+use crate::word::{is_space, word_len};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum TokenKind {
@@ -24,27 +22,6 @@ pub(crate) enum TokenKind {
 pub(crate) struct Token {
     pub kind: TokenKind,
     pub span: Span,
-}
-
-/// Whether `byte` separates tokens: blanks, control characters and the comma.
-#[inline]
-fn is_space(byte: u8) -> bool {
-    byte <= b' ' || byte == b','
-}
-
-/// Whether `byte` may continue a word.
-#[inline]
-fn is_word_byte(byte: u8) -> bool {
-    !is_space(byte) && !matches!(byte, b'{' | b'}' | b'[' | b']' | b'"' | b'#')
-}
-
-fn word(input: &[u8]) -> IResult<&[u8], &[u8]> {
-    take_while1(is_word_byte).parse(input)
-}
-
-/// Length of the word starting at `bytes[0]` (0 if none starts there).
-pub(crate) fn word_len(bytes: &[u8]) -> usize {
-    word(bytes).map(|(_, w)| w.len()).unwrap_or(0)
 }
 
 /// Reads a word as a number: a double (`1e-3`, `-.5`, `5.`, `+2`) or a VRML97 hex integer

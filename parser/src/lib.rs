@@ -13,10 +13,12 @@ pub mod format;
 mod lexer;
 mod parse;
 pub mod source;
+mod span;
 pub mod syntax;
 pub mod testgen;
+mod word;
 
 pub use diagnostic::{Diagnostic, Label, Severity, SourceMap};
 pub use parse::{parse, parse_with, Parse, MAX_DEPTH, MAX_ERRORS};
 pub use source::{SourceError, SourceText};
-pub use syntax::Span;
+pub use span::Span;

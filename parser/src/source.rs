@@ -7,7 +7,7 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use crate::diagnostic::Diagnostic;
-use crate::syntax::Span;
+use crate::span::Span;
 
 /// Why a file could not be read at all.
 #[derive(Debug, thiserror::Error)]

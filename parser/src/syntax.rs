@@ -4,55 +4,7 @@
 //! [`Span`] into the source it was parsed from; comments are kept aside in
 //! [`SourceFile::comments`] so that the tree plus the comments reproduce the file's content.
 
-use std::fmt;
-
-/// A half-open byte range `start..end` into the parsed source.
-#[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct Span {
-    /// First byte.
-    pub start: u32,
-    /// One past the last byte.
-    pub end: u32,
-}
-
-impl Span {
-    /// The span `start..end`.
-    pub fn new(start: usize, end: usize) -> Span {
-        Span {
-            start: start as u32,
-            end: end as u32,
-        }
-    }
-
-    /// The smallest span covering both.
-    pub fn to(self, other: Span) -> Span {
-        Span {
-            start: self.start.min(other.start),
-            end: self.end.max(other.end),
-        }
-    }
-
-    /// As a `usize` range, for slicing the source.
-    pub fn range(self) -> std::ops::Range<usize> {
-        self.start as usize..self.end as usize
-    }
-
-    /// Length in bytes.
-    pub fn len(self) -> usize {
-        (self.end - self.start) as usize
-    }
-
-    /// Whether the span is empty.
-    pub fn is_empty(self) -> bool {
-        self.start == self.end
-    }
-}
-
-impl fmt::Debug for Span {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}..{}", self.start, self.end)
-    }
-}
+pub use crate::span::Span;
 
 /// A name as written: a node type, a field, a DEF name or a PROTO name.
 #[derive(Clone, Debug, PartialEq)]
@@ -203,7 +155,7 @@ impl NumberList {
     /// Span of item `index`, found from its start by the lexer's word rule.
     pub fn span_of(&self, index: usize, source: &str) -> Span {
         let start = self.starts[index] as usize;
-        let len = crate::lexer::word_len(&source.as_bytes()[start..]);
+        let len = crate::word::word_len(&source.as_bytes()[start..]);
         Span::new(start, start + len)
     }
 }
