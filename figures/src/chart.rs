@@ -6,7 +6,8 @@ use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::{house_axes, number, polyline, style, DrawResult, Figure, Rasters};
+use crate::figure::{DrawResult, Figure, Rasters};
+use crate::style::{self, house_axes, number, polyline};
 
 /// One axis: its title (with the unit, e.g. "time per update (µs)"), scale and range.
 #[derive(Clone, Debug, PartialEq)]

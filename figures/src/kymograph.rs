@@ -10,7 +10,8 @@ use plotters::prelude::*;
 use plotters::style::colors::colormaps::{ColorMap, DerivedColorMap, ViridisRGB};
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::{house_axes, number, style, DrawResult, Figure, Rasters};
+use crate::figure::{DrawResult, Figure, Rasters};
+use crate::style::{self, house_axes, number};
 
 /// How values map to colours.
 #[derive(Clone, Copy, Debug, PartialEq)]

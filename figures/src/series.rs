@@ -8,7 +8,9 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::{house_axes, number, style, Axis, DrawResult, Figure, Rasters};
+use crate::chart::Axis;
+use crate::figure::{DrawResult, Figure, Rasters};
+use crate::style::{self, house_axes, number};
 
 /// One trace of a panel.
 #[derive(Clone, Debug, PartialEq)]

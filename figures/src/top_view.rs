@@ -11,7 +11,8 @@ use plotters::prelude::*;
 use plotters::style::colors::colormaps::{ColorMap, ViridisRGB};
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::{house_axes, number, polyline, style, DrawResult, Figure, Rasters};
+use crate::figure::{DrawResult, Figure, Rasters};
+use crate::style::{self, house_axes, number, polyline};
 
 /// An obstacle's footprint, in world (x, z) metres.
 #[derive(Clone, Debug, PartialEq)]

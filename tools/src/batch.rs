@@ -10,7 +10,7 @@ use anyhow::{bail, Context};
 use regatta_evolve::world::Override;
 use regatta_evolve::{Experiment, Fitness};
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -32,7 +32,7 @@ pub struct Args {
     #[arg(long, value_name = "WORLD")]
     network_from: Option<PathBuf>,
     /// The fitness of each row: NAME[:key=value,...] (avoidance, regatta, phototaxis).
-    #[arg(long, default_value = "regatta", value_parser = crate::run::parse_fitness)]
+    #[arg(long, default_value = "regatta", value_parser = regatta_evolve::Fitness::parse)]
     fitness: Fitness,
     /// Threads (0: one per core). The output does not depend on it.
     #[arg(short = 'j', long = "jobs", default_value_t = 0)]

@@ -15,7 +15,7 @@ use regatta_runtime::compile::rig::{Optics, PanoramicRig, Pose2, TurretRig};
 use regatta_runtime::optics::{Panoramic, Renderer, RetinaOutput};
 use regatta_runtime::render::Poses;
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -308,21 +308,16 @@ fn outputs(
     poses
         .iter()
         .map(|&pose| {
-            let view = renderer.view(&compiled.plan, &posed(compiled, robot, pose), robot);
+            let view = renderer.view(
+                &compiled.plan,
+                &crate::vision::posed(compiled, robot, pose),
+                robot,
+            );
             let mut out = RetinaOutput::default();
             retina.update(&renderer, &view, pose, floor, &mut out);
             out
         })
         .collect()
-}
-
-pub(crate) fn posed(compiled: &regatta_runtime::Compiled, robot: usize, pose: Pose2) -> Poses {
-    let mut poses = Poses {
-        poses: compiled.rig.robots.iter().map(|r| r.start).collect(),
-        floor_y: compiled.rig.robots.iter().map(|r| r.floor_y).collect(),
-    };
-    poses.poses[robot] = pose;
-    poses
 }
 
 /// Mean and max relative analog error, mean and max digital error in LSB.
@@ -366,7 +361,10 @@ fn time_per_update(
     let mut retina = Panoramic::new(rig);
     let floor = compiled.rig.robots[robot].floor_y;
     let mut out = RetinaOutput::default();
-    let all_poses: Vec<Poses> = poses.iter().map(|&p| posed(compiled, robot, p)).collect();
+    let all_poses: Vec<Poses> = poses
+        .iter()
+        .map(|&p| crate::vision::posed(compiled, robot, p))
+        .collect();
     let budget = std::time::Duration::from_millis(millis);
     let started = Instant::now();
     let mut best = f64::INFINITY;

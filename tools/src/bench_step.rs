@@ -9,7 +9,7 @@ use regatta_runtime::compile::plan::Plan;
 use regatta_runtime::sim::Simulation;
 use regatta_runtime::Compiled;
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -133,7 +133,7 @@ fn swarms(args: Args, threads: usize) -> anyhow::Result<Outcome> {
                 Budget::Simulated,
             ),
         )?;
-        let peak = crate::bench::peak_resident_bytes().unwrap_or(0);
+        let peak = crate::memory::peak_resident_bytes().unwrap_or(0);
         println!("{peak} {}", row.steps);
         return Ok(Outcome::Clean);
     }
@@ -194,7 +194,7 @@ fn world_configurations(args: Args) -> anyhow::Result<Outcome> {
         let compiled = load(&args.world)?;
         let mut simulation = Simulation::new(&compiled, None)?;
         simulation.run(20_000);
-        let peak = crate::bench::peak_resident_bytes().unwrap_or(0);
+        let peak = crate::memory::peak_resident_bytes().unwrap_or(0);
         println!("{peak}");
         return Ok(Outcome::Clean);
     }

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {

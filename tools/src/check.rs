@@ -3,8 +3,8 @@
 
 use std::path::PathBuf;
 
+use crate::outcome::Outcome;
 use crate::world::{check_world, WorldOptions};
-use crate::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {

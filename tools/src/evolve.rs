@@ -12,7 +12,7 @@ use regatta_evolve::evolve::{text_hash, Aggregate, Evolution, GenerationStats, M
 use regatta_evolve::world::Override;
 use regatta_evolve::{Experiment, Fitness};
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -85,7 +85,9 @@ enum MethodArg {
 }
 
 fn check_fitness(text: &str) -> Result<String, String> {
-    crate::run::parse_fitness(text).map(|_| text.to_owned())
+    regatta_evolve::Fitness::parse(text)
+        .map_err(|e| e.to_string())
+        .map(|_| text.to_owned())
 }
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {

@@ -9,7 +9,7 @@ use regatta_runtime::compile::graph::Owner;
 use regatta_runtime::compile::plan::RendererChoice;
 use regatta_runtime::compile::rig::{Optics, TurretRig};
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {

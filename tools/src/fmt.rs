@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use regatta_parser::SourceText;
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {

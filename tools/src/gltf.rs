@@ -8,7 +8,7 @@ use anyhow::{bail, Context};
 use regatta_gltf::{export, Options, Track};
 use regatta_runtime::compile::rig::Pose2;
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {

@@ -6,7 +6,7 @@ use anyhow::{bail, Context};
 use regatta_runtime::log::{read, CdrReader, LogContents, Recorder, RunInfo};
 use regatta_runtime::sim::Simulation;
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 /// Reads a log file, warning when it was cut short.
 pub(crate) fn load(path: &Path) -> anyhow::Result<LogContents> {
@@ -171,7 +171,7 @@ enum LogCommand {
         /// The log.
         log: PathBuf,
         /// NAME[:key=value,...]: avoidance, regatta, phototaxis.
-        #[arg(long, value_parser = crate::run::parse_fitness)]
+        #[arg(long, value_parser = regatta_evolve::Fitness::parse)]
         fitness: regatta_evolve::Fitness,
         #[command(flatten)]
         world: crate::world::LogWorldOptions,

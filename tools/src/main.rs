@@ -14,6 +14,8 @@ mod explain;
 mod fmt;
 mod gltf;
 mod logs;
+mod memory;
+mod outcome;
 mod plot;
 mod render;
 mod run;
@@ -28,6 +30,8 @@ use std::io::IsTerminal;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+
+use outcome::Outcome;
 
 /// regatta: VRML-style robot worlds — checked, simulated and logged reproducibly.
 #[derive(Parser)]
@@ -83,15 +87,6 @@ enum Command {
     Log(logs::LogArgs),
     /// Figures of a log: the arena from above, retina kymographs, and (--series) sensor time series.
     Plot(plot::PlotArgs),
-}
-
-/// What a subcommand reports back.
-pub enum Outcome {
-    Clean,
-    /// The input had errors; they were printed.
-    Errors,
-    /// A signal stopped the command, which finished its work cleanly (logs closed).
-    Signalled(i32),
 }
 
 /// Piping into `head` closes our standard output early: like other Unix tools, end quietly

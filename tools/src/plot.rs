@@ -17,7 +17,7 @@ use regatta_runtime::retina::FilterKind;
 use regatta_runtime::sim::world2d::Slab;
 use regatta_runtime::sim::Visits;
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 /// The file format of figures (`--format`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]

@@ -12,7 +12,7 @@ use regatta_runtime::optics::{
 use regatta_runtime::render::Poses;
 use serde_json::json;
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {

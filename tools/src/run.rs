@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::Context;
 use regatta_runtime::sim::Simulation;
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -46,12 +46,8 @@ pub struct Args {
     #[arg(long)]
     json: bool,
     /// The fitness the JSON's top-level `fitness` reports (NAME[:key=value,...]).
-    #[arg(long, default_value = "regatta", value_parser = parse_fitness)]
+    #[arg(long, default_value = "regatta", value_parser = regatta_evolve::Fitness::parse)]
     fitness: regatta_evolve::Fitness,
-}
-
-pub(crate) fn parse_fitness(text: &str) -> Result<regatta_evolve::Fitness, String> {
-    regatta_evolve::Fitness::parse(text).map_err(|e| e.to_string())
 }
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {

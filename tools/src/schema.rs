@@ -5,7 +5,7 @@ use std::fmt::Write;
 use anyhow::bail;
 use regatta_schema::{catalogue::did_you_mean, standard_protos, Catalogue, NodeSpec, ProtoSpec};
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {

@@ -13,7 +13,7 @@ use regatta_serial::link::Link;
 use regatta_serial::server::{serve_lock_step, serve_real_time, Ended};
 use regatta_serial::{ClientOptions, Pacing, RemoteKhepera, Server};
 
-use crate::Outcome;
+use crate::outcome::Outcome;
 
 #[derive(clap::Args)]
 pub struct ServeArgs {

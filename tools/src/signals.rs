@@ -50,8 +50,8 @@ impl Stop {
     }
 
     /// How the command ends when a signal stopped it: 128 + the signal's number.
-    pub fn outcome(&self) -> Option<crate::Outcome> {
-        self.signal().map(crate::Outcome::Signalled)
+    pub fn outcome(&self) -> Option<crate::outcome::Outcome> {
+        self.signal().map(crate::outcome::Outcome::Signalled)
     }
 
     /// The signal's name, for messages.

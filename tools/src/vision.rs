@@ -5,6 +5,8 @@
 use std::path::Path;
 
 use regatta_runtime::compile::plan::RendererChoice;
+use regatta_runtime::compile::rig::Pose2;
+use regatta_runtime::render::Poses;
 use regatta_runtime::vision::VisionBackend;
 use regatta_runtime::Compiled;
 
@@ -76,7 +78,7 @@ pub fn bench_population(
     sizes: &[usize],
     millis: u64,
     out: &Path,
-) -> anyhow::Result<crate::Outcome> {
+) -> anyhow::Result<crate::outcome::Outcome> {
     use std::fmt::Write as _;
     use std::time::Instant;
 
@@ -96,7 +98,7 @@ pub fn bench_population(
     };
     let worlds: Vec<_> = poses
         .iter()
-        .map(|&pose| crate::bench_retina::posed(compiled, robot, pose))
+        .map(|&pose| crate::vision::posed(compiled, robot, pose))
         .collect();
     let mut luminance = Vec::new();
     // Agreement with the CPU, from one batch of the compared poses.
@@ -170,7 +172,7 @@ pub fn bench_population(
     let path = out.join("retina-wgpu.csv");
     std::fs::write(&path, csv).with_context(|| format!("cannot write {}", path.display()))?;
     println!("\nwrote {}", path.display());
-    Ok(crate::Outcome::Clean)
+    Ok(crate::outcome::Outcome::Clean)
 }
 
 #[cfg(not(feature = "wgpu"))]
@@ -182,6 +184,16 @@ pub fn bench_population(
     _sizes: &[usize],
     _millis: u64,
     _out: &Path,
-) -> anyhow::Result<crate::Outcome> {
+) -> anyhow::Result<crate::outcome::Outcome> {
     unreachable!("bench retina asks for the backend first")
+}
+
+/// The robots at their start poses, with `robot` moved to `pose`.
+pub(crate) fn posed(compiled: &regatta_runtime::Compiled, robot: usize, pose: Pose2) -> Poses {
+    let mut poses = Poses {
+        poses: compiled.rig.robots.iter().map(|r| r.start).collect(),
+        floor_y: compiled.rig.robots.iter().map(|r| r.floor_y).collect(),
+    };
+    poses.poses[robot] = pose;
+    poses
 }
