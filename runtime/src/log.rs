@@ -445,7 +445,11 @@ impl<W: Write + Seek> Recorder<W> {
     }
 
     /// Closes the log with its end record.
-    pub fn finish(mut self, simulation: &Simulation, interrupted: bool) -> Result<(), LogError> {
+    pub fn finish(
+        mut self,
+        simulation: &Simulation,
+        interrupted: bool,
+    ) -> Result<LogStats, LogError> {
         let end = BTreeMap::from([
             ("steps".to_owned(), simulation.steps.to_string()),
             ("time".to_owned(), format!("{}", simulation.time)),
@@ -467,9 +471,18 @@ impl<W: Write + Seek> Recorder<W> {
                 metadata: end,
             })
             .map_err(LogError::Write)?;
-        self.writer.finish().map_err(LogError::Write)?;
-        Ok(())
+        let summary = self.writer.finish().map_err(LogError::Write)?;
+        Ok(LogStats {
+            messages: summary.stats.map_or(0, |stats| stats.message_count),
+        })
     }
+}
+
+/// What a finished log holds, for the line a command prints about it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LogStats {
+    /// Messages written, on every channel.
+    pub messages: u64,
 }
 
 /// A channel of a log.

@@ -20,7 +20,7 @@ pub struct Args {
     #[arg(long, default_value = "1..10", value_parser = parse_seeds)]
     seeds: Seeds,
     /// Simulated time per run (s).
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, allow_negative_numbers = true)]
     duration: f64,
     /// Set a field of every node of a type or DEF name: NODE.FIELD=VALUE (repeatable), e.g.
     /// `Khepera.controllerArgs=irGain=2`; a VALUE that is not a number, list, node or quoted

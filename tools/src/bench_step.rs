@@ -41,7 +41,7 @@ pub struct Args {
     #[arg(long)]
     threads: Option<usize>,
     /// Swarms: simulate this many seconds per size and time them, instead of `--millis`.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     seconds: Option<f64>,
     /// Swarms: seed of the placements.
     #[arg(long, default_value_t = 1)]

@@ -36,7 +36,7 @@ pub struct Args {
     #[arg(long, default_value_t = 2)]
     trials: usize,
     /// Simulated time per run (s).
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, allow_negative_numbers = true)]
     duration: f64,
     /// How a candidate's runs make its fitness.
     #[arg(long, value_enum, default_value_t = AggregateArg::Mean)]
@@ -48,7 +48,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Initial step size (CMA-ES) or mutation deviation (GA); default 0.5 and 0.2.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     sigma: Option<f64>,
     /// Threads (0: one per core). Results do not depend on it.
     #[arg(short = 'j', long = "jobs", default_value_t = 0)]

@@ -37,8 +37,8 @@ use outcome::Outcome;
 #[derive(Parser)]
 #[command(name = "regatta", version, about, long_about = None, propagate_version = true)]
 struct Cli {
-    /// When to colour diagnostics.
-    #[arg(long, global = true, value_enum, default_value_t = Color::Auto)]
+    /// When to colour error messages and diagnostics on the terminal (not figures).
+    #[arg(long, global = true, value_enum, default_value_t = Color::Auto, value_name = "WHEN")]
     color: Color,
     /// A folder where `webots://` PROTOs are looked for before regatta's stand-ins (a Webots
     /// installation or any folder of PROTOs); repeatable, after it REGATTA_PROTO_PATH's.
@@ -161,8 +161,25 @@ fn run() -> ExitCode {
             ExitCode::from(u8::try_from(128 + signal.clamp(0, 127)).unwrap_or(1))
         }
         Err(error) => {
-            eprintln!("error: {error:#}");
+            eprintln!("error: {}", report(&error));
             ExitCode::from(1)
         }
     }
+}
+
+/// An error and its causes on one line, `a: b: c`, each cause said once: libraries often put
+/// their source's text in their own message too, which `{:#}` would then repeat.
+fn report(error: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in error.chain() {
+        let text = cause.to_string();
+        if line.ends_with(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
 }

@@ -70,8 +70,13 @@ pub struct PlotArgs {
     /// File format of the figures.
     #[arg(long, value_enum, default_value_t)]
     format: FigureFormat,
-    /// How the top view colours trajectories.
-    #[arg(long, value_enum, default_value_t)]
+    /// How the top view colours trajectories: one colour per robot, or by time.
+    #[arg(
+        long = "trajectory-color",
+        alias = "color-by",
+        value_enum,
+        default_value_t
+    )]
     color_by: ColorBy,
     /// Also draw each robot's time series: IR, ambient, wheel speeds, visits and contacts.
     #[arg(long)]

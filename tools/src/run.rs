@@ -13,7 +13,7 @@ pub struct Args {
     /// The world file (`-` reads standard input).
     world: PathBuf,
     /// Simulated time to run (s).
-    #[arg(long, conflicts_with = "steps")]
+    #[arg(long, conflicts_with = "steps", allow_negative_numbers = true)]
     duration: Option<f64>,
     /// Steps to run.
     #[arg(long)]
@@ -118,10 +118,16 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
         if let Some(error) = &simulation.vision_error {
             anyhow::bail!("step {}: {error}", simulation.steps);
         }
-        if let Some(recorder) = &mut recorder {
-            recorder
-                .record(&simulation)
-                .with_context(|| format!("while logging step {}", simulation.steps))?;
+        let logged = recorder.as_mut().map_or(Ok(()), |r| r.record(&simulation));
+        if let Err(error) = logged {
+            let error = anyhow::Error::new(error)
+                .context(format!("while logging step {}", simulation.steps));
+            // The file is closed as it stands; the chunks written so far are readable.
+            drop(recorder.take());
+            if let Some(path) = args.log.as_deref() {
+                eprintln!("{}", crate::world::salvaged_log_line(path));
+            }
+            return Err(error);
         }
         if let Some(observer) = &mut observer {
             observer.after_step(&simulation);
@@ -156,11 +162,15 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
         bar.finish_and_clear();
     }
     let was_interrupted = stop.requested();
-    if let Some(recorder) = recorder {
-        recorder
-            .finish(&simulation, was_interrupted)
-            .context("cannot close the log")?;
-    }
+    let log_line = match (recorder, args.log.as_deref()) {
+        (Some(recorder), Some(path)) => {
+            let stats = recorder
+                .finish(&simulation, was_interrupted)
+                .context("cannot close the log")?;
+            Some(crate::world::log_line(path, stats.messages))
+        }
+        _ => None,
+    };
     let wall = started.elapsed().as_secs_f64();
     if was_interrupted {
         eprintln!(
@@ -177,6 +187,10 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
     if let Some(observer) = &observer {
         let summary = observer.summary(&simulation, &name, Some(wall));
         println!("{}", serde_json::to_string_pretty(&summary)?);
+        // Standard output is the JSON object alone.
+        if let Some(line) = &log_line {
+            eprintln!("{line}");
+        }
         return Ok(finish(failure, &simulation, &name, &args, &stop));
     }
     println!("world {name}: seed {}", simulation.seed);
@@ -228,6 +242,9 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
             );
         }
         println!();
+    }
+    if let Some(line) = &log_line {
+        println!("{line}");
     }
     Ok(finish(failure, &simulation, &name, &args, &stop))
 }

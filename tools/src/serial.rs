@@ -41,7 +41,7 @@ pub struct ServeArgs {
     #[arg(long, conflicts_with = "duration")]
     steps: Option<u64>,
     /// Stop after this much simulated time (s).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     duration: Option<f64>,
     /// Seed of every random stream (overrides WorldInfo.randomSeed).
     #[arg(long)]

@@ -194,7 +194,74 @@ pub fn steps_for(duration: f64, time_step: f64) -> anyhow::Result<u64> {
     Ok((duration / time_step).ceil().max(0.0) as u64)
 }
 
-/// A log recorder writing to `path` (its folder created), with the run's world text and seed.
+/// Creates the log file at `path`. A missing folder is created and said (a typo in a folder
+/// name should not scatter logs unnoticed); a part of the path that is a file, or a path
+/// that is a folder, is named as the problem.
+pub fn create_log_file(path: &Path) -> anyhow::Result<std::fs::File> {
+    if path.is_dir() {
+        bail!(
+            "cannot write the log to {}: it is a folder; give a file name such as {}",
+            path.display(),
+            path.join("run.mcap").display()
+        );
+    }
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        // The nearest part of the path that exists must be a folder.
+        if let Some(existing) = parent
+            .ancestors()
+            .find(|a| !a.as_os_str().is_empty() && a.exists())
+        {
+            if !existing.is_dir() {
+                bail!(
+                    "cannot write the log to {}: {} is a file, not a folder",
+                    path.display(),
+                    existing.display()
+                );
+            }
+        }
+        if !parent.exists() {
+            std::fs::create_dir_all(parent).with_context(|| {
+                format!("cannot create the folder {} for the log", parent.display())
+            })?;
+            eprintln!("note: created the folder {} for the log", parent.display());
+        }
+    }
+    std::fs::File::create(path).with_context(|| format!("cannot create the log {}", path.display()))
+}
+
+/// "log: PATH (size, messages)", the line a command prints about a log it wrote.
+pub fn log_line(path: &Path, messages: u64) -> String {
+    let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
+    let size = if bytes >= 1_000_000 {
+        format!("{:.1} MB", bytes as f64 / 1e6)
+    } else {
+        format!("{:.1} kB", bytes as f64 / 1e3)
+    };
+    format!("log: {} ({size}, {messages} messages)", path.display())
+}
+
+/// What is left of a log whose writing failed: the messages of its complete chunks, up to
+/// which simulated time, or that nothing of it can be read.
+pub fn salvaged_log_line(path: &Path) -> String {
+    let contents = std::fs::read(path)
+        .ok()
+        .and_then(|bytes| regatta_runtime::log::read(&bytes).ok());
+    match contents {
+        Some(contents) if !contents.messages.is_empty() => {
+            let last = contents.messages.iter().map(|m| m.1).max().unwrap_or(0);
+            format!(
+                "log: {} is cut short: {} messages up to t = {:.3} s are readable (`regatta log info` reads it)",
+                path.display(),
+                contents.messages.len(),
+                last as f64 * 1e-9
+            )
+        }
+        _ => format!("log: nothing of {} is readable", path.display()),
+    }
+}
+
+/// A log recorder writing to `path` (see [`create_log_file`]), with the run's world text and
+/// seed.
 pub fn create_recorder(
     path: &Path,
     world: &Path,
@@ -204,12 +271,7 @@ pub fn create_recorder(
     steps_requested: u64,
     channels: regatta_runtime::log::Channels,
 ) -> anyhow::Result<Recorder<std::io::BufWriter<std::fs::File>>> {
-    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent)
-            .with_context(|| format!("cannot create {}", parent.display()))?;
-    }
-    let file =
-        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let file = create_log_file(path)?;
     let run = RunInfo {
         world_name: world_name(world),
         world_text: loaded.checked.sources[0].text.to_string(),

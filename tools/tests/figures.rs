@@ -66,7 +66,14 @@ fn plot_writes_png_and_svg_figures_with_labelled_axes() {
     ok(regatta()
         .arg("plot")
         .arg(&log)
-        .args(["--format", "svg", "--color-by", "time", "--series", "--out"])
+        .args([
+            "--format",
+            "svg",
+            "--trajectory-color",
+            "time",
+            "--series",
+            "--out",
+        ])
         .arg(&svg)
         .output()
         .unwrap());
