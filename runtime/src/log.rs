@@ -28,24 +28,15 @@ use sha2::{Digest, Sha256};
 use crate::khepera::Senses;
 use crate::sim::Simulation;
 
+mod cdr;
 mod channels;
+mod error;
 mod foxglove;
 
+pub use cdr::{Cdr, CdrReader, ShortMessage};
 pub use channels::{is_ros2_topic, robot_tokens, sanitize, Channel, Channels, UnknownChannel};
+pub use error::LogError;
 pub use foxglove::SCHEMAS as FOXGLOVE_SCHEMAS;
-
-/// Why a log could not be written or read.
-#[derive(Debug, thiserror::Error)]
-pub enum LogError {
-    #[error("cannot write the log: {0}")]
-    Write(#[source] mcap::McapError),
-    #[error("the log is not a readable MCAP file: {0}")]
-    Read(#[source] mcap::McapError),
-    #[error("the log has no regatta metadata record: it was not written by regatta run --log")]
-    NoMetadata,
-    #[error("the log's metadata is incomplete: missing {0}")]
-    MissingField(&'static str),
-}
 
 /// What a run needs to be repeated, stored in the log.
 #[derive(Clone, Debug, PartialEq)]
@@ -183,70 +174,6 @@ pub const SCHEMAS: &[(&str, &str)] = &[
     ("regatta/msg/ControllerEvent", "# A controller call failed\nfloat64 t\nstring error\n"),
 ];
 
-/// CDR (little-endian) encoding into a reused buffer: every primitive aligned to its size,
-/// counted from after the 4-byte encapsulation header.
-pub struct Cdr {
-    pub buf: Vec<u8>,
-}
-
-impl Cdr {
-    fn start(&mut self) {
-        self.buf.clear();
-        self.buf.extend_from_slice(&[0, 1, 0, 0]);
-    }
-    fn align(&mut self, n: usize) {
-        while !(self.buf.len() - 4).is_multiple_of(n) {
-            self.buf.push(0);
-        }
-    }
-    fn f64(&mut self, x: f64) {
-        self.align(8);
-        self.buf.extend_from_slice(&x.to_le_bytes());
-    }
-    fn i32(&mut self, x: i32) {
-        self.align(4);
-        self.buf.extend_from_slice(&x.to_le_bytes());
-    }
-    fn u32(&mut self, x: u32) {
-        self.align(4);
-        self.buf.extend_from_slice(&x.to_le_bytes());
-    }
-    fn u64(&mut self, x: u64) {
-        self.align(8);
-        self.buf.extend_from_slice(&x.to_le_bytes());
-    }
-    fn u16(&mut self, x: u16) {
-        self.align(2);
-        self.buf.extend_from_slice(&x.to_le_bytes());
-    }
-    fn bool(&mut self, x: bool) {
-        self.buf.push(x as u8);
-    }
-    fn string(&mut self, text: &str) {
-        self.u32(text.len() as u32 + 1);
-        self.buf.extend_from_slice(text.as_bytes());
-        self.buf.push(0);
-    }
-    fn f32s(&mut self, values: impl ExactSizeIterator<Item = f64>) {
-        self.u32(values.len() as u32);
-        for x in values {
-            self.buf.extend_from_slice(&(x as f32).to_le_bytes());
-        }
-    }
-    fn u16s(&mut self, values: &[u16]) {
-        self.u32(values.len() as u32);
-        for &x in values {
-            self.u16(x);
-        }
-    }
-}
-
-/// Reads CDR written by [`Cdr`], field by field.
-pub struct CdrReader<'a> {
-    data: &'a [u8],
-    at: usize,
-}
-
 /// A `/{robot}/pose` message: its time (s) and the pose.
 pub fn decode_pose(data: &[u8]) -> Result<(f64, crate::compile::rig::Pose2), ShortMessage> {
     let mut r = CdrReader::new(data);
@@ -258,95 +185,6 @@ pub fn decode_pose(data: &[u8]) -> Result<(f64, crate::compile::rig::Pose2), Sho
             heading: r.f64()?,
         },
     ))
-}
-
-/// A CDR message too short for its schema.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("a message is shorter than its schema")]
-pub struct ShortMessage;
-
-impl<'a> CdrReader<'a> {
-    pub fn new(data: &'a [u8]) -> CdrReader<'a> {
-        CdrReader { data, at: 4 }
-    }
-    fn align(&mut self, n: usize) {
-        while !(self.at - 4).is_multiple_of(n) {
-            self.at += 1;
-        }
-    }
-    fn take(&mut self, n: usize) -> Result<&'a [u8], ShortMessage> {
-        let bytes = self.data.get(self.at..self.at + n).ok_or(ShortMessage)?;
-        self.at += n;
-        Ok(bytes)
-    }
-    pub fn f64(&mut self) -> Result<f64, ShortMessage> {
-        self.align(8);
-        Ok(f64::from_le_bytes(
-            self.take(8)?.try_into().expect("8 bytes"),
-        ))
-    }
-    pub fn i32(&mut self) -> Result<i32, ShortMessage> {
-        self.align(4);
-        Ok(i32::from_le_bytes(
-            self.take(4)?.try_into().expect("4 bytes"),
-        ))
-    }
-    pub fn u32(&mut self) -> Result<u32, ShortMessage> {
-        self.align(4);
-        Ok(u32::from_le_bytes(
-            self.take(4)?.try_into().expect("4 bytes"),
-        ))
-    }
-    pub fn u64(&mut self) -> Result<u64, ShortMessage> {
-        self.align(8);
-        Ok(u64::from_le_bytes(
-            self.take(8)?.try_into().expect("8 bytes"),
-        ))
-    }
-    pub fn u16(&mut self) -> Result<u16, ShortMessage> {
-        self.align(2);
-        Ok(u16::from_le_bytes(
-            self.take(2)?.try_into().expect("2 bytes"),
-        ))
-    }
-    pub fn bool(&mut self) -> Result<bool, ShortMessage> {
-        Ok(self.take(1)?[0] != 0)
-    }
-    pub fn string(&mut self) -> Result<String, ShortMessage> {
-        let length = self.u32()? as usize;
-        let bytes = self.take(length)?;
-        Ok(String::from_utf8_lossy(bytes.strip_suffix(&[0]).unwrap_or(bytes)).into_owned())
-    }
-    pub fn f32s(&mut self) -> Result<Vec<f32>, ShortMessage> {
-        let n = self.u32()? as usize;
-        if n > self.data.len() {
-            return Err(ShortMessage);
-        }
-        (0..n)
-            .map(|_| {
-                Ok(f32::from_le_bytes(
-                    self.take(4)?.try_into().expect("4 bytes"),
-                ))
-            })
-            .collect()
-    }
-    pub fn u16s(&mut self, fixed: Option<usize>) -> Result<Vec<u16>, ShortMessage> {
-        let n = match fixed {
-            Some(n) => n,
-            None => self.u32()? as usize,
-        };
-        if n > self.data.len() {
-            return Err(ShortMessage);
-        }
-        (0..n).map(|_| self.u16()).collect()
-    }
-    pub fn strings(&mut self) -> Result<Vec<String>, ShortMessage> {
-        let n = self.u32()? as usize;
-        if n > self.data.len() {
-            return Err(ShortMessage);
-        }
-        (0..n).map(|_| self.string()).collect()
-    }
 }
 
 impl<W: Write + Seek> Recorder<W> {

@@ -23,8 +23,9 @@ use std::io::{Seek, Write};
 
 use glam::{DMat3, DQuat, DVec3};
 
+use super::cdr::Cdr;
 use super::channels::{Channel, Channels};
-use super::{Cdr, LogError};
+use super::error::LogError;
 use crate::compile::graph::{Owner, Shape};
 use crate::sim::Simulation;
 
