@@ -3,10 +3,10 @@
 //!
 //! [`CONTROLLERS`] is the registry: each entry names a controller, documents it, lists its
 //! parameters with their kinds and defaults ([`parameters`]), and builds it. `regatta check`
-//! validates a world's controllers against it ([`check::check_scene`]: unknown names and keys,
-//! ill-typed values, with "did you mean"), and a run builds them from it ([`build`],
+//! validates a world's controllers against it (`check_scene`, in `check.rs`: unknown names and
+//! keys, ill-typed values, with "did you mean"), and a run builds them from it ([`build`],
 //! [`build_for`]), so both agree by construction. Adding a controller is one entry here and
-//! its own file. Webots' controller names map to these in [`webots`].
+//! its own file. Webots' controller names map to these in `webots.rs`.
 //!
 //! - `none` ([`idle`]): does nothing.
 //! - `braitenberg` ([`braitenberg`]): Mondada's obstacle avoider, the feed-forward network of

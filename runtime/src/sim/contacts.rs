@@ -10,7 +10,7 @@ use super::world2d::{Footprint, Slab};
 use crate::compile::rig::RobotRig;
 
 /// Most collision sub-steps in one step. A world whose robots could need more (a long time
-/// step at a high top speed) is refused when it is checked ([`crate::check`]), so the bound
+/// step at a high top speed) is refused when it is checked (`check.rs`), so the bound
 /// never cuts a step short and nothing tunnels at any accepted time step.
 pub const MAX_SUB_STEPS: usize = 4096;
 

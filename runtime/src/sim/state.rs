@@ -141,7 +141,8 @@ pub struct RobotState {
     pub(super) ir_due: Vec<f64>,
     pub(super) ambient_due: Vec<f64>,
     pub(super) ir_streams: Vec<Stream>,
-    /// Each IR sensor's (mean, spread) with nothing in range ([`super::sensors::nothing_in_range`]).
+    /// Each IR sensor's (mean, spread) with nothing in range
+    /// ([`super::sensors::nothing_in_range`]).
     pub(super) ir_nothing: Vec<(f64, f64)>,
     /// How far from the centre any IR sensor reaches ([`super::sensors::ir_reach`]).
     pub(super) ir_reach: f64,
