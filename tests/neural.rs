@@ -84,7 +84,7 @@ fn check_short(text: &str) -> Vec<String> {
     );
     checked
         .diagnostics
-        .extend(regatta_runtime::neural::check_networks(&checked.scene));
+        .extend(regatta_runtime::check::check_networks(&checked.scene));
     checked.short()
 }
 

@@ -16,11 +16,11 @@ use std::sync::Arc;
 
 use regatta_evolve::experiment::{EvalError, LoadError};
 use regatta_evolve::{Experiment, Fitness, Observer};
+use regatta_runtime::compile::network::{Input, Pooling};
 use regatta_runtime::compile::rig::{RobotRig, TurretRig};
-use regatta_runtime::controllers::to_command;
-use regatta_runtime::khepera::{Controller, Khepera, KheperaError, Senses};
+use regatta_runtime::controllers::neural::pool_sectors;
+use regatta_runtime::khepera::{to_command, Controller, Khepera, KheperaError, Senses};
 use regatta_runtime::log::{Channels, Recorder, RunInfo};
-use regatta_runtime::neural::{pool_sectors, Input, Pooling};
 use regatta_runtime::retina::FilterKind;
 use regatta_runtime::sim::{RobotState, Simulation};
 
@@ -489,6 +489,7 @@ impl Core {
         };
         log.recorder
             .finish(self.running.borrow_dependent(), false)
+            .map(|_| ())
             .map_err(|e| CoreError::Log {
                 path: log.path,
                 message: e.to_string(),

@@ -1,11 +1,13 @@
 //! Checks of a typed scene that need the runtime's knowledge, run by `regatta check` and by
 //! every command before it runs a world: controllers and their arguments
-//! ([`crate::controllers::check_scene`]), each robot's network against its inputs and outputs
-//! ([`crate::neural::check_networks`]), and time steps the simulation cannot follow.
+//! ([`crate::controllers::check::check_scene`]), each robot's network against its inputs and
+//! outputs ([`check_networks`]), and time steps the simulation cannot follow.
 
 use regatta_parser::Diagnostic;
-use regatta_schema::{Checked, FileDiagnostic, Value};
+use regatta_schema::{Checked, FileDiagnostic, Scene, Value};
 
+use crate::compile::network::{network_from_scene, NetworkError};
+use crate::compile::world_settings;
 use crate::sim::MAX_SUB_STEPS;
 
 /// Largest |gaussian| a Box–Muller draw from 53-bit uniforms can give (√(−2 ln 2⁻⁵³)).
@@ -13,11 +15,53 @@ const GAUSSIAN_BOUND: f64 = 8.6;
 
 /// Adds every runtime diagnostic to `checked`.
 pub fn check_scene(checked: &mut Checked) {
-    crate::controllers::check_scene(checked);
-    let networks = crate::neural::check_networks(&checked.scene);
+    crate::controllers::check::check_scene(checked);
+    let networks = check_networks(&checked.scene);
     checked.diagnostics.extend(networks);
     check_time_step(checked);
     checked.sort_diagnostics();
+}
+
+/// Every robot's network checked, as diagnostics at the field they are about (what
+/// `regatta check` adds to the schema's): sizes against inputs and outputs, retina inputs
+/// without a turret, and controller "neural" without a network.
+pub fn check_networks(scene: &Scene) -> Vec<FileDiagnostic> {
+    let time_step = world_settings(scene).time_step;
+    let mut diagnostics = Vec::new();
+    for robot in scene.find("DifferentialWheels") {
+        let panoramic = scene
+            .child(robot, "turret")
+            .is_some_and(|t| scene.type_name(t) == "PanoramicTurret");
+        let result = match scene.child(robot, "network") {
+            Some(network) => network_from_scene(scene, network, panoramic, time_step)
+                .map(|_| ())
+                .map_err(|e| (network, e)),
+            None if scene.string(robot, "controller") == "neural" => {
+                Err((robot, NetworkError::NoNetwork))
+            }
+            None => Ok(()),
+        };
+        if let Err((node, error)) = result {
+            let field = match error {
+                NetworkError::NoNetwork => "controller",
+                _ => error.field(),
+            };
+            let at = scene.value_span(node, field);
+            let label = match &error {
+                NetworkError::WeightCount { expected, .. } => {
+                    format!("{expected} weights expected")
+                }
+                _ => format!("in '{field}'"),
+            };
+            diagnostics.push(FileDiagnostic {
+                file: at.file,
+                diagnostic: Diagnostic::error(at.span, error.to_string())
+                    .with_label(label)
+                    .with_code("network"),
+            });
+        }
+    }
+    diagnostics
 }
 
 /// Refuses a time step at which a robot could cross more than half its body radius in each of

@@ -7,6 +7,13 @@
 
 use crate::retina::FilterKind;
 
+/// A wheel speed (pulses per 10 ms) as the robot takes it: rounded half away from zero,
+/// clamped to −127 … 127.
+#[inline]
+pub fn to_command(speed: f64) -> i32 {
+    libm::round(speed).clamp(-127.0, 127.0) as i32
+}
+
 /// Why a Khepera call failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum KheperaError {

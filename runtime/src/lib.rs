@@ -16,12 +16,10 @@ pub mod controllers;
 pub mod geometry;
 pub mod khepera;
 pub mod log;
-pub mod neural;
 pub mod optics;
 pub mod render;
 pub mod retina;
 pub mod sim;
 pub mod vision;
-pub mod webots_controllers;
 
 pub use compile::{compile, Compiled};

@@ -33,7 +33,7 @@ mod channels;
 mod error;
 mod foxglove;
 
-pub use cdr::{decode_pose, Cdr, CdrReader, ShortMessage};
+pub use cdr::{Cdr, CdrReader, ShortMessage};
 pub use channels::{is_ros2_topic, robot_tokens, sanitize, Channel, Channels, UnknownChannel};
 pub use error::LogError;
 pub use foxglove::SCHEMAS as FOXGLOVE_SCHEMAS;
@@ -173,6 +173,19 @@ pub const SCHEMAS: &[(&str, &str)] = &[
     ("regatta/msg/Visit", "# The robot entered a buoy's visit disc (its radius plus two body diameters): buoy number (from 1, in file order), its name, visits so far\nfloat64 t\nuint32 buoy\nstring name\nuint32 visits\n"),
     ("regatta/msg/ControllerEvent", "# A controller call failed\nfloat64 t\nstring error\n"),
 ];
+
+/// A `/{robot}/pose` message: its time (s) and the pose.
+pub fn decode_pose(data: &[u8]) -> Result<(f64, crate::compile::rig::Pose2), ShortMessage> {
+    let mut r = CdrReader::new(data);
+    Ok((
+        r.f64()?,
+        crate::compile::rig::Pose2 {
+            x: r.f64()?,
+            z: r.f64()?,
+            heading: r.f64()?,
+        },
+    ))
+}
 
 impl<W: Write + Seek> Recorder<W> {
     /// Starts a log for `simulation`, writing the header, metadata, schemas and the channels

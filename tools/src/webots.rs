@@ -4,7 +4,7 @@
 //! `--controller` override.
 
 use anyhow::bail;
-use regatta_runtime::webots_controllers::{resolve, resolve_robot, Resolution, Resolved};
+use regatta_runtime::controllers::webots::{resolve, resolve_robot, Resolution, Resolved};
 use regatta_runtime::Compiled;
 
 use crate::world::Loaded;

@@ -7,7 +7,8 @@ use std::sync::Arc;
 
 use glam::DVec2;
 use rayon::prelude::*;
-use regatta_runtime::neural::{NetworkError, Neural, Topology};
+use regatta_runtime::compile::network::{NetworkError, Topology};
+use regatta_runtime::controllers::neural::Neural;
 use regatta_runtime::sim::{SimError, Simulation};
 use regatta_runtime::Compiled;
 use serde::Serialize;
@@ -283,7 +284,7 @@ impl Experiment {
         let mut compiled = regatta_runtime::compile(&checked.scene);
         // Webots controller names, as `regatta run` maps them.
         for (index, robot) in compiled.rig.robots.iter_mut().enumerate() {
-            use regatta_runtime::webots_controllers::{
+            use regatta_runtime::controllers::webots::{
                 resolve, resolve_robot, Resolution, Resolved,
             };
             if driven.drives(index, &robot.name)

@@ -6,8 +6,10 @@
 //! frames relative to it, and its devices go to the rig.
 
 pub mod graph;
+pub mod network;
 pub mod plan;
 pub mod rig;
+pub mod shapes;
 pub mod triangulate;
 
 use std::sync::Arc;
@@ -18,14 +20,15 @@ use regatta_schema::{NodeId, Scene, Value};
 
 use crate::geometry::{axis_angle, Frame};
 use graph::{
-    background_of, index_static, material_of, shape_of, Group, GroupId, Light, LightKind, Material,
-    Owner, Primitive, RenderGraph, Viewpoint,
+    index_static, Group, GroupId, Light, LightKind, Material, Owner, Primitive, RenderGraph,
+    Viewpoint,
 };
 pub use plan::Plan;
 use rig::{
     filter_set, CameraRig, DistanceSensorRig, LightSensorRig, LinearCameraRig, Optics,
     PanoramicRig, Pose2, RobotRig, SensorRig, TurretRig,
 };
+use shapes::{background_of, material_of, shape_of};
 
 /// World-wide settings the runtime needs.
 #[derive(Clone, Debug, PartialEq)]
@@ -507,7 +510,7 @@ impl Compiler<'_> {
                 let panoramic = scene
                     .child(node, "turret")
                     .is_some_and(|t| scene.type_name(t) == "PanoramicTurret");
-                crate::neural::network_from_scene(
+                network::network_from_scene(
                     scene,
                     network,
                     panoramic,

@@ -5,6 +5,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
+use super::network::{NetworkError, NetworkSpec};
 use crate::retina::{FilterKind, FilterSet};
 
 /// A robot's position on the floor: x and z in metres, heading in radians counter-clockwise
@@ -271,7 +272,7 @@ pub struct RobotRig {
     /// them is falling off the world. Empty: no floor under it, nothing is checked.
     pub floors: Vec<[f64; 4]>,
     /// The `network` field's NeuralNetwork, read and checked (`None`: the field is NULL).
-    pub network: Option<Result<crate::neural::NetworkSpec, crate::neural::NetworkError>>,
+    pub network: Option<Result<NetworkSpec, NetworkError>>,
     pub distance_sensors: Vec<DistanceSensorRig>,
     pub light_sensors: Vec<LightSensorRig>,
     pub turret: Option<TurretRig>,
@@ -303,22 +304,10 @@ impl SensorRig {
     }
 }
 
-/// The filter a world names.
-pub(crate) fn filter_kind(name: &str) -> Option<FilterKind> {
-    Some(match name {
-        "raw" => FilterKind::Raw,
-        "lowpass" => FilterKind::Lowpass,
-        "highpass" => FilterKind::Highpass,
-        "bandpass" => FilterKind::Bandpass,
-        "odd" => FilterKind::Odd,
-        _ => return None,
-    })
-}
-
 /// Filters named in a world's `filters` field.
 pub(crate) fn filter_set(names: &[String]) -> FilterSet {
     let mut set = FilterSet::default();
-    for kind in names.iter().filter_map(|name| filter_kind(name)) {
+    for kind in names.iter().filter_map(|name| FilterKind::from_name(name)) {
         set.insert(kind);
     }
     set

@@ -1,5 +1,5 @@
-//! CDR, the encoding of ROS 2 messages that the log's channels carry: a writer into a reused
-//! buffer and a bounded reader.
+//! CDR (little-endian, the ROS 2 encoding of every channel's messages): the encoder the
+//! recorder writes with and the reader that decodes a message field by field.
 
 /// CDR (little-endian) encoding into a reused buffer: every primitive aligned to its size,
 /// counted from after the 4-byte encapsulation header.
@@ -8,49 +8,60 @@ pub struct Cdr {
 }
 
 impl Cdr {
+    #[inline]
     pub(super) fn start(&mut self) {
         self.buf.clear();
         self.buf.extend_from_slice(&[0, 1, 0, 0]);
     }
+    #[inline]
     pub(super) fn align(&mut self, n: usize) {
         while !(self.buf.len() - 4).is_multiple_of(n) {
             self.buf.push(0);
         }
     }
+    #[inline]
     pub(super) fn f64(&mut self, x: f64) {
         self.align(8);
         self.buf.extend_from_slice(&x.to_le_bytes());
     }
+    #[inline]
     pub(super) fn i32(&mut self, x: i32) {
         self.align(4);
         self.buf.extend_from_slice(&x.to_le_bytes());
     }
+    #[inline]
     pub(super) fn u32(&mut self, x: u32) {
         self.align(4);
         self.buf.extend_from_slice(&x.to_le_bytes());
     }
+    #[inline]
     pub(super) fn u64(&mut self, x: u64) {
         self.align(8);
         self.buf.extend_from_slice(&x.to_le_bytes());
     }
+    #[inline]
     pub(super) fn u16(&mut self, x: u16) {
         self.align(2);
         self.buf.extend_from_slice(&x.to_le_bytes());
     }
+    #[inline]
     pub(super) fn bool(&mut self, x: bool) {
         self.buf.push(x as u8);
     }
+    #[inline]
     pub(super) fn string(&mut self, text: &str) {
         self.u32(text.len() as u32 + 1);
         self.buf.extend_from_slice(text.as_bytes());
         self.buf.push(0);
     }
+    #[inline]
     pub(super) fn f32s(&mut self, values: impl ExactSizeIterator<Item = f64>) {
         self.u32(values.len() as u32);
         for x in values {
             self.buf.extend_from_slice(&(x as f32).to_le_bytes());
         }
     }
+    #[inline]
     pub(super) fn u16s(&mut self, values: &[u16]) {
         self.u32(values.len() as u32);
         for &x in values {
@@ -65,19 +76,6 @@ pub struct CdrReader<'a> {
     at: usize,
 }
 
-/// A `/{robot}/pose` message: its time (s) and the pose.
-pub fn decode_pose(data: &[u8]) -> Result<(f64, crate::compile::rig::Pose2), ShortMessage> {
-    let mut r = CdrReader::new(data);
-    Ok((
-        r.f64()?,
-        crate::compile::rig::Pose2 {
-            x: r.f64()?,
-            z: r.f64()?,
-            heading: r.f64()?,
-        },
-    ))
-}
-
 /// A CDR message too short for its schema.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("a message is shorter than its schema")]
@@ -87,12 +85,14 @@ impl<'a> CdrReader<'a> {
     pub fn new(data: &'a [u8]) -> CdrReader<'a> {
         CdrReader { data, at: 4 }
     }
-    pub(super) fn align(&mut self, n: usize) {
+    #[inline]
+    fn align(&mut self, n: usize) {
         while !(self.at - 4).is_multiple_of(n) {
             self.at += 1;
         }
     }
-    pub(super) fn take(&mut self, n: usize) -> Result<&'a [u8], ShortMessage> {
+    #[inline]
+    fn take(&mut self, n: usize) -> Result<&'a [u8], ShortMessage> {
         let bytes = self.data.get(self.at..self.at + n).ok_or(ShortMessage)?;
         self.at += n;
         Ok(bytes)

@@ -1,4 +1,4 @@
-//! Why a log could not be written or read.
+//! The log's error type.
 
 /// Why a log could not be written or read.
 #[derive(Debug, thiserror::Error)]

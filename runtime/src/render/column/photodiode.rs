@@ -5,7 +5,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::ColumnFrame;
+use super::shading::Shades;
 
 /// The part of a column an object covers.
 #[derive(Clone, Copy, Debug)]
@@ -313,13 +313,13 @@ impl LitSegments {
 /// Lights each segment as it comes, from its object's fast shading.
 pub(super) struct LitSink<'a> {
     pub(super) lit: &'a mut LitSegments,
-    pub(super) frame: &'a ColumnFrame,
+    pub(super) shades: &'a Shades,
 }
 
 impl SegmentSink for LitSink<'_> {
     #[inline(always)]
     fn insert(&mut self, segment: Segment) {
-        let Some(fast) = self.frame.fast_shade(segment.primitive) else {
+        let Some(fast) = self.shades.get(segment.primitive) else {
             return;
         };
         let luminance = match segment.face {
@@ -500,6 +500,57 @@ impl Free {
                     self.len -= 1;
                 }
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn band_atan_matches_libm() {
+        for i in -100..=100 {
+            let t = i as f64 * 0.002;
+            assert!((band_atan(t) - libm::atan(t)).abs() < 1e-10, "{t}");
+        }
+    }
+
+    #[test]
+    fn nearest_index_rounds_like_round() {
+        for x in [
+            -2.5,
+            -0.5,
+            -0.2,
+            0.0,
+            0.2,
+            0.5,
+            0.7,
+            1.5,
+            2.4999,
+            2.5,
+            149.5,
+            1e30,
+            f64::NAN,
+        ] {
+            for limit in [0, 1, 149, 1 << 40] {
+                let expected = ((x.round().max(0.0)) as usize).min(limit);
+                assert_eq!(nearest_index(x, limit), expected, "{x} {limit}");
+                let expected = (x.max(0.0) as usize).min(limit);
+                assert_eq!(index_below(x, limit), expected, "{x} {limit}");
+            }
+        }
+    }
+
+    #[test]
+    fn small_rotation_matches_libm() {
+        let base = 0.7f64;
+        for i in -10..=10 {
+            let d = i as f64 * 0.0014;
+            let (c, s) = rotate_small(libm::cos(base), libm::sin(base), d);
+            assert!(
+                (c - libm::cos(base + d)).abs() < 1e-14 && (s - libm::sin(base + d)).abs() < 1e-14
+            );
         }
     }
 }

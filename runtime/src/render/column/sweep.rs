@@ -8,7 +8,8 @@ use glam::{DVec2, DVec3};
 use super::footprint::Relative;
 use super::footprint::{azimuth_interval, corner_of, wrap, Interval, PendingEdge, Upright};
 use super::photodiode::rotate_small;
-use super::{ColumnFrame, ColumnScene, Strip};
+use super::scene::{ColumnFrame, ColumnScene};
+use super::strip::Strip;
 use crate::geometry::Footprint;
 
 /// An object as seen from one eye.

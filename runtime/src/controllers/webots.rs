@@ -72,7 +72,7 @@ pub fn resolve(name: &str) -> Resolution {
         return Resolution::Builtin("none", "");
     }
     // regatta's own names (and their aliases): the registry's.
-    if let Some(own) = crate::controllers::find(name) {
+    if let Some(own) = super::find(name) {
         return Resolution::Builtin(own.name, "");
     }
     if let Some((_, builtin, why)) = MAPPED.iter().find(|(n, _, _)| *n == name) {

@@ -1,0 +1,491 @@
+//! The `regatta` controller: the paper's controller: the Braitenberg network plus light
+//! seeking. The odd filter's output is scanned for light-intensity maxima (a negative lobe
+//! followed by a positive one, both beyond `minContrast` LSB); the maximum nearest the centre
+//! of the retina steers the robot by `lightGain` pulses/10 ms per pixel of distance from the
+//! centre, added to the network's output. A robot that stalls facing an obstacle (both
+//! commands within ±`STALL_SPEED` while a front sensor reads more than `STALL_PROXIMITY`, for
+//! `STALL_STEPS` steps: the Braitenberg network's deadlock in a corner) turns on the spot,
+//! away from the nearer side, for `ESCAPE_STEPS` steps.
+//!
+//! Habituation: a robot that has seen two lights at once (it knows there is more than one
+//! buoy) and has kept the light it follows abeam (more than `ABEAM_PIXELS` from the
+//! retina's centre: rounding it, not sailing to it) for `habituation` control steps loses
+//! interest in it: the light is ignored until it leaves the view, and the robot sails on
+//! to the light farthest to the other side (the first one the rounding turned its bow
+//! to), as a sailor rounds a mark and leaves it. Near a buoy the retina's normalisation
+//! (by the mean photocurrent) can dim the far ones below the lobe contrast, so that
+//! without habituation the robot circles the near one for ever (worlds/regatta_wide.wbt).
+//! In the paper's arena the next light almost always takes over before habituation would;
+//! a robot that has only ever seen one light keeps circling it, as the paper's did. `habituation=0`
+//! turns it off.
+
+use std::ops::ControlFlow;
+
+use super::braitenberg::braitenberg_speeds;
+use super::parameters::Parameters;
+use crate::khepera::{to_command, Controller, Khepera, KheperaError, Senses};
+use crate::retina::FilterKind;
+
+/// Light-intensity maxima in an odd-filter output (digital, `bits` bits).
+///
+/// The odd filter answers a bright patch with a negative lobe at its left edge and a positive
+/// lobe at its right edge (pixel index grows clockwise). Lobes are runs beyond `min_contrast`
+/// LSB from zero; a negative lobe followed directly by a positive one is a maximum, placed
+/// midway between them (in pixel-edge units from the region's first pixel), however wide the
+/// patch is.
+pub fn light_maxima(odd: &[u16], bits: u32, min_contrast: f64) -> Vec<f64> {
+    let mut maxima = Vec::new();
+    LobeThresholds::new(bits, min_contrast).for_each_maximum(odd, |p| {
+        maxima.push(p);
+        ControlFlow::Continue(())
+    });
+    maxima
+}
+
+/// The maximum of [`light_maxima`] nearest `centre` (the first of equals), without listing them.
+pub fn nearest_light_maximum(
+    odd: &[u16],
+    bits: u32,
+    min_contrast: f64,
+    centre: f64,
+) -> Option<f64> {
+    LobeThresholds::new(bits, min_contrast).nearest_maximum(odd, centre)
+}
+
+/// The lobe tests of [`light_maxima`] for one resolution and contrast, as integer thresholds
+/// on the digital value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LobeThresholds {
+    /// Values below this are in a negative lobe.
+    negative_below: u32,
+    /// Values from this on are in a positive lobe.
+    positive_from: u32,
+}
+
+impl LobeThresholds {
+    /// The thresholds for `bits`-bit values and `min_contrast` LSB.
+    pub fn new(bits: u32, min_contrast: f64) -> LobeThresholds {
+        let zero = ((1u32 << bits) - 1) as f64 / 2.0;
+        let negative = |d: u32| d as f64 - zero <= -min_contrast;
+        let positive = |d: u32| !negative(d) && d as f64 - zero >= min_contrast;
+        // Both tests are monotone in the digital value: negative on a prefix of 0…65535,
+        // positive on a suffix. Found once with the float tests themselves, they become
+        // integer compares.
+        LobeThresholds {
+            negative_below: partition_point_u16(negative),
+            positive_from: partition_point_u16(|d| !positive(d)),
+        }
+    }
+
+    /// [`nearest_light_maximum`] with these thresholds.
+    pub fn nearest_maximum(&self, odd: &[u16], centre: f64) -> Option<f64> {
+        let mut nearest: Option<f64> = None;
+        self.for_each_maximum(odd, |p| {
+            if nearest.is_none_or(|n| (p - centre).abs() < (n - centre).abs()) {
+                nearest = Some(p);
+            }
+            // Maxima come in increasing order: past the centre, the rest are farther.
+            if p >= centre {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        });
+        nearest
+    }
+
+    /// Calls `visit` on each maximum of [`light_maxima`], in pixel order, until it breaks.
+    fn for_each_maximum(&self, odd: &[u16], mut visit: impl FnMut(f64) -> ControlFlow<()>) {
+        // A positive lobe starts a maximum where the nearest lobe pixel before it is negative;
+        // that pixel ends the negative lobe. Most pixels are in no lobe: a plain search skips
+        // them, with no state carried from pixel to pixel.
+        let is_negative = |d: u16| (d as u32) < self.negative_below;
+        let is_positive = |d: u16| (d as u32) >= self.positive_from;
+        let (mut last_negative, mut last_index) = (false, 0usize);
+        let mut i = 0;
+        while let Some(skipped) = odd[i..]
+            .iter()
+            .position(|&d| is_negative(d) | is_positive(d))
+        {
+            i += skipped;
+            // A lobe is a run of one sign: skip to its end in one search too.
+            let negative = is_negative(odd[i]);
+            let run = odd[i..]
+                .iter()
+                .position(|&d| {
+                    if negative {
+                        !is_negative(d)
+                    } else {
+                        !is_positive(d)
+                    }
+                })
+                .unwrap_or(odd.len() - i);
+            if !negative && last_negative && visit((last_index + 1 + i) as f64 / 2.0).is_break() {
+                return;
+            }
+            last_negative = negative;
+            last_index = i + run - 1;
+            i += run;
+        }
+    }
+}
+
+/// The number of values in 0…65535 that satisfy `holds`, which holds on a prefix of them.
+fn partition_point_u16(holds: impl Fn(u32) -> bool) -> u32 {
+    let (mut lo, mut hi) = (0u32, 1u32 << 16);
+    while lo < hi {
+        let middle = (lo + hi) / 2;
+        if holds(middle) {
+            lo = middle + 1;
+        } else {
+            hi = middle;
+        }
+    }
+    lo
+}
+
+/// Commands this close to zero count as stopped.
+pub const STALL_SPEED: i32 = 1;
+/// A front IR reading above this counts as facing an obstacle.
+pub const STALL_PROXIMITY: u16 = 300;
+/// Steps stalled before turning away (about a second at 32 ms).
+pub const STALL_STEPS: u32 = 32;
+/// Steps of turning on the spot (about 0.8 s at 32 ms: roughly a right angle at the bias
+/// speed).
+pub const ESCAPE_STEPS: u32 = 24;
+
+/// Turns a stalled robot away from what it faces.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct StallEscape {
+    stalled: u32,
+    /// Steps left to turn, and the direction (+1 turns right).
+    escaping: u32,
+    direction: i32,
+}
+
+impl StallEscape {
+    /// The commands to send instead of `(left, right)`, if the robot must turn away.
+    pub fn check(
+        &mut self,
+        proximity: &[u16; 8],
+        (left, right): (i32, i32),
+        bias: f64,
+    ) -> Option<(i32, i32)> {
+        let turn = to_command(bias).max(1);
+        if self.escaping > 0 {
+            self.escaping -= 1;
+            return Some((self.direction * turn, -self.direction * turn));
+        }
+        let front = proximity[1..5].iter().copied().max().unwrap_or(0);
+        if left.abs() <= STALL_SPEED && right.abs() <= STALL_SPEED && front > STALL_PROXIMITY {
+            self.stalled += 1;
+        } else {
+            self.stalled = 0;
+        }
+        if self.stalled < STALL_STEPS {
+            return None;
+        }
+        self.stalled = 0;
+        self.escaping = ESCAPE_STEPS - 1;
+        // Away from the side that reads more (left sensors 0…2, right 3…5); right on a tie.
+        let left_side: u32 = proximity[0..3].iter().map(|&v| v as u32).sum();
+        let right_side: u32 = proximity[3..6].iter().map(|&v| v as u32).sum();
+        self.direction = if right_side > left_side { -1 } else { 1 };
+        Some((self.direction * turn, -self.direction * turn))
+    }
+}
+
+/// A light moves less than this many pixels from one step to the next while the robot
+/// turns at its speeds (an orbit turns it by about 1.4 pixels per 32 ms step): the maximum
+/// nearest a light's last position, within it, is the same light.
+pub const TRACK_PIXELS: f64 = 8.0;
+
+/// A followed light this many pixels or more from the retina's centre (80°) is abeam.
+pub const ABEAM_PIXELS: f64 = 50.0;
+
+/// Departing ends once the next mark is this close to the retina's centre (pixels).
+pub const DEPARTED_PIXELS: f64 = 10.0;
+
+/// The regatta controller's habituation to the light it follows (see the module's
+/// documentation). Lights have no names: a light is followed from step to step by its
+/// position on the retina.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Habituation {
+    /// Whether two lights were ever seen at once.
+    several: bool,
+    /// The light followed (its position, in pixels from the region's first) and the steps
+    /// it has been abeam.
+    followed: Option<(f64, u32)>,
+    /// The light the robot lost interest in, followed until it leaves the view.
+    ignored: Option<f64>,
+    /// Set on losing interest in a light: the side it was on (−1 left, +1 right).
+    departing: Option<f64>,
+}
+
+/// The maximum in `maxima` nearest `position`, within [`TRACK_PIXELS`].
+fn track(maxima: &[f64], position: f64) -> Option<f64> {
+    maxima
+        .iter()
+        .copied()
+        .filter(|m| (m - position).abs() <= TRACK_PIXELS)
+        .min_by(|a, b| (a - position).abs().total_cmp(&(b - position).abs()))
+}
+
+/// The maximum nearest `centre` (the first of equals, as [`nearest_light_maximum`]) other
+/// than `except`.
+fn nearest_to(maxima: &[f64], centre: f64, except: Option<f64>) -> Option<f64> {
+    let mut nearest: Option<f64> = None;
+    for &m in maxima {
+        if Some(m) != except && nearest.is_none_or(|n| (m - centre).abs() < (n - centre).abs()) {
+            nearest = Some(m);
+        }
+    }
+    nearest
+}
+
+impl Habituation {
+    /// The light to steer to among this step's `maxima` (in pixel order, `centre` the
+    /// retina's centre in the same units), if any. `habituation` is the parameter.
+    pub fn choose(&mut self, maxima: &[f64], centre: f64, habituation: f64) -> Option<f64> {
+        self.ignored = self.ignored.and_then(|p| track(maxima, p));
+        let followed = self
+            .followed
+            .and_then(|(p, steps)| track(maxima, p).map(|m| (m, steps)));
+        self.several |= maxima.len() >= 2;
+        let target = match self.departing {
+            // Leaving a light behind on one side: the next mark is the light farthest to
+            // the other side (the first the rounding turned the bow to).
+            Some(side) => maxima
+                .iter()
+                .copied()
+                .filter(|&m| Some(m) != self.ignored)
+                .max_by(|a, b| (side * (centre - a)).total_cmp(&(side * (centre - b)))),
+            None => nearest_to(maxima, centre, self.ignored),
+        };
+        let Some(target) = target else {
+            self.followed = None;
+            return None;
+        };
+        if (target - centre).abs() <= DEPARTED_PIXELS {
+            self.departing = None;
+        }
+        let abeam = u32::from((target - centre).abs() >= ABEAM_PIXELS);
+        let steps = match followed {
+            Some((p, steps)) if p == target => steps.saturating_add(abeam),
+            _ => abeam,
+        };
+        if self.several && habituation > 0.0 && steps as f64 > habituation {
+            self.ignored = Some(target);
+            self.departing = Some((target - centre).signum());
+            self.followed = None;
+            return None;
+        }
+        self.followed = Some((target, steps));
+        Some(target)
+    }
+}
+
+/// The paper's regatta controller.
+pub struct Regatta {
+    pub parameters: Parameters,
+    /// The lobe thresholds, with the resolution and contrast they were found for.
+    thresholds: Option<(u32, u64, LobeThresholds)>,
+    enabled: bool,
+    /// The odd filter's last reading and its maxima, their buffers reused.
+    odd: Vec<u16>,
+    maxima: Vec<f64>,
+    escape: StallEscape,
+    habituation: Habituation,
+}
+
+impl Regatta {
+    /// The controller with its parameters, before its first step.
+    pub fn new(parameters: Parameters) -> Regatta {
+        Regatta {
+            parameters,
+            thresholds: None,
+            enabled: false,
+            odd: Vec::new(),
+            maxima: Vec::new(),
+            escape: StallEscape::default(),
+            habituation: Habituation::default(),
+        }
+    }
+}
+
+impl Controller for Regatta {
+    fn step(&mut self, robot: &mut dyn Khepera) -> Result<(), KheperaError> {
+        let proximity = robot.proximity()?;
+        let (mut left, mut right) = braitenberg_speeds(&proximity, &self.parameters);
+        let turret = robot.panoramic().ok_or(KheperaError::NoDevice(
+            "Panoramic turret (the regatta controller needs one)",
+        ))?;
+        if !self.enabled {
+            turret.enable_filter(FilterKind::Odd)?;
+            self.enabled = true;
+        }
+        turret.read_into(FilterKind::Odd, &mut self.odd)?;
+        let (first, _) = turret.region_of_interest()?;
+        let bits = turret.bits()?;
+        let centre = crate::retina::PIXELS as f64 / 2.0;
+        let contrast = self.parameters.min_contrast;
+        let thresholds = match self.thresholds {
+            Some((b, c, thresholds)) if b == bits && c == contrast.to_bits() => thresholds,
+            _ => {
+                let thresholds = LobeThresholds::new(bits, contrast);
+                self.thresholds = Some((bits, contrast.to_bits(), thresholds));
+                thresholds
+            }
+        };
+        self.maxima.clear();
+        thresholds.for_each_maximum(&self.odd, |p| {
+            self.maxima.push(p);
+            ControlFlow::Continue(())
+        });
+        let chosen = self.habituation.choose(
+            &self.maxima,
+            centre - first as f64,
+            self.parameters.habituation,
+        );
+        if let Some(maximum) = chosen {
+            let offset = maximum + first as f64 - centre;
+            // Right of centre (positive) turns right: left wheel faster.
+            left += self.parameters.light_gain * offset;
+            right -= self.parameters.light_gain * offset;
+        }
+        let command = (to_command(left), to_command(right));
+        let (left, right) = self
+            .escape
+            .check(&proximity, command, self.parameters.bias)
+            .unwrap_or(command);
+        robot.set_speed(left, right)
+    }
+
+    fn senses(&self) -> Senses {
+        Senses {
+            proximity: true,
+            vision: true,
+            ..Senses::NONE
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_light_kept_abeam_too_long_is_left_for_the_farthest_on_the_other_side() {
+        let centre = 75.0;
+        let limit = 3.0;
+        // One light only, abeam on the left: the robot has never seen two, so it keeps it.
+        let mut lone = Habituation::default();
+        for _ in 0..10 {
+            assert_eq!(lone.choose(&[20.0], centre, limit), Some(20.0));
+        }
+        // Two lights seen at once, then one abeam: kept for `limit` steps abeam, then left.
+        let mut h = Habituation::default();
+        assert_eq!(h.choose(&[20.0, 140.0], centre, limit), Some(20.0));
+        // Sailing to a light near the centre never counts.
+        for _ in 0..10 {
+            assert_eq!(h.choose(&[70.0], centre, limit), Some(70.0));
+        }
+        // It drifts abeam (moving a pixel a step: the same light).
+        let mut position = 24.0;
+        let mut chosen = Vec::new();
+        for _ in 0..5 {
+            position -= 1.0;
+            chosen.push(h.choose(&[position], centre, limit));
+        }
+        assert_eq!(
+            chosen,
+            [Some(23.0), Some(22.0), Some(21.0), None, None],
+            "left after {limit} steps abeam, then ignored while in view"
+        );
+        // Other lights appear: the one farthest right (the light left was on the left) is
+        // the next mark, even if another is nearer the centre.
+        assert_eq!(h.choose(&[18.0, 60.0, 100.0], centre, limit), Some(100.0));
+        // Once it is ahead, the usual rule again: the light nearest the centre.
+        assert_eq!(h.choose(&[18.0, 72.0, 80.0], centre, limit), Some(80.0));
+        assert_eq!(h.choose(&[18.0, 74.0, 80.0], centre, limit), Some(74.0));
+        // The ignored light, lost from view, may be followed again.
+        assert_eq!(h.choose(&[], centre, limit), None);
+        assert_eq!(h.choose(&[18.0], centre, limit), Some(18.0));
+        // habituation=0: never left.
+        let mut off = Habituation::default();
+        assert_eq!(off.choose(&[20.0, 140.0], centre, 0.0), Some(20.0));
+        for _ in 0..100 {
+            assert_eq!(off.choose(&[20.0], centre, 0.0), Some(20.0));
+        }
+    }
+
+    #[test]
+    fn a_bright_blob_is_found_between_its_lobes() {
+        // Negative lobe then positive lobe around pixel edge 40.
+        let mut odd = vec![32u16; 150];
+        for (i, v) in [(37, 30), (38, 28), (39, 25), (40, 40), (41, 36), (42, 34)] {
+            odd[i] = v;
+        }
+        assert_eq!(light_maxima(&odd, 6, 1.5), vec![40.0]);
+        // A wide patch: lobes at its edges only, the maximum in its middle.
+        let mut wide = vec![32u16; 150];
+        for (i, v) in [(60, 28), (61, 29), (90, 36), (91, 35)] {
+            wide[i] = v;
+        }
+        assert_eq!(light_maxima(&wide, 6, 1.5), vec![76.0]);
+        // Flicker between 31 and 32 is not a light.
+        let flicker: Vec<u16> = (0..150).map(|i| if i % 2 == 0 { 31 } else { 32 }).collect();
+        assert!(light_maxima(&flicker, 6, 1.5).is_empty());
+    }
+
+    /// The float tests of the lobes, pixel by pixel: what the integer thresholds replace.
+    fn maxima_by_float_tests(odd: &[u16], bits: u32, min_contrast: f64) -> Vec<f64> {
+        let zero = ((1u32 << bits) - 1) as f64 / 2.0;
+        let mut maxima = Vec::new();
+        let mut last: Option<(bool, usize)> = None;
+        for (i, &d) in odd.iter().enumerate() {
+            let value = d as f64 - zero;
+            let negative = value <= -min_contrast;
+            let positive = !negative && value >= min_contrast;
+            if positive && matches!(last, Some((true, _))) {
+                let (_, j) = last.unwrap();
+                maxima.push((j as f64 + 1.0 + i as f64) / 2.0);
+            }
+            if negative || positive {
+                last = Some((negative, i));
+            }
+        }
+        maxima
+    }
+
+    #[test]
+    fn integer_lobe_thresholds_agree_with_the_float_tests() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        for bits in [1, 2, 6, 8, 12, 16] {
+            for min_contrast in [-2.0, 0.0, 0.5, 1.0, 1.5, 2.25, 7.0, 1e9, f64::NAN] {
+                for _ in 0..20 {
+                    let top = (1u64 << bits) - 1;
+                    let odd: Vec<u16> = (0..150)
+                        .map(|_| {
+                            state ^= state << 13;
+                            state ^= state >> 7;
+                            state ^= state << 17;
+                            (state % (top + 1)) as u16
+                        })
+                        .collect();
+                    let expected = maxima_by_float_tests(&odd, bits, min_contrast);
+                    assert_eq!(light_maxima(&odd, bits, min_contrast), expected);
+                    let centre = 61.5;
+                    let nearest = expected
+                        .iter()
+                        .copied()
+                        .min_by(|a, b| (a - centre).abs().total_cmp(&(b - centre).abs()));
+                    assert_eq!(
+                        nearest_light_maximum(&odd, bits, min_contrast, centre),
+                        nearest
+                    );
+                }
+            }
+        }
+    }
+}

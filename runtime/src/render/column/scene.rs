@@ -1,0 +1,208 @@
+//! The column renderer's scene: the upright objects of a graph (the static ones placed once,
+//! with what may hide their corners), robot parts to place, and lights and fast shading
+//! cached while no light moves; and the frame of one step, every robot's parts placed once
+//! for every viewer. What one eye sees of it is `sweep.rs`'s; integrating it,
+//! `integrate.rs`'s.
+
+use std::sync::Arc;
+
+use super::super::{world_lights, Poses, WorldLight};
+use super::footprint::{corner_hiders, upright_of, Hider, Upright};
+use super::shading::{FastShade, Shades};
+use crate::compile::graph::{Owner, RenderGraph};
+use crate::compile::plan::Plan;
+
+/// The upright objects of a graph. Immutable once built, so every viewer of a step can render
+/// from it at once; each thread keeps its own working buffers ([`Workspace`]).
+pub struct ColumnScene<'g> {
+    pub(super) graph: &'g RenderGraph,
+    /// The static objects, shared by every frame.
+    pub(super) statics: Arc<[Upright]>,
+    /// Whether each primitive is in the plan's visible set, and in its robot's own.
+    pub(super) visible: Vec<bool>,
+    pub(super) own_visible: Vec<bool>,
+    /// Whether every static object has fast shading (lights that do not move).
+    pub(super) statics_fast: bool,
+    /// Primitives attached to robots, in graph order, with their robot.
+    pub(super) robot_parts: Vec<(usize, usize)>,
+    /// Lights and every primitive's fast shading, when no light moves (shared by every frame).
+    pub(super) cached: Option<(Arc<[WorldLight]>, Arc<Shades>)>,
+    /// Per static object, what may hide its corners' silhouette edges.
+    pub(super) hiders: Vec<Vec<Hider>>,
+    /// Per static object, whether its footprint is the previous one's (a lamp on its buoy).
+    pub(super) same_footprint: Vec<bool>,
+    /// Per static object, whether an eye may leave it out when it is behind the strip: no
+    /// corner test names it (robot parts always may).
+    pub(super) cullable: Vec<bool>,
+}
+
+/// The world placed for one step: the static objects, and every robot's parts placed once —
+/// as other robots see them, and as their own turret does. Shared by every viewer of the step.
+#[derive(Clone)]
+pub struct ColumnFrame {
+    pub(super) statics: Arc<[Upright]>,
+    /// Per entry of the scene's `robot_parts`: the part placed, if other robots see it.
+    pub(super) others: Vec<Option<Upright>>,
+    /// Per entry of the scene's `robot_parts`: the part placed, if its own turret sees it.
+    pub(super) own: Vec<Option<Upright>>,
+    /// The robot of each entry.
+    pub(super) part_robot: Vec<usize>,
+    pub(super) lights: Arc<[WorldLight]>,
+    pub(super) shades: Arc<Shades>,
+    /// Whether every object of the frame has fast shading.
+    pub(super) all_fast: bool,
+    /// Whose frame this is when one viewer made it ([`ColumnScene::prepare`]).
+    pub viewer: Option<usize>,
+}
+
+impl ColumnFrame {
+    /// The fast shading of a primitive, if it has one.
+    #[inline]
+    pub(super) fn fast_shade(&self, primitive: u32) -> Option<&FastShade> {
+        self.shades.get(primitive)
+    }
+}
+
+impl<'g> ColumnScene<'g> {
+    pub fn new(graph: &'g RenderGraph, plan: &Plan) -> ColumnScene<'g> {
+        let statics: Arc<[Upright]> = plan
+            .visible
+            .iter()
+            .filter(|&&p| graph.primitives[p].owner == Owner::Static)
+            .filter_map(|&p| upright_of(graph, p, &graph.primitives[p].frame))
+            .collect();
+        let mut visible = vec![false; graph.primitives.len()];
+        for &p in &plan.visible {
+            visible[p] = true;
+        }
+        let mut own_visible = vec![false; graph.primitives.len()];
+        for &p in plan.own_visible.iter().flatten() {
+            own_visible[p] = true;
+        }
+        let robot_parts = (0..graph.primitives.len())
+            .filter_map(|p| match graph.primitives[p].owner {
+                Owner::Robot(robot) => Some((p, robot)),
+                Owner::Static => None,
+            })
+            .collect();
+        // With every light static, lighting is the same each frame: shade once.
+        let static_lights = plan
+            .lights
+            .iter()
+            .all(|&l| graph.lights[l].owner == Owner::Static);
+        let cached = static_lights.then(|| {
+            let lights = world_lights(graph, plan, &Poses::default());
+            let mut shades = Shades::default();
+            shades.fill(graph, 0..graph.primitives.len(), &lights);
+            (Arc::from(lights), Arc::new(shades))
+        });
+        let hiders = corner_hiders(&statics);
+        let same_footprint = (0..statics.len())
+            .map(|i| i > 0 && statics[i].footprint == statics[i - 1].footprint)
+            .collect();
+        let statics_fast = cached.as_ref().is_some_and(|(_, shades)| {
+            statics
+                .iter()
+                .all(|u| shades.get(u.primitive as u32).is_some())
+        });
+        let mut cullable: Vec<bool> = hiders.iter().map(Vec::is_empty).collect();
+        for hider in hiders.iter().flatten() {
+            cullable[hider.object as usize] = false;
+        }
+        ColumnScene {
+            graph,
+            own_visible,
+            statics_fast,
+            cullable,
+            hiders,
+            same_footprint,
+            statics,
+            visible,
+            robot_parts,
+            cached,
+        }
+    }
+
+    /// The frame for one viewer (`None`: every robot's parts as others see them).
+    pub fn prepare(&self, plan: &Plan, poses: &Poses, viewer: Option<usize>) -> ColumnFrame {
+        let mut frame = self.empty_frame();
+        self.prepare_into(plan, poses, &mut frame);
+        frame.viewer = viewer;
+        frame
+    }
+
+    /// A frame with nothing placed yet.
+    pub fn empty_frame(&self) -> ColumnFrame {
+        ColumnFrame {
+            statics: self.statics.clone(),
+            others: Vec::new(),
+            own: Vec::new(),
+            part_robot: Vec::new(),
+            lights: self
+                .cached
+                .as_ref()
+                .map_or_else(|| Arc::from([]), |(lights, _)| lights.clone()),
+            shades: self
+                .cached
+                .as_ref()
+                .map_or_else(Default::default, |(_, shades)| shades.clone()),
+            all_fast: false,
+            viewer: None,
+        }
+    }
+
+    /// Places every robot's parts for `poses` into `frame`, reusing its buffers: once per
+    /// step, for every viewer.
+    pub fn prepare_into(&self, plan: &Plan, poses: &Poses, frame: &mut ColumnFrame) {
+        if !Arc::ptr_eq(&frame.statics, &self.statics) {
+            frame.statics = self.statics.clone();
+        }
+        frame.others.clear();
+        frame.own.clear();
+        if frame.part_robot.len() != self.robot_parts.len() {
+            frame.part_robot.clear();
+            frame
+                .part_robot
+                .extend(self.robot_parts.iter().map(|&(_, robot)| robot));
+        }
+        for &(index, robot) in &self.robot_parts {
+            let (mut other, mut own) = (None, None);
+            if robot < poses.poses.len() {
+                let primitive = &self.graph.primitives[index];
+                let own_wanted = self.own_visible[index];
+                if self.visible[index] || own_wanted {
+                    let placed = poses.frame(robot).then(&primitive.frame);
+                    let upright = upright_of(self.graph, index, &placed);
+                    other = upright.filter(|_| self.visible[index]);
+                    own = upright.filter(|_| own_wanted);
+                }
+            }
+            frame.others.push(other);
+            frame.own.push(own);
+        }
+        match &self.cached {
+            Some((lights, shades)) => {
+                if !Arc::ptr_eq(&frame.lights, lights) {
+                    frame.lights = lights.clone();
+                }
+                if !Arc::ptr_eq(&frame.shades, shades) {
+                    frame.shades = shades.clone();
+                }
+            }
+            None => {
+                let lights = world_lights(self.graph, plan, poses);
+                let mut shades = std::mem::take(Arc::make_mut(&mut frame.shades));
+                shades.fill(self.graph, 0..self.graph.primitives.len(), &lights);
+                frame.shades = Arc::new(shades);
+                frame.lights = Arc::from(lights);
+            }
+        }
+        let shades = &frame.shades;
+        let fast = |u: &Upright| shades.get(u.primitive as u32).is_some();
+        let statics_fast = match &self.cached {
+            Some(_) => self.statics_fast,
+            None => frame.statics.iter().all(fast),
+        };
+        frame.all_fast = statics_fast && frame.others.iter().chain(&frame.own).flatten().all(fast);
+    }
+}

@@ -1,0 +1,315 @@
+//! A step's motion: wheel speeds (with their noise) turned into sub-steps short enough that
+//! nothing tunnels, each robot moved along its arc, bodies pushed out of obstacles and out of
+//! each other (a crowd that stays pressed settles back), and the step's contacts counted.
+
+use glam::DVec2;
+
+use super::broad_phase::{self, BroadPhase};
+use super::state::{PhaseClock, PhaseTimes, RobotState, StepScratch};
+use super::world2d::{Footprint, Slab};
+use crate::compile::rig::RobotRig;
+
+/// Most collision sub-steps in one step. A world whose robots could need more (a long time
+/// step at a high top speed) is refused when it is checked (`check.rs`), so the bound
+/// never cuts a step short and nothing tunnels at any accepted time step.
+pub const MAX_SUB_STEPS: usize = 4096;
+
+/// Largest penetration left after a step's collision handling (m).
+pub const PENETRATION_TOLERANCE: f64 = 1e-9;
+
+/// Collision passes in one sub-step, at most.
+const PASSES: usize = 3;
+
+/// How far a robot may move before its collision candidates are asked again (m).
+const SLACK: f64 = 0.005;
+
+/// What a step's motion reads and writes of a simulation.
+pub(super) struct Motion<'a> {
+    pub(super) rigs: &'a [RobotRig],
+    pub(super) slab: &'a Slab,
+    /// Grids over the floor: what pairs bodies without testing every pair.
+    pub(super) broad: &'a mut BroadPhase,
+    pub(super) robots: &'a mut [RobotState],
+    pub(super) scratch: &'a mut StepScratch,
+    /// Wall time spent in each phase, when profiling.
+    pub(super) profile: &'a mut Option<PhaseTimes>,
+    pub(super) time_step: f64,
+}
+
+impl Motion<'_> {
+    pub(super) fn move_robots(&mut self, clock: &mut PhaseClock) {
+        let dt = self.time_step;
+        let rigs = self.rigs;
+        let mut speeds = std::mem::take(&mut self.scratch.speeds);
+        // Wheel speeds (m/s) of every robot for this step.
+        speeds.clear();
+        speeds.extend(self.robots.iter_mut().zip(rigs).map(|(robot, rig)| {
+            let to_metres = 100.0 / rig.encoder_resolution;
+            let clamp =
+                |command: i32| (command as f64 * to_metres).clamp(-rig.max_speed, rig.max_speed);
+            let (mut left, mut right) = (clamp(robot.command.0), clamp(robot.command.1));
+            if rig.wheel_speed_noise > 0.0 {
+                left *= 1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian();
+                right *= 1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian();
+            }
+            (left, right)
+        }));
+        // Sub-steps short enough that no body crosses half its radius in one: no tunnelling.
+        let sub_steps = speeds
+            .iter()
+            .zip(rigs)
+            .map(|(&(l, r), rig)| {
+                libm::ceil(l.abs().max(r.abs()) * dt / (0.5 * rig.body_radius)) as usize
+            })
+            .max()
+            .unwrap_or(1)
+            .clamp(1, MAX_SUB_STEPS);
+        let h = dt / sub_steps as f64;
+        for robot in self.robots.iter_mut() {
+            robot.touched.clear();
+        }
+        for _ in 0..sub_steps {
+            self.scratch.before.clear();
+            self.scratch
+                .before
+                .extend(self.robots.iter().map(|r| DVec2::new(r.pose.x, r.pose.z)));
+            for ((robot, rig), &(left, right)) in self.robots.iter_mut().zip(rigs).zip(&speeds) {
+                robot.pose =
+                    super::kinematics::advance(robot.pose, left, right, rig.axle_length, h);
+                robot.travel.0 += left * h;
+                robot.travel.1 += right * h;
+            }
+            clock.lap(self.profile.as_mut().map(|p| &mut p.kinematics));
+            if self.resolve_collisions() {
+                self.settle();
+            }
+            clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));
+        }
+        for robot in self.robots.iter_mut() {
+            robot.touched.sort_unstable();
+            robot.touched.dedup();
+            let RobotState {
+                contacts, touched, ..
+            } = robot;
+            let any = !touched.is_empty();
+            for &k in touched.iter() {
+                if contacts.touching.binary_search(&k).is_err() {
+                    contacts.count_event(k);
+                }
+            }
+            let was = !contacts.touching.is_empty();
+            if any && !was {
+                contacts.events += 1;
+            }
+            robot.updated.contact |= any != was;
+            if any {
+                contacts.steps += 1;
+                contacts.current += dt;
+                contacts.longest = contacts.longest.max(contacts.current);
+            } else {
+                contacts.current = 0.0;
+            }
+            contacts.touching.clone_from(touched);
+        }
+        self.scratch.speeds = speeds;
+    }
+
+    /// Pushes bodies out of obstacles and out of each other: up to 3 passes, each robot
+    /// against each static obstacle in order, then each pair of robots in order, every push
+    /// seen by the tests after it. The grids only leave out pairs that cannot touch, so the
+    /// pushes are those of testing every pair.
+    fn resolve_collisions(&mut self) -> bool {
+        let rigs = self.rigs;
+        let statics = self.slab.obstacles.len();
+        let mut candidates = std::mem::take(&mut self.scratch.candidates);
+        let mut drift = std::mem::take(&mut self.scratch.drift);
+        let max_radius = self.broad.max_radius;
+        let mut unsettled = false;
+        for pass in 0..PASSES {
+            // A pass that pushes nothing leaves the next one nothing new to find.
+            let mut pushed = false;
+            for (index, robot) in self.robots.iter_mut().enumerate() {
+                let rig = &rigs[index];
+                let (floor, top) = (rig.floor_y, rig.floor_y + rig.body_height);
+                let reach = rig.body_radius + 1e-6;
+                // Candidates from where the robot is; asked again if pushes carry it further
+                // than SLACK from there.
+                let mut anchor = DVec2::new(robot.pose.x, robot.pose.z);
+                let (lo, hi) = broad_phase::square(anchor, reach + SLACK);
+                self.broad.statics.query(lo, hi, &mut candidates);
+                let mut next = 0;
+                while let Some(&k) = candidates.get(next) {
+                    next += 1;
+                    let center = DVec2::new(robot.pose.x, robot.pose.z);
+                    if center.distance(anchor) > SLACK {
+                        anchor = center;
+                        let (lo, hi) = broad_phase::square(anchor, reach + SLACK);
+                        self.broad.statics.query(lo, hi, &mut candidates);
+                        next = candidates.partition_point(|&c| c < k);
+                        continue;
+                    }
+                    let obstacle = &self.slab.obstacles[k as usize];
+                    if obstacle.y1 <= floor + 1e-6 || obstacle.y0 >= top {
+                        continue;
+                    }
+                    if let Some((depth, normal)) =
+                        obstacle.shape.penetration(center, rig.body_radius)
+                    {
+                        let moved = center + normal * depth;
+                        robot.pose.x = moved.x;
+                        robot.pose.z = moved.y;
+                        robot.touched.push(k);
+                        pushed = true;
+                    } else if obstacle
+                        .shape
+                        .penetration(center, rig.body_radius + 1e-6)
+                        .is_some()
+                    {
+                        robot.touched.push(k);
+                    }
+                }
+            }
+            let count = self.robots.len();
+            if count > 1 {
+                let robots = &self.robots;
+                self.broad
+                    .file_robots(count, |i| DVec2::new(robots[i].pose.x, robots[i].pose.z));
+                drift.clear();
+                drift.resize(count, 0.0);
+            }
+            // The largest drift of any robot since the grid was filed.
+            let mut max_drift = 0.0f64;
+            for a in 0..count.saturating_sub(1) {
+                let ra = rigs[a].body_radius;
+                // Candidates b > a whose filed centre is near enough that they might touch a,
+                // allowing for SLACK of motion of a, or of anyone, before they are asked again.
+                let (mut anchor, mut drift_then) = (
+                    DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z),
+                    max_drift,
+                );
+                let query = |anchor: DVec2, drift_then: f64, out: &mut Vec<u32>| {
+                    let (lo, hi) =
+                        broad_phase::square(anchor, ra + max_radius + drift_then + SLACK);
+                    self.broad.robots.query(lo, hi, out);
+                };
+                query(anchor, drift_then, &mut candidates);
+                let mut next = candidates.partition_point(|&c| c as usize <= a);
+                let mut moved = 0.0;
+                while let Some(&b) = candidates.get(next) {
+                    next += 1;
+                    let b = b as usize;
+                    if moved + (max_drift - drift_then) > SLACK {
+                        anchor = DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z);
+                        drift_then = max_drift;
+                        moved = 0.0;
+                        query(anchor, drift_then, &mut candidates);
+                        next = candidates.partition_point(|&c| (c as usize) < b);
+                        continue;
+                    }
+                    let rb = rigs[b].body_radius;
+                    let ca = DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z);
+                    let cb = DVec2::new(self.robots[b].pose.x, self.robots[b].pose.z);
+                    if let Some((depth, normal)) = (Footprint::Circle {
+                        center: cb,
+                        radius: rb,
+                    })
+                    .penetration(ca, ra)
+                    {
+                        let half = normal * (0.5 * depth);
+                        self.robots[a].pose.x += half.x;
+                        self.robots[a].pose.z += half.y;
+                        self.robots[b].pose.x -= half.x;
+                        self.robots[b].pose.z -= half.y;
+                        self.robots[a].touched.push((statics + b) as u32);
+                        self.robots[b].touched.push((statics + a) as u32);
+                        pushed = true;
+                        // Bounds on how far each has gone since the grid was filed.
+                        let step = half.length() * (1.0 + 1e-9);
+                        drift[a] += step;
+                        drift[b] += step;
+                        moved += step;
+                        max_drift = max_drift.max(drift[a]).max(drift[b]);
+                    }
+                }
+                let _ = anchor;
+            }
+            if !pushed {
+                break;
+            }
+            // The last pass still pushed: what it left may overlap (a pressing crowd).
+            unsettled = pass + 1 == PASSES;
+        }
+        self.scratch.candidates = candidates;
+        self.scratch.drift = drift;
+        unsettled
+    }
+
+    /// After the passes of a crowd: every robot still overlapping something beyond the
+    /// tolerance goes back to where it was before this sub-step (where nothing overlapped),
+    /// until nothing does. Blocked robots stay put; the others keep their motion.
+    fn settle(&mut self) {
+        let rigs = self.rigs;
+        let mut candidates = std::mem::take(&mut self.scratch.candidates);
+        let mut marked = std::mem::take(&mut self.scratch.marked);
+        let max_radius = self.broad.max_radius;
+        for _ in 0..=self.robots.len() {
+            marked.clear();
+            marked.resize(self.robots.len(), false);
+            let mut any = false;
+            for (index, robot) in self.robots.iter().enumerate() {
+                let rig = &rigs[index];
+                let (floor, top) = (rig.floor_y, rig.floor_y + rig.body_height);
+                let center = DVec2::new(robot.pose.x, robot.pose.z);
+                let (lo, hi) = broad_phase::square(center, rig.body_radius);
+                self.broad.statics.query(lo, hi, &mut candidates);
+                let in_wall = candidates.iter().any(|&k| {
+                    let obstacle = &self.slab.obstacles[k as usize];
+                    !(obstacle.y1 <= floor + 1e-6 || obstacle.y0 >= top)
+                        && obstacle
+                            .shape
+                            .penetration(center, rig.body_radius)
+                            .is_some_and(|(depth, _)| depth > PENETRATION_TOLERANCE)
+                });
+                if in_wall {
+                    marked[index] = true;
+                    any = true;
+                }
+            }
+            let robots = &self.robots;
+            self.broad.file_robots(robots.len(), |i| {
+                DVec2::new(robots[i].pose.x, robots[i].pose.z)
+            });
+            for a in 0..robots.len() {
+                let ca = DVec2::new(robots[a].pose.x, robots[a].pose.z);
+                let ra = rigs[a].body_radius;
+                let (lo, hi) = broad_phase::square(ca, ra + max_radius);
+                self.broad.robots.query(lo, hi, &mut candidates);
+                for &b in candidates.iter().filter(|&&b| b as usize > a) {
+                    let b = b as usize;
+                    let cb = DVec2::new(robots[b].pose.x, robots[b].pose.z);
+                    if ca.distance(cb) < ra + rigs[b].body_radius - PENETRATION_TOLERANCE {
+                        marked[a] = true;
+                        marked[b] = true;
+                        any = true;
+                    }
+                }
+            }
+            if !any {
+                break;
+            }
+            for ((robot, &back), before) in self
+                .robots
+                .iter_mut()
+                .zip(&marked)
+                .zip(&self.scratch.before)
+            {
+                if back {
+                    robot.pose.x = before.x;
+                    robot.pose.z = before.y;
+                }
+            }
+        }
+        self.scratch.candidates = candidates;
+        self.scratch.marked = marked;
+    }
+}

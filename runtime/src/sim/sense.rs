@@ -1,0 +1,202 @@
+//! One robot's sensing in a step: its due IR sensors (against the obstacles and robots
+//! within their reach), ambient light sensors, 2-D cameras and vision device, from what the
+//! step shares with every robot.
+
+use glam::DVec2;
+
+use super::broad_phase::{self, BroadPhase};
+use super::sensors;
+use super::state::RobotState;
+use super::world2d::Slab;
+use crate::compile::Compiled;
+use crate::optics::{Renderer, ViewOf};
+use crate::render::Poses;
+
+/// What every robot's sensing reads in a step, shared and never written while robots sense:
+/// so robots can be sensed side by side, each writing only its own state.
+pub(super) struct SenseShared<'s, 'c> {
+    pub(super) compiled: &'c Compiled,
+    pub(super) slab: &'s Slab,
+    pub(super) broad: &'s BroadPhase,
+    pub(super) placements: &'s [crate::compile::rig::Placement],
+    pub(super) lights: &'s [crate::render::WorldLight],
+    pub(super) poses: &'s Poses,
+    /// The CPU renderer, unless a batched backend renders vision.
+    pub(super) renderer: Option<&'s Renderer<'c>>,
+    /// The step's frame, when the renderer shares one between viewers.
+    pub(super) frame: Option<&'s crate::render::column::ColumnFrame>,
+    /// The ray caster of the 2-D cameras, when a robot has one.
+    pub(super) camera_caster: Option<&'s crate::render::raycast::RayCaster<'c>>,
+    pub(super) batched: bool,
+    pub(super) t: f64,
+}
+
+impl SenseShared<'_, '_> {
+    /// Refreshes one robot's due sensors.
+    pub(super) fn sense(&self, index: usize, robot: &mut RobotState) {
+        let (compiled, t) = (self.compiled, self.t);
+        let rig = &compiled.rig.robots[index];
+        let senses = robot.senses;
+        robot.vision_requested = false;
+        let proximity_sensors = if senses.proximity { 8 } else { 0 };
+        let mut nearby_found = false;
+        // Sensors that share a period and a due time are due alike: one division for all.
+        let mut last_due: Option<(u64, f64, bool, f64)> = None;
+        for (s, sensor) in rig
+            .distance_sensors
+            .iter()
+            .enumerate()
+            .take(proximity_sensors)
+        {
+            let period = robot.ir_period.unwrap_or(sensor.period);
+            let before = robot.ir_due[s];
+            let is_due = match last_due {
+                Some((bits, last_period, was_due, after))
+                    if bits == before.to_bits() && last_period.to_bits() == period.to_bits() =>
+                {
+                    robot.ir_due[s] = after;
+                    was_due
+                }
+                _ => {
+                    let is_due = due(&mut robot.ir_due[s], t, period);
+                    last_due = Some((before.to_bits(), period, is_due, robot.ir_due[s]));
+                    is_due
+                }
+            };
+            if !is_due {
+                continue;
+            }
+            if !nearby_found {
+                let placement = &self.placements[index];
+                sensors::nearby_obstacles(
+                    self.slab,
+                    &self.broad.statics,
+                    placement,
+                    robot.ir_reach,
+                    &mut robot.nearby,
+                );
+                robot.nearby_robots.clear();
+                if self.placements.len() > 1 {
+                    let reach = robot.ir_reach + self.broad.max_radius;
+                    let (lo, hi) = broad_phase::square(DVec2::new(placement.x, placement.z), reach);
+                    self.broad.robots.query(lo, hi, &mut robot.nearby_robots);
+                    // The grid's square holds its corners too: only robots whose bodies come
+                    // within reach are worth a sensor's test (in a crowd, most sensors then
+                    // have none and trace nothing).
+                    let center = DVec2::new(placement.x, placement.z);
+                    let sensor_reach = robot.ir_reach;
+                    let rigs = &compiled.rig.robots;
+                    robot.nearby_robots.retain(|&other| {
+                        let place = &self.placements[other as usize];
+                        other as usize != index
+                            && DVec2::new(place.x, place.z).distance(center)
+                                <= sensor_reach + rigs[other as usize].body_radius
+                    });
+                }
+                nearby_found = true;
+            }
+            robot.updated.proximity = true;
+            if robot.nearby.is_empty() && robot.nearby_robots.is_empty() {
+                robot.proximity[s] =
+                    sensors::proximity_of_nothing(robot.ir_nothing[s], &mut robot.ir_streams[s]);
+                continue;
+            }
+            robot.proximity[s] = sensors::proximity(
+                self.slab,
+                &robot.nearby,
+                &robot.nearby_robots,
+                self.placements,
+                index,
+                &compiled.rig.robots,
+                sensor,
+                &mut robot.ir_streams[s],
+            );
+        }
+        let ambient_sensors = if senses.ambient { 8 } else { 0 };
+        for (s, sensor) in rig.light_sensors.iter().enumerate().take(ambient_sensors) {
+            if due(&mut robot.ambient_due[s], t, sensor.period) {
+                robot.updated.ambient = true;
+                robot.ambient[s] = sensors::ambient(
+                    self.lights,
+                    self.slab,
+                    &self.broad.statics,
+                    self.placements,
+                    index,
+                    sensor,
+                    &mut robot.ambient_streams[s],
+                );
+            }
+        }
+        // 2-D cameras always render on the CPU, with the ray caster.
+        if let (true, Some(caster)) = (senses.camera, self.camera_caster) {
+            let mut view = None;
+            for (c, camera) in robot.cameras.iter_mut().enumerate() {
+                if due(&mut camera.due, t, camera.model.rig.period) {
+                    robot.updated.cameras |= 1 << c.min(63);
+                    let view = view.get_or_insert_with(|| {
+                        caster.prepare(&compiled.plan, self.poses, Some(index))
+                    });
+                    camera.model.update(
+                        caster,
+                        view,
+                        robot.pose,
+                        rig.floor_y,
+                        &mut camera.noise,
+                        &mut camera.image,
+                    );
+                }
+            }
+        }
+        if !senses.vision {
+            return;
+        }
+        if self.batched {
+            robot.vision_requested = match (&mut robot.panoramic, &mut robot.linear_camera) {
+                (Some(turret), _) => due(&mut turret.due, t, turret.model.rig.period),
+                (None, Some(camera)) => due(&mut camera.due, t, camera.model.rig.period),
+                (None, None) => false,
+            };
+            return;
+        }
+        let Some(renderer) = self.renderer else {
+            return;
+        };
+        // The shared frame, or a viewer's own (the ray caster's).
+        let own;
+        let view = match self.frame {
+            Some(frame) => ViewOf::Columns(frame, Some(index)),
+            None => {
+                own = renderer.view(&compiled.plan, self.poses, index);
+                own.of()
+            }
+        };
+        if let Some(turret) = &mut robot.panoramic {
+            if due(&mut turret.due, t, turret.model.rig.period) {
+                robot.updated.vision = true;
+                turret
+                    .model
+                    .update_of(renderer, view, robot.pose, rig.floor_y, &mut turret.output);
+            }
+        }
+        if let Some(camera) = &mut robot.linear_camera {
+            if due(&mut camera.due, t, camera.model.rig.period) {
+                robot.updated.vision = true;
+                camera
+                    .model
+                    .update_of(renderer, view, robot.pose, rig.floor_y, &mut camera.output);
+            }
+        }
+    }
+}
+
+/// Whether a sensor with `period` is due at `t`; moves its next due time on a regular grid.
+fn due(next: &mut f64, t: f64, period: f64) -> bool {
+    if period <= 0.0 {
+        return true;
+    }
+    if t + 1e-12 < *next {
+        return false;
+    }
+    *next = (libm::floor(t / period + 1e-9) + 1.0) * period;
+    true
+}

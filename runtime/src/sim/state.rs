@@ -1,0 +1,261 @@
+//! What a simulation keeps of each robot from step to step (its pose, commands, readings and
+//! their due times, noise streams, devices, contacts, visits and falls), the step's working
+//! buffers, and the wall-time profile of its phases.
+
+use glam::DVec2;
+
+use super::noise::Stream;
+use crate::compile::rig::{Pose2, RobotRig};
+use crate::khepera::{Controller, Senses};
+use crate::optics::{LinearCamera, LinearCameraOutput, Panoramic, RetinaOutput};
+use crate::render::Poses;
+use crate::vision::VisionRequest;
+
+/// Which sensor readings a step refreshed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Updated {
+    pub proximity: bool,
+    pub ambient: bool,
+    pub vision: bool,
+    /// Which 2-D cameras took an image (bit i: camera i).
+    pub cameras: u64,
+    /// A contact began or ended.
+    pub contact: bool,
+    /// The controller returned an error.
+    pub controller_error: bool,
+}
+
+/// Contact bookkeeping of one robot.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Contacts {
+    /// Times a contact began.
+    pub events: u64,
+    /// Steps that ended in contact.
+    pub steps: u64,
+    /// Longest unbroken contact (s).
+    pub longest: f64,
+    pub(super) current: f64,
+    /// Contact events per obstacle, for the obstacles ever touched, by obstacle (static
+    /// obstacles are numbered first, then robots): kept sparse, so that a swarm's table grows
+    /// with its contacts, not with the square of its size.
+    pub per_obstacle: Vec<(u32, u64)>,
+    /// The obstacles touched at the end of the last step, ascending.
+    pub(super) touching: Vec<u32>,
+}
+
+impl Contacts {
+    /// Whether the robot ended the last step touching something.
+    pub fn is_touching(&self) -> bool {
+        !self.touching.is_empty()
+    }
+
+    /// Contact events with one obstacle (static obstacles first, then robots).
+    pub fn events_with(&self, obstacle: usize) -> u64 {
+        self.per_obstacle
+            .binary_search_by_key(&(obstacle as u32), |&(k, _)| k)
+            .map_or(0, |i| self.per_obstacle[i].1)
+    }
+
+    #[inline]
+    pub(super) fn count_event(&mut self, obstacle: u32) {
+        match self
+            .per_obstacle
+            .binary_search_by_key(&obstacle, |&(k, _)| k)
+        {
+            Ok(i) => self.per_obstacle[i].1 += 1,
+            Err(i) => self.per_obstacle.insert(i, (obstacle, 1)),
+        }
+    }
+
+    /// The obstacles it ended the last step touching, ascending (indices into
+    /// `Simulation::obstacle_names`).
+    pub fn touching(&self) -> &[u32] {
+        &self.touching
+    }
+}
+
+/// Visits to the world's landmarks (buoys).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Visits {
+    /// Landmark indices in the order they were entered.
+    pub sequence: Vec<usize>,
+    /// When each entry of `sequence` happened (simulated s, the end of the step).
+    pub times: Vec<f64>,
+    /// The landmarks whose visit disc holds the robot now, ascending.
+    pub(super) inside: Vec<u32>,
+}
+
+impl Visits {
+    /// The radius of the disc a robot's centre enters to visit a landmark of `radius`: the
+    /// landmark's radius plus two body diameters.
+    #[inline]
+    pub fn disc_radius(radius: f64, body_radius: f64) -> f64 {
+        radius + 4.0 * body_radius
+    }
+}
+
+/// The Panoramic turret of a simulated robot.
+pub struct PanoramicState {
+    pub model: Panoramic,
+    pub output: RetinaOutput,
+    pub(super) due: f64,
+    /// Whether the turret is refreshed (someone reads it).
+    pub(super) sensed: bool,
+}
+
+/// The K213 of a simulated robot.
+pub struct LinearCameraState {
+    pub model: LinearCamera,
+    pub output: LinearCameraOutput,
+    pub(super) due: f64,
+    /// Whether the camera is refreshed (someone reads it).
+    pub(super) sensed: bool,
+}
+
+/// A 2-D camera of a simulated robot.
+pub struct CameraState {
+    pub model: crate::camera::Camera,
+    pub image: crate::camera::CameraImage,
+    pub(super) noise: Stream,
+    pub(super) due: f64,
+    /// Whether the camera is refreshed (someone reads it).
+    pub(super) sensed: bool,
+}
+
+/// One simulated robot.
+pub struct RobotState {
+    pub name: String,
+    /// Which readings the last step refreshed (what a log records, at each sensor's rate).
+    pub updated: Updated,
+    pub pose: Pose2,
+    /// Wheel speed commands (pulses per 10 ms).
+    pub command: (i32, i32),
+    /// Wheel travel since the start (m), from which the encoders count.
+    pub travel: (f64, f64),
+    pub(super) counter_offset: (i64, i64),
+    pub leds: [bool; 2],
+    /// The sensors refreshed in the last step: those the controller reads, or all.
+    pub senses: Senses,
+    pub proximity: [u16; 8],
+    pub ambient: [u16; 8],
+    pub(super) ir_due: Vec<f64>,
+    pub(super) ambient_due: Vec<f64>,
+    pub(super) ir_streams: Vec<Stream>,
+    /// Each IR sensor's (mean, spread) with nothing in range
+    /// ([`super::sensors::nothing_in_range`]).
+    pub(super) ir_nothing: Vec<(f64, f64)>,
+    /// How far from the centre any IR sensor reaches ([`super::sensors::ir_reach`]).
+    pub(super) ir_reach: f64,
+    /// The IR sensors' period when they all share one (read here, not from the rig, in the
+    /// step loop).
+    pub(super) ir_period: Option<f64>,
+    pub(super) ambient_streams: Vec<Stream>,
+    pub(super) wheel_stream: Stream,
+    pub panoramic: Option<PanoramicState>,
+    pub linear_camera: Option<LinearCameraState>,
+    pub cameras: Vec<CameraState>,
+    pub(super) controller: Option<Box<dyn Controller>>,
+    /// Controller calls that returned an error, and the last message.
+    pub controller_errors: u64,
+    pub last_controller_error: Option<String>,
+    pub contacts: Contacts,
+    pub visits: Visits,
+    /// Working lists, kept from step to step (the robot's own, so that robots can be sensed
+    /// side by side): static obstacles and robots near enough for the IR sensors, obstacles
+    /// touched in this step.
+    pub(super) nearby: Vec<u32>,
+    pub(super) nearby_robots: Vec<u32>,
+    pub(super) touched: Vec<u32>,
+    /// A batched backend is to render this robot's vision device in this step.
+    pub(super) vision_requested: bool,
+    /// Where and when the robot left every floor (it stays there, fallen off the world).
+    pub fell: Option<Fall>,
+}
+
+/// A robot leaving its floor: simulated time (s) and position (m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fall {
+    pub time: f64,
+    pub pose: Pose2,
+}
+
+impl RobotState {
+    /// Whether its vision device is read and due at `t` (without moving its due time).
+    #[inline]
+    pub(super) fn vision_due(&self, t: f64) -> bool {
+        let next = match (&self.panoramic, &self.linear_camera) {
+            (Some(turret), _) => (turret.due, turret.model.rig.period),
+            (None, Some(camera)) => (camera.due, camera.model.rig.period),
+            (None, None) => return false,
+        };
+        self.senses.vision && (next.1 <= 0.0 || t + 1e-12 >= next.0)
+    }
+
+    /// The encoder counters (pulses), as the robot reports them.
+    #[inline]
+    pub fn counters(&self, rig: &RobotRig) -> (i32, i32) {
+        let pulses = |travel: f64, offset: i64| {
+            ((libm::floor(travel * rig.encoder_resolution) as i64) - offset) as i32
+        };
+        (
+            pulses(self.travel.0, self.counter_offset.0),
+            pulses(self.travel.1, self.counter_offset.1),
+        )
+    }
+}
+
+/// Wall time spent in each phase of the steps run while profiling.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// Sensors: IR, ambient light, vision.
+    pub sense: std::time::Duration,
+    /// Controllers.
+    pub control: std::time::Duration,
+    /// Wheels moved along their arcs.
+    pub kinematics: std::time::Duration,
+    /// Bodies pushed apart, contacts and visits counted.
+    pub collisions: std::time::Duration,
+}
+
+/// Times a phase when profiling.
+pub(super) struct PhaseClock(Option<std::time::Instant>);
+
+impl PhaseClock {
+    #[inline]
+    pub(super) fn start(on: bool) -> PhaseClock {
+        PhaseClock(on.then(std::time::Instant::now))
+    }
+
+    /// Adds the time since the last lap to `slot` and starts the next lap.
+    #[inline]
+    pub(super) fn lap(&mut self, slot: Option<&mut std::time::Duration>) {
+        if let (Some(started), Some(slot)) = (self.0, slot) {
+            let now = std::time::Instant::now();
+            *slot += now - started;
+            self.0 = Some(now);
+        }
+    }
+}
+
+/// A step's working buffers.
+#[derive(Default)]
+pub(super) struct StepScratch {
+    pub(super) poses: Poses,
+    pub(super) placements: Vec<crate::compile::rig::Placement>,
+    /// The plan's lights in the world, kept from step to step when none is on a robot.
+    pub(super) lights: Vec<crate::render::WorldLight>,
+    pub(super) lights_move: bool,
+    pub(super) requests: Vec<VisionRequest>,
+    pub(super) speeds: Vec<(f64, f64)>,
+    /// Collision candidates of one robot.
+    pub(super) candidates: Vec<u32>,
+    /// How far each robot was pushed since the robots' grid was filed (an upper bound).
+    pub(super) drift: Vec<f64>,
+    /// One robot's landmarks inside at the last step.
+    pub(super) was_inside: Vec<u32>,
+    /// Where each robot was before the sub-step, and which go back there.
+    pub(super) before: Vec<DVec2>,
+    pub(super) marked: Vec<bool>,
+    /// The world placed once for every viewer of the step (column renderer).
+    pub(super) frame: Option<crate::render::column::ColumnFrame>,
+}

@@ -1,0 +1,518 @@
+//! The simulation and its step loop: fixed steps of `WorldInfo.basicTimeStep`. In each step, sensors that are
+//! due update (each at its own period), controllers read them and set wheel speeds, then
+//! kinematics and collisions run. All randomness comes from the run's seed, one stream per
+//! robot and per sensor; robots are visited in file order; nothing depends on wall time.
+//! A step is two halves: [`Simulation::sense`] (sensors, side by side where robots are many)
+//! and [`Simulation::act`] (controllers, then motion and collisions, falls and visits).
+
+use glam::DVec2;
+
+use super::broad_phase::BroadPhase;
+use super::contacts::Motion;
+use super::noise::{kind, Stream};
+use super::robot::SimulatedKhepera;
+use super::sense::SenseShared;
+use super::sensors;
+use super::state::{
+    CameraState, Contacts, LinearCameraState, PanoramicState, PhaseClock, PhaseTimes, RobotState,
+    StepScratch, Updated, Visits,
+};
+use super::visits::{track_falls, track_visits};
+use super::world2d::Slab;
+use crate::compile::rig::TurretRig;
+use crate::compile::Compiled;
+use crate::controllers;
+use crate::khepera::{Controller, Senses};
+use crate::optics::{LinearCamera, LinearCameraOutput, Panoramic, Renderer, RetinaOutput};
+use crate::render::Poses;
+use crate::vision::{VisionBackend, VisionError, VisionRequest, WorldInstance};
+
+/// Why a simulation could not start.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SimError {
+    #[error("robot '{robot}': {source}")]
+    Controller {
+        robot: String,
+        #[source]
+        source: controllers::ControllerError,
+    },
+    #[error("the world's time step must be positive, found {0} s")]
+    TimeStep(f64),
+}
+
+/// A running world.
+pub struct Simulation<'c> {
+    pub compiled: &'c Compiled,
+    renderer: Option<Renderer<'c>>,
+    /// The ray caster 2-D cameras render with, when a robot has one.
+    camera_caster: Option<crate::render::raycast::RayCaster<'c>>,
+    /// A batched backend that renders every due vision device of a step in one call,
+    /// replacing the CPU renderer.
+    vision: Option<Box<dyn VisionBackend + 'c>>,
+    /// The first error the vision backend returned; vision readings stop refreshing after it.
+    pub vision_error: Option<VisionError>,
+    vision_buffers: Vec<Vec<f64>>,
+    pub slab: Slab,
+    /// Grids over the floor: what pairs bodies without testing every pair.
+    broad: BroadPhase,
+    pub robots: Vec<RobotState>,
+    /// Simulated time (s) and steps done.
+    pub time: f64,
+    pub steps: u64,
+    pub time_step: f64,
+    pub seed: u64,
+    /// Sensors refreshed whether or not a controller reads them (what a log records).
+    pub always_sensed: Senses,
+    /// Buffers a step fills and the next reuses: stepping allocates nothing once warm.
+    scratch: StepScratch,
+    /// Wall time spent in each phase, when profiling (`regatta bench step`); never read by
+    /// the simulation itself, so it changes no result.
+    profile: Option<PhaseTimes>,
+}
+
+impl<'c> Simulation<'c> {
+    /// Starts a world with its built-in controllers; `seed` overrides the world's.
+    pub fn new(compiled: &'c Compiled, seed: Option<u64>) -> Result<Simulation<'c>, SimError> {
+        let time_step = compiled.settings.time_step;
+        if !(time_step > 0.0 && time_step.is_finite()) {
+            return Err(SimError::TimeStep(time_step));
+        }
+        let seed = seed.unwrap_or(compiled.settings.seed);
+        let slab = Slab::new(&compiled.graph, &compiled.rig);
+        let renderer = (compiled.plan.renderer != crate::compile::plan::RendererChoice::None)
+            .then(|| Renderer::new(&compiled.graph, &compiled.plan, false));
+        let broad = BroadPhase::new(compiled, &slab);
+        let mut robots: Vec<RobotState> = Vec::with_capacity(compiled.rig.robots.len());
+        // The last turret built: the next with the same settings shares its filters.
+        let mut last_panoramic: Option<usize> = None;
+        for (index, rig) in compiled.rig.robots.iter().enumerate() {
+            let controller =
+                controllers::build_for(rig).map_err(|source| SimError::Controller {
+                    robot: rig.name.clone(),
+                    source,
+                })?;
+            robots.push(RobotState {
+                name: rig.name.clone(),
+                updated: Updated::default(),
+                pose: rig.start,
+                command: (0, 0),
+                travel: (0.0, 0.0),
+                counter_offset: (0, 0),
+                leds: [false; 2],
+                senses: Senses::ALL,
+                proximity: [0; 8],
+                ambient: [0; 8],
+                ir_due: vec![0.0; rig.distance_sensors.len()],
+                ambient_due: vec![0.0; rig.light_sensors.len()],
+                ir_nothing: rig
+                    .distance_sensors
+                    .iter()
+                    .map(sensors::nothing_in_range)
+                    .collect(),
+                ir_reach: sensors::ir_reach(&rig.distance_sensors),
+                ir_period: rig.distance_sensors.first().map(|s| s.period).filter(|&p| {
+                    rig.distance_sensors
+                        .iter()
+                        .all(|s| s.period.to_bits() == p.to_bits())
+                }),
+                ir_streams: (0..rig.distance_sensors.len())
+                    .map(|s| Stream::new(seed, index, kind::PROXIMITY, s))
+                    .collect(),
+                ambient_streams: (0..rig.light_sensors.len())
+                    .map(|s| Stream::new(seed, index, kind::AMBIENT, s))
+                    .collect(),
+                wheel_stream: Stream::new(seed, index, kind::WHEELS, 0),
+                panoramic: match &rig.turret {
+                    Some(TurretRig::Panoramic(p)) => Some(PanoramicState {
+                        model: Panoramic::new_like(
+                            p,
+                            last_panoramic
+                                .and_then(|r| robots[r].panoramic.as_ref())
+                                .map(|state| &state.model),
+                        ),
+                        output: RetinaOutput::default(),
+                        due: 0.0,
+                        sensed: true,
+                    }),
+                    _ => None,
+                },
+                linear_camera: match &rig.turret {
+                    Some(TurretRig::Linear(c)) => Some(LinearCameraState {
+                        model: LinearCamera::new(c),
+                        output: LinearCameraOutput::default(),
+                        due: 0.0,
+                        sensed: true,
+                    }),
+                    _ => None,
+                },
+                cameras: rig
+                    .cameras
+                    .iter()
+                    .enumerate()
+                    .map(|(c, camera)| CameraState {
+                        model: crate::camera::Camera::new(camera),
+                        image: crate::camera::CameraImage::default(),
+                        noise: Stream::new(seed, index, kind::CAMERA, c),
+                        due: 0.0,
+                        sensed: true,
+                    })
+                    .collect(),
+                controller: Some(controller),
+                controller_errors: 0,
+                last_controller_error: None,
+                // Room for a few contacts and visits at once: a step allocates only when a
+                // record outgrows it (amortised doubling), never as routine.
+                contacts: Contacts {
+                    per_obstacle: Vec::with_capacity(8),
+                    touching: Vec::with_capacity(8),
+                    ..Contacts::default()
+                },
+                visits: Visits {
+                    sequence: Vec::with_capacity(64),
+                    times: Vec::with_capacity(64),
+                    inside: Vec::with_capacity(4),
+                },
+                nearby: Vec::with_capacity(16),
+                nearby_robots: Vec::with_capacity(32),
+                touched: Vec::with_capacity(8),
+                vision_requested: false,
+                fell: None,
+            });
+            if robots[index].panoramic.is_some() {
+                last_panoramic = Some(index);
+            }
+        }
+        let camera_caster = compiled
+            .rig
+            .has_cameras()
+            .then(|| crate::render::raycast::RayCaster::new(&compiled.graph, &compiled.plan));
+        let mut simulation = Simulation {
+            compiled,
+            renderer,
+            camera_caster,
+            vision: None,
+            vision_error: None,
+            vision_buffers: Vec::new(),
+            slab,
+            broad,
+            robots,
+            time: 0.0,
+            steps: 0,
+            time_step,
+            seed,
+            always_sensed: Senses::NONE,
+            scratch: StepScratch::default(),
+            profile: None,
+        };
+        let plan = &compiled.plan;
+        simulation.scratch.lights_move = plan
+            .lights
+            .iter()
+            .any(|&l| compiled.graph.lights[l].owner != crate::compile::graph::Owner::Static);
+        simulation.scratch.lights =
+            crate::render::world_lights(&compiled.graph, plan, &simulation.poses());
+        track_visits(
+            &mut simulation.robots,
+            compiled,
+            &simulation.broad,
+            simulation.time,
+            &mut simulation.scratch,
+        );
+        Ok(simulation)
+    }
+
+    /// Renders vision devices with `backend` (built for this world as scene 0) instead of
+    /// the CPU renderer.
+    pub fn set_vision_backend(&mut self, backend: Box<dyn VisionBackend + 'c>) {
+        self.vision = Some(backend);
+    }
+
+    /// Refreshes every sensor from now on, whether or not a controller reads it: what a log
+    /// records. Other robots' readings and noise streams do not change.
+    pub fn sense_everything(&mut self) {
+        self.always_sensed = Senses::ALL;
+    }
+
+    /// Starts (or stops) adding up the wall time of each phase of the steps that follow.
+    pub fn set_profiling(&mut self, on: bool) {
+        self.profile = on.then(PhaseTimes::default);
+    }
+
+    /// The wall time of each phase since profiling started.
+    pub fn phase_times(&self) -> Option<PhaseTimes> {
+        self.profile
+    }
+
+    /// Replaces a robot's controller (a library user's own).
+    pub fn set_controller(&mut self, robot: usize, controller: Box<dyn Controller>) {
+        self.robots[robot].controller = Some(controller);
+    }
+
+    fn poses(&self) -> Poses {
+        Poses {
+            poses: self.robots.iter().map(|r| r.pose).collect(),
+            floor_y: self.compiled.rig.robots.iter().map(|r| r.floor_y).collect(),
+        }
+    }
+
+    /// Advances the world by one step: [`Simulation::sense`] then [`Simulation::act`].
+    pub fn step(&mut self) {
+        self.sense();
+        self.act();
+    }
+
+    /// The first half of a step: clears the update flags and refreshes the sensors that are
+    /// due. A robot driven from outside (over the serial protocol) is read and commanded
+    /// between this and [`Simulation::act`], exactly where a built-in controller runs.
+    pub fn sense(&mut self) {
+        let t = self.time;
+        for robot in &mut self.robots {
+            robot.updated = Updated::default();
+            // A robot driven from outside may read anything its protocol reads.
+            let reads = robot
+                .controller
+                .as_ref()
+                .map_or(Senses::PROTOCOL, |c| c.senses());
+            robot.senses = reads.union(self.always_sensed);
+            let vision = robot.senses.vision;
+            if let Some(turret) = &mut robot.panoramic {
+                turret.sensed = vision;
+            }
+            if let Some(camera) = &mut robot.linear_camera {
+                camera.sensed = vision;
+            }
+            for camera in &mut robot.cameras {
+                camera.sensed = robot.senses.camera;
+            }
+        }
+        let mut clock = PhaseClock::start(self.profile.is_some());
+        self.update_sensors(t);
+        clock.lap(self.profile.as_mut().map(|p| &mut p.sense));
+    }
+
+    /// The second half of a step: runs the built-in controllers, moves the robots and
+    /// advances time.
+    pub fn act(&mut self) {
+        let mut clock = PhaseClock::start(self.profile.is_some());
+        let rigs = &self.compiled.rig.robots;
+        let control = |index: usize, robot: &mut RobotState| {
+            let Some(mut controller) = robot.controller.take() else {
+                return;
+            };
+            let mut io = SimulatedKhepera {
+                robot,
+                rig: &rigs[index],
+            };
+            if let Err(error) = controller.step(&mut io) {
+                robot.updated.controller_error = true;
+                robot.controller_errors += 1;
+                robot.last_controller_error = Some(error.to_string());
+            }
+            robot.controller = Some(controller);
+        };
+        // Each controller drives its own robot only: side by side, the same results.
+        if parallel(&self.robots) {
+            use rayon::prelude::*;
+            self.robots
+                .par_iter_mut()
+                .enumerate()
+                .for_each(|(index, robot)| control(index, robot));
+        } else {
+            for (index, robot) in self.robots.iter_mut().enumerate() {
+                control(index, robot);
+            }
+        }
+        clock.lap(self.profile.as_mut().map(|p| &mut p.control));
+        Motion {
+            rigs: &self.compiled.rig.robots,
+            slab: &self.slab,
+            broad: &mut self.broad,
+            robots: &mut self.robots,
+            scratch: &mut self.scratch,
+            profile: &mut self.profile,
+            time_step: self.time_step,
+        }
+        .move_robots(&mut clock);
+        self.steps += 1;
+        self.time = self.steps as f64 * self.time_step;
+        track_falls(&mut self.robots, &self.compiled.rig.robots, self.time);
+        track_visits(
+            &mut self.robots,
+            self.compiled,
+            &self.broad,
+            self.time,
+            &mut self.scratch,
+        );
+        clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));
+    }
+
+    /// Takes a robot's built-in controller away, so that something outside drives it.
+    pub fn detach_controller(&mut self, robot: usize) -> Option<Box<dyn Controller>> {
+        self.robots[robot].controller.take()
+    }
+
+    /// One robot's Khepera API, for driving it from outside between [`Simulation::sense`] and
+    /// [`Simulation::act`].
+    pub fn khepera(&mut self, robot: usize) -> SimulatedKhepera<'_> {
+        SimulatedKhepera {
+            robot: &mut self.robots[robot],
+            rig: &self.compiled.rig.robots[robot],
+        }
+    }
+
+    /// Runs `steps` steps.
+    pub fn run(&mut self, steps: u64) {
+        for _ in 0..steps {
+            self.step();
+        }
+    }
+
+    fn update_sensors(&mut self, t: f64) {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        self.update_sensors_with(t, &mut scratch);
+        self.scratch = scratch;
+    }
+
+    fn update_sensors_with(&mut self, t: f64, scratch: &mut StepScratch) {
+        let compiled = self.compiled;
+        let StepScratch {
+            poses,
+            placements,
+            lights,
+            lights_move,
+            requests,
+            ..
+        } = scratch;
+        poses.poses.clear();
+        poses.poses.extend(self.robots.iter().map(|r| r.pose));
+        poses.floor_y.clear();
+        poses
+            .floor_y
+            .extend(compiled.rig.robots.iter().map(|r| r.floor_y));
+        let poses = &*poses;
+        placements.clear();
+        placements.extend(
+            poses
+                .poses
+                .iter()
+                .zip(&poses.floor_y)
+                .map(|(p, &y)| p.placement(y)),
+        );
+        let placements = &*placements;
+        // Ambient sensors read the plan's lights, placed once per step where they move.
+        if *lights_move
+            && self
+                .robots
+                .iter()
+                .any(|r| r.senses.ambient && !r.ambient_due.is_empty())
+        {
+            *lights = crate::render::world_lights(&compiled.graph, &compiled.plan, poses);
+        }
+        // Where every robot is, once per step, for every robot's IR sensors.
+        if self.robots.len() > 1 && self.robots.iter().any(|r| r.senses.proximity) {
+            self.broad.file_robots(placements.len(), |i| {
+                DVec2::new(placements[i].x, placements[i].z)
+            });
+        }
+        let renderer = self.renderer.as_ref().filter(|_| self.vision.is_none());
+        // The world placed once, for every robot's vision device, when one is due.
+        let frame = &mut scratch.frame;
+        match renderer {
+            Some(renderer) if self.robots.iter().any(|r| r.vision_due(t)) => {
+                renderer.prepare_shared(&compiled.plan, poses, frame)
+            }
+            _ => {}
+        }
+        let shared = SenseShared {
+            compiled,
+            slab: &self.slab,
+            broad: &self.broad,
+            placements,
+            lights,
+            poses,
+            renderer,
+            frame: frame.as_ref(),
+            camera_caster: self.camera_caster.as_ref(),
+            batched: self.vision.is_some(),
+            t,
+        };
+        // Each robot reads only what is shared and writes only itself: side by side when
+        // there is enough work, and the same results either way.
+        if parallel(&self.robots) {
+            use rayon::prelude::*;
+            self.robots
+                .par_iter_mut()
+                .enumerate()
+                .with_max_len(1)
+                .for_each(|(index, robot)| shared.sense(index, robot));
+        } else {
+            for (index, robot) in self.robots.iter_mut().enumerate() {
+                shared.sense(index, robot);
+            }
+        }
+        requests.clear();
+        if !shared.batched {
+            return;
+        }
+        requests.extend(
+            self.robots
+                .iter()
+                .enumerate()
+                .filter(|(_, r)| r.vision_requested)
+                .map(|(robot, _)| VisionRequest { instance: 0, robot }),
+        );
+        if requests.is_empty() || self.vision_error.is_some() {
+            return;
+        }
+        let Some(backend) = &mut self.vision else {
+            return;
+        };
+        let instances = [WorldInstance { scene: 0, poses }];
+        if let Err(error) = backend.render(&instances, requests, &mut self.vision_buffers) {
+            self.vision_error = Some(error);
+            return;
+        }
+        for (request, luminance) in requests.iter().zip(&self.vision_buffers) {
+            let robot = &mut self.robots[request.robot];
+            robot.updated.vision = true;
+            if let Some(turret) = &mut robot.panoramic {
+                turret.model.accept(luminance, &mut turret.output);
+            } else if let Some(camera) = &mut robot.linear_camera {
+                camera.model.accept(luminance, &mut camera.output);
+            }
+        }
+    }
+
+    /// A name for everything a robot can touch, in [`Contacts::per_obstacle`] order: a buoy's
+    /// landmark name, else the outermost named group the obstacle stands in (a DEF or PROTO
+    /// name such as `Arena`), then the robots by name.
+    pub fn obstacle_names(&self) -> Vec<String> {
+        let graph = &self.compiled.graph;
+        let statics = self.slab.obstacles.iter().map(|obstacle| {
+            if let Some(landmark) = self
+                .compiled
+                .landmarks
+                .iter()
+                .find(|l| l.primitives.contains(&obstacle.primitive))
+            {
+                return landmark.name.clone();
+            }
+            let mut group = graph.primitives[obstacle.primitive].group;
+            let mut name = None;
+            while let Some(g) = group {
+                name = Some(&graph.groups[g].name);
+                group = graph.groups[g].parent;
+            }
+            name.cloned().unwrap_or_else(|| "an obstacle".to_owned())
+        });
+        statics
+            .chain(self.robots.iter().map(|r| r.name.clone()))
+            .collect()
+    }
+}
+
+/// Whether robots are sensed and controlled side by side: with more than one thread and
+/// enough robots to share (a few robots cost less than handing them out).
+fn parallel(robots: &[RobotState]) -> bool {
+    robots.len() >= 8 && rayon::current_num_threads() > 1
+}
