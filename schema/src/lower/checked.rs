@@ -94,16 +94,21 @@ impl Checked {
 
     /// Renders the diagnostics `keep` selects, in rustc's style.
     pub fn render_where(&self, keep: impl Fn(&FileDiagnostic) -> bool, color: bool) -> String {
+        let mut kept = self.diagnostics.iter().filter(|d| keep(d)).peekable();
+        // The map finds every line of every file: only worth it for something to show.
+        if kept.peek().is_none() {
+            return String::new();
+        }
         let map = self.source_map();
-        self.diagnostics
-            .iter()
-            .filter(|d| keep(d))
-            .map(|d| map.render(d.file.0 as usize, &d.diagnostic, color))
+        kept.map(|d| map.render(d.file.0 as usize, &d.diagnostic, color))
             .collect()
     }
 
     /// One line per diagnostic: `file:line:col: error: message`.
     pub fn short(&self) -> Vec<String> {
+        if self.diagnostics.is_empty() {
+            return Vec::new();
+        }
         let map = self.source_map();
         self.diagnostics
             .iter()

@@ -1,4 +1,4 @@
-//! Typing: from syntax trees to a [`Scene`], checking every field against the catalogue,
+//! Typing: from syntax trees to a [`Scene`](crate::scene::Scene), checking every field against the catalogue,
 //! resolving DEF/USE, expanding PROTOs (built-in, file-local and local EXTERNPROTOs) and
 //! Inline files.
 //!
@@ -7,12 +7,18 @@
 //!   error and the scene is always a DAG; among repeated DEFs the latest bound wins.
 //! - Strict mode makes unknown nodes, fields and template code errors; lenient mode makes them
 //!   warnings and skips them, as Webots does.
-//! - Files are read through [`FileAccess`] only: urls resolve relative to the file naming
+//! - Files are read through [`FileAccess`](crate::access::FileAccess) only: urls resolve relative to the file naming
 //!   them and never leave the world's root; no url is ever fetched.
-//! - Every [`Limits`] bound is checked where it is crossed and reported there, once.
+//! - Every [`Limits`](crate::access::Limits) bound is checked where it is crossed and reported there, once.
 //! - A problem inside a PROTO's body that the instance caused (a value it passed, a template
 //!   over its fields, any problem in a built-in PROTO) is reported at the instance's line, with
 //!   the PROTO's line beside it, as rustc does for macros.
+//!
+//! This file holds the entry points. The lowerer's state is `state.rs`; each of its jobs is a
+//! file: `nodes.rs` (DEF/USE, built-in nodes), `fields.rs` (field values, IS), `protos.rs`
+//! (PROTO instances), `templates.rs`, `files.rs` (urls, EXTERNPROTO, Inline), `routes.rs`,
+//! `axes.rs`, `limits.rs`, `report.rs` (diagnostics and blame), `finish.rs`; what a check is
+//! given and returns are `options.rs` and `checked.rs`.
 
 use std::path::{Path, PathBuf};
 

@@ -17,12 +17,12 @@ pub const MAX_DIAGNOSTICS: usize = 500;
 pub struct Options {
     /// Unknown nodes and fields are errors (regatta's own worlds) or warnings (foreign files).
     pub strict: bool,
-    /// The folders the world may read files from; [`check_path`] adds the world's own folder.
+    /// The folders the world may read files from; `check_path` adds the world's own folder.
     pub access: FileAccess,
     /// Bounds on includes, PROTO depth, nodes, nesting and file size.
     pub limits: Limits,
     /// The folder the main text's relative urls resolve against: the world file's folder
-    /// ([`check_path`] sets it); `None` for a text with no folder (standard input), whose
+    /// (`check_path` sets it); `None` for a text with no folder (standard input), whose
     /// urls resolve against the current directory, still within `access`.
     pub base_dir: Option<PathBuf>,
     /// Folders where `webots://` PROTOs are looked for before regatta's stand-ins (a Webots
