@@ -140,7 +140,7 @@ pub(super) struct Lowerer<'c> {
     /// the parser's generic "missing value" ones.
     pub(super) parse_diagnostics: Vec<FileDiagnostic>,
     pub(super) diagnostics: Vec<FileDiagnostic>,
-    /// Diagnostics dropped past [`MAX_DIAGNOSTICS`].
+    /// Diagnostics dropped past `MAX_DIAGNOSTICS`.
     pub(super) dropped: usize,
     pub(super) refined_missing: BTreeSet<(u32, u32)>,
     pub(super) builtins: Option<ProtoTable>,
