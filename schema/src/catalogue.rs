@@ -5,8 +5,11 @@
 use std::collections::BTreeMap;
 use std::sync::OnceLock;
 
+use regatta_parser::syntax::{self, Atom, BodyItem, Item, NodeKind};
+use regatta_parser::{Diagnostic, Span};
 use serde::{Deserialize, Serialize};
 
+use crate::typing::{self, Literal, Typing};
 use crate::value::{FieldType, Value};
 
 const CATALOGUE_FILES: &[(&str, &str)] = &[
@@ -70,6 +73,96 @@ impl FieldSpec {
         self.default_value
             .as_ref()
             .expect("catalogue defaults are typed when it loads")
+    }
+
+    /// Why the string `value`, written at `span` for the field `field_name`, is not one of
+    /// the field's allowed values; `None` when it is (or the field allows any string).
+    pub(crate) fn disallowed(
+        &self,
+        value: &str,
+        span: Span,
+        field_name: &str,
+    ) -> Option<Diagnostic> {
+        if self.values.is_empty() || self.values.iter().any(|v| v == value) {
+            return None;
+        }
+        let allowed = self
+            .values
+            .iter()
+            .map(|v| format!("\"{v}\""))
+            .collect::<Vec<_>>()
+            .join(", ");
+        let mut diagnostic = Diagnostic::error(
+            span,
+            format!("\"{value}\" is not a valid value of '{field_name}'"),
+        )
+        .with_label(format!("expected one of {allowed}"))
+        .with_code("range");
+        if let Some(close) = did_you_mean(value, self.values.iter().map(String::as_str)) {
+            diagnostic = diagnostic.with_note(format!("did you mean \"{close}\"?"));
+        }
+        Some(diagnostic)
+    }
+
+    /// Why a typed value, written at `span`, breaks the field's min/max/above/count; `None`
+    /// when it does not.
+    pub(crate) fn out_of_range(&self, value: &Value, span: Span) -> Option<Diagnostic> {
+        let numbers: Vec<f64> = match value {
+            Value::Int(i) => vec![*i as f64],
+            Value::Float(x) => vec![*x],
+            Value::Vec2(v) => v.to_vec(),
+            Value::Vec3(v) => v.to_vec(),
+            Value::Ints(v) => v.iter().map(|&i| i as f64).collect(),
+            Value::Floats(v) => v.clone(),
+            Value::Vec2s(v) => v.iter().flatten().copied().collect(),
+            Value::Vec3s(v) => v.iter().flatten().copied().collect(),
+            _ => Vec::new(),
+        };
+        let count = match value {
+            Value::Ints(v) => Some(v.len()),
+            Value::Floats(v) => Some(v.len()),
+            Value::Strings(v) => Some(v.len()),
+            Value::Nodes(v) => Some(v.len()),
+            Value::Vec3s(v) => Some(v.len()),
+            Value::Vec2s(v) => Some(v.len()),
+            _ => None,
+        };
+        if let (Some(expected), Some(found)) = (self.count, count) {
+            if expected != found {
+                return Some(
+                    Diagnostic::error(
+                        span,
+                        format!(
+                            "'{}' takes exactly {expected} values, found {found}",
+                            self.name
+                        ),
+                    )
+                    .with_code("arity"),
+                );
+            }
+        }
+        for x in numbers {
+            let problem = if self.above.is_some_and(|a| x <= a) {
+                Some(format!(
+                    "must be greater than {}",
+                    self.above.unwrap_or_default()
+                ))
+            } else if self.min.is_some_and(|m| x < m) {
+                Some(format!("must be at least {}", self.min.unwrap_or_default()))
+            } else if self.max.is_some_and(|m| x > m) {
+                Some(format!("must be at most {}", self.max.unwrap_or_default()))
+            } else {
+                None
+            };
+            if let Some(problem) = problem {
+                return Some(
+                    Diagnostic::error(span, format!("'{}' {problem}, found {x}", self.name))
+                        .with_label(self.doc.clone())
+                        .with_code("range"),
+                );
+            }
+        }
+        None
     }
 }
 
@@ -153,7 +246,7 @@ impl Catalogue {
         // Type every default with the same code as user values.
         for id in 0..catalogue.nodes.len() {
             for index in 0..catalogue.nodes[id].fields.len() {
-                let value = crate::lower::type_default(&catalogue, id, index)?;
+                let value = type_default(&catalogue, id, index)?;
                 // A node's children are among its own values (`scene::Fields::own`).
                 if !value.nodes().is_empty() {
                     return Err(format!(
@@ -180,6 +273,72 @@ impl Catalogue {
     /// Every name a node type can be written with, for "did you mean".
     pub fn names(&self) -> impl Iterator<Item = &str> {
         self.by_name.keys().map(String::as_str)
+    }
+}
+
+/// Types a catalogue default with the code that types user values ([`Typing`]), as the
+/// field `NAME DEFAULT` of a node: a default holds no node, and keeps to the field's ranges.
+fn type_default(catalogue: &Catalogue, spec: SpecId, index: usize) -> Result<Value, String> {
+    let node = &catalogue.nodes[spec];
+    let field = &node.fields[index];
+    let text = format!("Default {{ {} {} }}", field.name, field.default);
+    let parse = regatta_parser::parse(&text);
+    let value = match parse.file.items.first() {
+        Some(Item::Node(syntax::Node {
+            kind: NodeKind::Instance {
+                body: Some(body), ..
+            },
+            ..
+        })) => match body.items.first() {
+            Some(BodyItem::Field(f)) => &f.value,
+            _ => return Err(format!("{}.{}: unreadable default", node.name, field.name)),
+        },
+        _ => return Err(format!("{}.{}: unreadable default", node.name, field.name)),
+    };
+    let does_not_type = |problem: Option<&str>| {
+        format!(
+            "{}.{}: default {:?} does not type: {problem:?}",
+            node.name, field.name, field.default
+        )
+    };
+    let syntax::FieldValue::Value(value) = value else {
+        return Err(does_not_type(Some("not a value")));
+    };
+    let ty = field.ty();
+    if let Some(problem) = typing::bracketed(value, ty) {
+        return Err(does_not_type(Some(&problem.message)));
+    }
+    let disallowed = |s: &syntax::StringLit| field.disallowed(&s.value, s.span, &field.name);
+    let typing = Typing {
+        text: &text,
+        ty,
+        field_name: &field.name,
+        strict: true,
+        disallowed: &disallowed,
+    };
+    let mut problems = Vec::new();
+    let typed = match typing.literal(value, &mut problems) {
+        Some(Literal::Value(value)) => Some(value),
+        // No node but NULL or an empty list.
+        Some(Literal::Nodes([Atom::Null(_)])) if !ty.multi => Some(Value::Node(None)),
+        Some(Literal::Nodes([])) if ty.multi => Some(Value::Nodes(Vec::new())),
+        Some(Literal::Nodes(_)) => {
+            return Err(format!(
+                "{}.{}: a default holds no node",
+                node.name, field.name
+            ))
+        }
+        None => None,
+    };
+    if let Some(problem) = typed
+        .as_ref()
+        .and_then(|v| field.out_of_range(v, value.span))
+    {
+        problems.push(problem);
+    }
+    match typed {
+        Some(value) if problems.is_empty() => Ok(value),
+        _ => Err(does_not_type(problems.first().map(|d| d.message.as_str()))),
     }
 }
 

@@ -6,6 +6,7 @@
 //! the scene and every diagnostic. It never fails on user input.
 
 pub mod access;
+mod binding;
 pub mod catalogue;
 mod lower;
 mod procedural;
@@ -13,18 +14,19 @@ pub mod proto_path;
 mod protos;
 pub mod scene;
 pub mod template;
+mod typing;
 pub mod value;
 pub mod webots;
 
 pub use access::{FileAccess, Limits, Refusal};
+pub use binding::{Binding, Bindings};
 pub use catalogue::{Catalogue, FieldSpec, NodeSpec};
 pub use lower::{
-    check, check_file, check_file_with_proto_path, check_path, Binding, Bindings, Checked,
-    FileDiagnostic, Options, Source, Substitution, UnbuiltRobot, MAX_DIAGNOSTICS,
-    MAX_INSTANCE_DEPTH, MAX_NODES,
+    check, check_file, check_file_with_proto_path, check_path, Checked, FileDiagnostic, Options,
+    Source, Substitution, UnbuiltRobot, MAX_DIAGNOSTICS, MAX_INSTANCE_DEPTH, MAX_NODES,
 };
 pub use protos::{
     standard_proto, standard_protos, ProtoField, ProtoSpec, BUILTIN_PROTOS, WEBOTS_STANDINS,
 };
-pub use scene::{Fields, FileId, NodeId, Scene, SceneNode, UpAxis, Written};
-pub use value::{BaseType, FieldType, Value};
+pub use scene::{Fields, FileId, Scene, SceneNode, UpAxis, Written};
+pub use value::{BaseType, FieldType, NodeId, Value};

@@ -9,17 +9,9 @@ use std::sync::Arc;
 use regatta_parser::Span;
 
 use crate::catalogue::{Catalogue, NodeSpec, SpecId};
+// A node value names its nodes by handle, so the handle lives with the values.
+pub use crate::value::NodeId;
 use crate::value::Value;
-
-/// Handle of a node in [`Scene::nodes`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct NodeId(pub u32);
-
-impl NodeId {
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-}
 
 /// Handle of a source file in [`Scene::files`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]

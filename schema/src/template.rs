@@ -6,6 +6,7 @@
 //! `+ - * /` and parentheses. Statement blocks (`%< … >%`) and anything else are not run:
 //! the caller reports them.
 
+use crate::binding::Bindings;
 use crate::value::Value;
 
 /// The result of an expression: a number or a vector (spread into its components).
@@ -16,7 +17,7 @@ pub enum Evaluated {
 }
 
 /// Evaluates the inside of an expression template (`%<= … >%` or `%{= … }%`).
-pub fn evaluate(template_text: &str, fields: &crate::lower::Bindings) -> Result<Evaluated, String> {
+pub fn evaluate(template_text: &str, fields: &Bindings) -> Result<Evaluated, String> {
     let inner = template_text
         .strip_prefix("%<=")
         .and_then(|t| t.strip_suffix(">%"))
@@ -47,7 +48,7 @@ struct ExprParser<'a> {
     bytes: &'a [u8],
     text: &'a str,
     pos: usize,
-    fields: &'a crate::lower::Bindings,
+    fields: &'a Bindings,
 }
 
 const MAX_NESTING: usize = 64;
@@ -219,11 +220,11 @@ mod tests {
         };
         fields.insert(
             "height".to_owned(),
-            crate::lower::Binding::new(float, Some(Value::Float(0.04))),
+            crate::binding::Binding::new(float, Some(Value::Float(0.04))),
         );
         fields.insert(
             "size".to_owned(),
-            crate::lower::Binding::new(vec2, Some(Value::Vec2([1.0, 2.0]))),
+            crate::binding::Binding::new(vec2, Some(Value::Vec2([1.0, 2.0]))),
         );
         let eval = |t: &str| evaluate(t, &fields).unwrap();
         assert_eq!(

@@ -2,7 +2,15 @@
 
 use std::fmt;
 
-use crate::scene::NodeId;
+/// Handle of a node in the scene (`Scene::nodes`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct NodeId(pub u32);
+
+impl NodeId {
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
 
 /// The element type of a field, shared by its SF and MF forms.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -128,33 +128,3 @@ pub fn unsimulated(name: &str) -> Option<&'static str> {
         _ => return None,
     })
 }
-
-/// Why a world whose robots regatta could not build is not simulated, naming each robot at
-/// its file:line:col and its PROTO's url; `None` when every robot was built.
-pub fn unbuilt_refusal(checked: &crate::Checked) -> Option<String> {
-    let unbuilt = &checked.unbuilt_robots;
-    if unbuilt.is_empty() {
-        return None;
-    }
-    let lines: Vec<String> = unbuilt
-        .iter()
-        .map(|robot| {
-            let source = &checked.sources[robot.file.0 as usize];
-            let (line, column) =
-                regatta_parser::diagnostic::line_col(&source.text, robot.span.start as usize);
-            let from = match &robot.url {
-                Some(url) => format!(" (its PROTO: {url})"),
-                None => String::new(),
-            };
-            format!(
-                "  {}:{line}:{column}: '{}'{from}",
-                source.name, robot.type_name
-            )
-        })
-        .collect();
-    Some(format!(
-        "the world has {} robot(s) regatta could not build, so it is not simulated:\n{}\nregatta has stand-ins for Khepera1, Khepera2 and E-puck (and its own Khepera); --proto-path DIR can point at a folder with the others' PROTOs",
-        unbuilt.len(),
-        lines.join("\n")
-    ))
-}

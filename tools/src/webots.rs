@@ -25,7 +25,7 @@ pub struct ControllerOverride {
 /// Fails when the world has robots regatta could not build (their PROTO has no stand-in and
 /// was not found), naming each.
 pub fn refuse_unbuilt_robots(loaded: &Loaded) -> anyhow::Result<()> {
-    match regatta_schema::webots::unbuilt_refusal(&loaded.checked) {
+    match loaded.checked.unbuilt_refusal() {
         Some(refusal) => bail!("{refusal}"),
         None => Ok(()),
     }

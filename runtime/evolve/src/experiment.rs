@@ -275,7 +275,7 @@ impl Experiment {
         } else {
             String::new()
         };
-        if let Some(reason) = regatta_schema::webots::unbuilt_refusal(&checked) {
+        if let Some(reason) = checked.unbuilt_refusal() {
             return Err(LoadError::Refused {
                 name: name.to_owned(),
                 reason,

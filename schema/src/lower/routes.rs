@@ -1,0 +1,139 @@
+//! ROUTEs, checked as VRML97 says (both ends DEF'd, event access, one type) and reported as
+//! read but not simulated.
+
+use regatta_parser::syntax::{self};
+use regatta_parser::Diagnostic;
+
+use crate::catalogue::did_you_mean;
+use crate::value::FieldType;
+
+use super::events::with_article;
+use super::state::{Lowerer, Scope};
+
+impl<'c> Lowerer<'c> {
+    /// Checks a ROUTE as VRML97 does (4.10): both nodes DEF'd before it, the source an
+    /// eventOut or exposedField, the target an eventIn or exposedField, the same type at both
+    /// ends. Nothing is simulated: regatta has no event model, and says so for a sound ROUTE.
+    pub(super) fn route(&mut self, route: &syntax::Route, scope: &mut Scope) {
+        let from = self.route_end(&route.from_node, &route.from_field, true, scope);
+        let to = self.route_end(&route.to_node, &route.to_field, false, scope);
+        let (Some(from), Some(to)) = (from, to) else {
+            return;
+        };
+        if from != to {
+            self.strict_or_warn(
+                scope.file,
+                Diagnostic::error(
+                    route.span,
+                    format!("ROUTE from {from} to {to}: both ends must have the same type"),
+                )
+                .with_secondary(route.from_field.span, format!("{from}"))
+                .with_secondary(route.to_field.span, format!("{to}"))
+                .with_code("route-type"),
+            );
+            return;
+        }
+        self.error(
+            scope.file,
+            Diagnostic::warning(
+                route.span,
+                "ROUTEs are read but not simulated: regatta has no event model",
+            )
+            .with_code("route"),
+        );
+    }
+
+    /// The type of one end of a ROUTE, after reporting what is wrong with it.
+    pub(super) fn route_end(
+        &mut self,
+        node: &syntax::Ident,
+        field: &syntax::Ident,
+        source: bool,
+        scope: &Scope,
+    ) -> Option<FieldType> {
+        let Some(&id) = scope.defs.get(&node.text) else {
+            if scope.skipped_defs.contains(&node.text) {
+                return None;
+            }
+            let diagnostic = Diagnostic::error(
+                node.span,
+                format!("no node was DEF'd as '{}' before this ROUTE", node.text),
+            )
+            .with_code("route-node");
+            self.strict_or_warn(scope.file, diagnostic);
+            return None;
+        };
+        // Every event and field the node has: (name, type, access).
+        let mut ends: Vec<(String, FieldType, String)> = Vec::new();
+        let node_type;
+        if let Some(def) = self.instance_of.get(&id).cloned() {
+            node_type = format!("PROTO '{}'", def.proto.name.text);
+            for declaration in &def.proto.interface {
+                if let Some(ty) = FieldType::parse(&declaration.field_type.text) {
+                    let access = match declaration.keyword.text.as_str() {
+                        "exposedField" | "eventIn" | "eventOut" => declaration.keyword.text.clone(),
+                        _ => "field".to_owned(),
+                    };
+                    ends.push((declaration.name.text.clone(), ty, access));
+                }
+            }
+        } else {
+            let spec = self.catalogue().spec(self.nodes[id.index()].spec);
+            node_type = format!("{} node", spec.name);
+            for f in &spec.fields {
+                let access = f
+                    .access
+                    .clone()
+                    .unwrap_or_else(|| "exposedField".to_owned());
+                ends.push((f.name.clone(), f.ty(), access));
+            }
+        }
+        let wanted = if source { "eventOut" } else { "eventIn" };
+        let name = field.text.as_str();
+        let mut found = None;
+        for (end, ty, access) in &ends {
+            let matches = if access == "exposedField" {
+                end == name
+                    || (source && name.strip_suffix("_changed") == Some(end.as_str()))
+                    || (!source && name.strip_prefix("set_") == Some(end.as_str()))
+            } else {
+                end == name
+            };
+            if matches {
+                found = Some((*ty, access.clone()));
+                break;
+            }
+        }
+        let Some((ty, access)) = found else {
+            let mut diagnostic = Diagnostic::error(
+                field.span,
+                format!("the {node_type} '{}' has no {wanted} '{name}'", node.text),
+            )
+            .with_code("route-field");
+            if let Some(close) = did_you_mean(name, ends.iter().map(|(n, _, _)| n.as_str())) {
+                diagnostic = diagnostic.with_note(format!("did you mean '{close}'?"));
+            }
+            self.strict_or_warn(scope.file, diagnostic);
+            return None;
+        };
+        if access != "exposedField" && access != wanted {
+            let role = if source { "send" } else { "receive" };
+            self.strict_or_warn(
+                scope.file,
+                Diagnostic::error(
+                    field.span,
+                    format!("'{name}' of '{}' is {}: it cannot {role} events", node.text, with_article(&access)),
+                )
+                .with_label(if source {
+                    "a ROUTE starts at an eventOut or exposedField"
+                } else {
+                    "a ROUTE ends at an eventIn or exposedField"
+                })
+                .with_note("VRML97 4.10: a ROUTE goes from an eventOut (or exposedField) to an eventIn (or exposedField)")
+                .with_code("route-access"),
+            );
+            return None;
+        }
+        Some(ty)
+    }
+}
