@@ -15,6 +15,17 @@ _Path = Union[str, os.PathLike[str]]
 class WorldError(ValueError):
     """A world that does not parse or check; the message holds the diagnostics at file:line:col."""
 
+    file: str | None
+    """The file of the first error (``None`` when the world failed for another reason)."""
+    line: int | None
+    """Its line, from 1."""
+    column: int | None
+    """Its column, from 1, in characters."""
+    message: str | None
+    """Its message, without location."""
+    errors: list[tuple[str, int, int, str]]
+    """Every error as ``(file, line, column, message)``."""
+
 class Robot:
     """One robot of a :class:`World`, as it is after the last step."""
 

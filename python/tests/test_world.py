@@ -3,6 +3,7 @@ command line gives them, and errors as Python exceptions."""
 
 from __future__ import annotations
 
+import errno
 import json
 
 import numpy as np
@@ -202,8 +203,20 @@ def test_a_bad_world_raises_with_file_line_col(tmp_path):
     assert f"{bad}:4:3" in message
     assert "did you mean 'translation'?" in message
     assert isinstance(error.value, ValueError)
-    with pytest.raises(FileNotFoundError):
+    # What a program reads without parsing the message.
+    assert (error.value.file, error.value.line, error.value.column) == (str(bad), 4, 3)
+    assert error.value.message == "Unknown 'translaton' parameter in Khepera PROTO."
+    assert error.value.errors[0][:3] == (str(bad), 4, 3)
+    # A refused world is refused, not "skipped".
+    assert "Skipped" not in message
+    with pytest.raises(FileNotFoundError) as missing:
         regatta.World(tmp_path / "missing.wbt")
+    assert missing.value.errno == errno.ENOENT
+    assert missing.value.filename == str((tmp_path / "missing.wbt").resolve())
+    assert missing.value.strerror == "No such file or directory"
+    with pytest.raises(IsADirectoryError) as folder:
+        regatta.World(tmp_path)
+    assert folder.value.filename == str(tmp_path.resolve())
     with pytest.raises(ValueError, match="unknown fitness"):
         regatta.World(REGATTA, fitness="speed")
 

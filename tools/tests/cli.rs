@@ -56,7 +56,7 @@ fn errors_exit_1_with_file_line_col_caret_and_hint() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(1), "{stderr}");
     assert!(
-        stderr.contains("error: Skipped unknown 'translaton' field in Transform node."),
+        stderr.contains("error: Unknown 'translaton' field in Transform node."),
         "{stderr}"
     );
     assert!(stderr.contains("<stdin>:3:3"), "{stderr}");

@@ -24,12 +24,13 @@ pub enum LoadError {
     Read(#[from] regatta_parser::SourceError),
     #[error(transparent)]
     Edit(#[from] EditError),
-    /// The diagnostics, rendered.
+    /// The diagnostics, rendered, and each error where it stands.
     #[error("{name} has {errors} error(s):\n{rendered}")]
     Check {
         name: String,
         errors: usize,
         rendered: String,
+        located: Vec<Located>,
     },
     /// Robots regatta could not build, or a controller it does not have (strict mode).
     #[error("cannot run {name}: {reason}")]
@@ -40,6 +41,16 @@ pub enum LoadError {
         #[source]
         source: SimError,
     },
+}
+
+/// One error of a world that does not check, for programs that read it: the file it is in,
+/// its line and column (from 1, the column in characters) and its message.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Located {
+    pub file: String,
+    pub line: usize,
+    pub column: usize,
+    pub message: String,
 }
 
 /// Why an evaluation failed.
@@ -264,10 +275,26 @@ impl Experiment {
             .filter(|d| d.diagnostic.is_error())
             .count();
         if errors > 0 {
+            let located = checked
+                .diagnostics
+                .iter()
+                .filter(|d| d.diagnostic.is_error())
+                .map(|d| {
+                    let source = &checked.sources[d.file.0 as usize];
+                    let (line, column) = d.diagnostic.line_col(&source.text);
+                    Located {
+                        file: source.name.clone(),
+                        line,
+                        column,
+                        message: d.diagnostic.message.clone(),
+                    }
+                })
+                .collect();
             return Err(LoadError::Check {
                 name: name.to_owned(),
                 errors,
                 rendered: render(true),
+                located,
             });
         }
         let mut warnings = if lenient {

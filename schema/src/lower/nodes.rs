@@ -271,7 +271,7 @@ impl<'c> Lowerer<'c> {
         let diagnostic = if let Some(url) = self.unresolved.get(name) {
             Diagnostic::error(
                 type_name.span,
-                format!("Skipped unknown '{name}' node or PROTO."),
+                format!("{} '{name}' node or PROTO.", self.unknown()),
             )
             .with_label("its PROTO is not available")
             .with_note(if crate::webots::webots_path(url).is_some() {
@@ -286,7 +286,7 @@ impl<'c> Lowerer<'c> {
         } else {
             let mut diagnostic = Diagnostic::error(
                 type_name.span,
-                format!("Skipped unknown '{name}' node or PROTO."),
+                format!("{} '{name}' node or PROTO.", self.unknown()),
             )
             .with_label("unknown node type");
             if let Some(reason) = crate::webots::unsimulated(name) {
@@ -323,7 +323,7 @@ impl<'c> Lowerer<'c> {
                         continue;
                     }
                     let Some(index) = spec.field_index(&field.name.text) else {
-                        let mut diagnostic = Diagnostic::error(field.name.span, format!("Skipped unknown '{}' field in {} node.", field.name.text, spec.name))
+                        let mut diagnostic = Diagnostic::error(field.name.span, format!("{} '{}' field in {} node.", self.unknown(), field.name.text, spec.name))
                             .with_label("unknown field")
                             .with_code("unknown-field");
                         if let Some(close) = did_you_mean(&field.name.text, spec.fields.iter().map(|f| f.name.as_str())) {

@@ -232,7 +232,8 @@ impl<'c> Lowerer<'c> {
                 let mut diagnostic = Diagnostic::error(
                     field.name.span,
                     format!(
-                        "Skipped unknown '{}' parameter in {name} PROTO.",
+                        "{} '{}' parameter in {name} PROTO.",
+                        self.unknown(),
                         field.name.text
                     ),
                 )

@@ -86,6 +86,17 @@ impl<'c> Lowerer<'c> {
     }
 
     /// An error in strict mode, a warning in lenient mode.
+    /// How a message begins about something unknown: a strict check refuses the world
+    /// ("Unknown 'X' field in Y node."), a lenient one skips it and says so as Webots does
+    /// ("Skipped unknown 'X' field in Y node.").
+    pub(super) fn unknown(&self) -> &'static str {
+        if self.options.strict {
+            "Unknown"
+        } else {
+            "Skipped unknown"
+        }
+    }
+
     pub(super) fn strict_or_warn(&mut self, file: FileId, mut diagnostic: Diagnostic) {
         if !self.options.strict {
             diagnostic.severity = regatta_parser::Severity::Warning;
