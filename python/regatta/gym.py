@@ -71,7 +71,14 @@ class RegattaEnv(gymnasium.Env):
             optional parameters such as ``regatta:penalty=1``).
         duration: simulated seconds after which an episode is truncated.
         render_mode: None or ``"rgb_array"`` (the arena from above, ``render_size`` pixels).
+        render_size: the side of a rendered image, in pixels.
         lenient: read a foreign world file leniently.
+        default_world: the world of the project's ``worlds/`` used when ``world`` is None
+            (each registered environment names its own).
+
+    ``step``'s info holds the driven robot's step: ``time`` (s), ``visits`` (buoy visits so
+    far) and ``new_visits`` (the buoys entered this step, numbered from 1), ``contacts``
+    (contacts begun so far), ``touching``, and ``reward`` (the step's fitness term).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
@@ -101,6 +108,7 @@ class RegattaEnv(gymnasium.Env):
         self.observation_names = self._world.observation_names
         self.render_mode = render_mode
         self.render_size = render_size
+        self._visits_seen = 0
 
     @property
     def world(self) -> World:
@@ -114,13 +122,28 @@ class RegattaEnv(gymnasium.Env):
             # first reset's seed.
             seed = int(self.np_random.integers(0, 2**63))
         observation = self._world.reset(seed)
+        self._visits_seen = 0
         return observation[0], {"seed": seed}
 
     def step(self, action):
         observation = self._world.step(action)
         reward = float(self._world.rewards[0])
         truncated = self._world.steps >= self._episode_steps
-        return observation[0], reward, False, truncated, {}
+        return observation[0], reward, False, truncated, self._step_info(reward)
+
+    def _step_info(self, reward: float) -> dict:
+        robot = self._world[self._world.controlled[0]]
+        visits = robot.visits
+        new = visits[self._visits_seen :]
+        self._visits_seen = len(visits)
+        return {
+            "time": self._world.time,
+            "visits": len(visits),
+            "new_visits": new,
+            "contacts": robot.contacts,
+            "touching": robot.touching,
+            "reward": reward,
+        }
 
     def render(self):
         if self.render_mode == "rgb_array":

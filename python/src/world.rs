@@ -88,9 +88,14 @@ pub fn read_actions(actions: &Bound<'_, PyAny>, out: &mut [f64]) -> PyResult<()>
 
 /// A world stepped from Python.
 ///
-/// `World(path, seed=None, lenient=False, control=None, fitness="regatta")` reads, checks and
-/// compiles a world file (a world that does not check raises `WorldError` with the
-/// diagnostics at file:line:col). The robots named in `control` (every robot when `None`) are
+/// `World(path, *, seed=None, lenient=False, control=None, fitness="regatta", text=None)`
+/// reads, checks and compiles a world file (a world that does not check raises `WorldError`
+/// with the diagnostics at file:line:col, and `file`, `line`, `column`, `message` for
+/// programs). `seed=None` takes the world's own `WorldInfo.randomSeed` (0 when it has none),
+/// so that a world runs as `regatta run` runs it; `reset(seed)` starts again under another.
+/// `text` gives the world's text instead of reading `path` (which still names it in messages
+/// and is where its relative urls are read from). `world["name"]` (or `world.robot("name")`)
+/// is one robot as it is after the last step. The robots named in `control` (every robot when `None`) are
 /// driven by the actions given to `step`; the others run the controllers their world gives
 /// them (`control=[]` runs the world as `regatta run` does). A driven robot may have an
 /// external controller in its world (Webots' `"<extern>"`, as webots_ros2's worlds give the
@@ -314,6 +319,8 @@ impl World {
         }
     }
 
+    /// `world["name"]`: the robot of that name as it is after the last step (`KeyError`
+    /// naming the robots there are, when none has that name).
     fn __getitem__(slf: &Bound<'_, Self>, name: &str) -> PyResult<Robot> {
         World::robot(slf, name)
     }

@@ -41,6 +41,20 @@ def test_regatta_env_spaces_and_episode():
     assert steps == 32  # 1 s of 32 ms steps, the last one partial
 
 
+def test_step_info_holds_visits_contacts_and_the_reward():
+    env = gymnasium.make("regatta/Regatta-v0", duration=60.0)
+    env.reset(seed=1)
+    entered = []
+    for _ in range(600):
+        _, reward, _, _, info = env.step(np.array([1.0, 1.0], dtype=np.float32))
+        assert set(info) == {"time", "visits", "new_visits", "contacts", "touching", "reward"}
+        assert info["reward"] == reward
+        entered += info["new_visits"]
+    robot = env.unwrapped.world[env.unwrapped.world.controlled[0]]
+    assert entered == list(robot.visits) and info["visits"] == len(entered)
+    assert info["contacts"] == robot.contacts
+
+
 def test_reset_with_a_seed_reproduces_and_without_one_continues():
     env = gymnasium.make("regatta/Regatta-v0", duration=2.0)
     a, _ = env.reset(seed=5)
