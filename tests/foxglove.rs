@@ -534,3 +534,28 @@ fn camera_images_are_logged_as_the_camera_took_them() {
     let (messages, _) = read_all(&bytes);
     assert!(messages.iter().all(|(topic, ..)| !topic.contains("camera")));
 }
+
+/// A log cut anywhere (a crash, a full disk) keeps its complete chunks, and chunks close
+/// every `CHUNK_SECONDS` of simulated time: what is lost is at most the last chunk's span.
+#[test]
+fn a_log_cut_short_keeps_all_but_its_last_seconds() {
+    use regatta_runtime::log::CHUNK_SECONDS;
+    let steps = 500; // 16 s of 32 ms steps
+    let log = record("regatta.wbt", steps, Channels::ALL);
+    let whole = regatta_runtime::log::read(&log).unwrap();
+    assert!(whole.truncated.is_none());
+    let end = whole.messages.iter().map(|m| m.1).max().unwrap() as f64 * 1e-9;
+    for fraction in [0.3, 0.6, 0.9] {
+        let cut = (log.len() as f64 * fraction) as usize;
+        let kept = regatta_runtime::log::read(&log[..cut]).unwrap();
+        assert!(kept.truncated.is_some(), "a log cut at {cut} bytes says so");
+        let last = kept.messages.iter().map(|m| m.1).max().unwrap_or(0) as f64 * 1e-9;
+        // The chunks before the cut are whole: the time they reach is the cut's place in the
+        // run, less at most one chunk (the messages are spread evenly over the run).
+        let expected = end * fraction;
+        assert!(
+            last >= expected - CHUNK_SECONDS - 1.0,
+            "cut at {fraction} of the file: messages up to {last} s kept, expected about {expected} s"
+        );
+    }
+}

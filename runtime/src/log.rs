@@ -8,8 +8,10 @@
 //!   scene, transforms, poses, images, events) so that Foxglove and ROS 2 tools show a log
 //!   as it is. `{robot}` is the robot's name made a valid ROS 2 token (`channels`);
 //!   `--channels` picks the channels a log holds, and the log's metadata says which.
-//! - Chunks of 4 MB (uncompressed) with zstd level 1: the size and speed targets of a ten-minute
-//!   regatta at full rate (18.9 MB; logging costs about 45 % of the speed) both hold.
+//! - Chunks close every [`CHUNK_SECONDS`] of simulated time or at [`CHUNK_BYTES`]
+//!   (uncompressed), whichever comes first, and go to the file as they close: a crash or a full
+//!   disk loses at most that much of a run, and the reader keeps every complete chunk. zstd
+//!   level 1.
 //! - Messages are CDR-encoded with a `ros2msg` schema per channel (the ROS 2 convention that
 //!   Foxglove and the MCAP tools decode without code generation). Binary was chosen over JSON
 //!   for speed and size: JSON made a ten-minute regatta log 43 MB and logging 10× slower.
@@ -160,7 +162,17 @@ pub struct Recorder<W: Write + Seek> {
     visits_written: Vec<usize>,
     sequence: u32,
     cdr: Cdr,
+    /// Simulated time at which the open chunk is closed and written out.
+    chunk_closes_at: f64,
 }
+
+/// Simulated seconds a chunk covers at most: a crash or a full disk loses at most this much
+/// of a run (or [`CHUNK_BYTES`] of messages, whichever is less). Chunks close at simulated
+/// times, never at clock times, so that the same run writes the same bytes.
+pub const CHUNK_SECONDS: f64 = 2.0;
+
+/// Uncompressed bytes a chunk holds at most.
+pub const CHUNK_BYTES: u64 = 1 << 20;
 
 /// The `ros2msg` schemas, one per message type.
 pub const SCHEMAS: &[(&str, &str)] = &[
@@ -208,7 +220,7 @@ impl<W: Write + Seek> Recorder<W> {
         let simulation = &*simulation;
         let options = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Zstd))
-            .chunk_size(Some(4 << 20))
+            .chunk_size(Some(CHUNK_BYTES))
             .compression_level(1)
             .library(format!("regatta {}", env!("CARGO_PKG_VERSION")))
             .profile("");
@@ -301,6 +313,7 @@ impl<W: Write + Seek> Recorder<W> {
             visits_written: vec![0; simulation.robots.len()],
             sequence,
             cdr,
+            chunk_closes_at: simulation.time + CHUNK_SECONDS,
         })
     }
 
@@ -454,6 +467,14 @@ impl<W: Write + Seek> Recorder<W> {
                 simulation,
             )?;
         }
+        if t >= self.chunk_closes_at {
+            // Closes the chunk and hands its bytes to the sink, so that they are on disk (or
+            // the disk's refusal is known) before the run goes on.
+            self.writer.flush().map_err(LogError::Write)?;
+            while self.chunk_closes_at <= t {
+                self.chunk_closes_at += CHUNK_SECONDS;
+            }
+        }
         Ok(())
     }
 
@@ -527,7 +548,7 @@ pub struct LogContents {
     pub truncated: Option<String>,
 }
 
-/// Largest uncompressed chunk a log may claim: regatta writes chunks of about 4 MB, and a
+/// Largest uncompressed chunk a log may claim: regatta writes chunks of at most about 1 MB, and a
 /// damaged or hostile header must not make the reader allocate what it says.
 const MAX_CHUNK: u64 = 256 << 20;
 
