@@ -1,8 +1,8 @@
 //! The README's sample outputs are what its commands print. A sample is a ```text block
 //! right after a comment `<!-- sample: COMMAND -->`; the test runs COMMAND with this build's
 //! binary (for `regatta …`; `cd DIR && regatta …` runs it in DIR of the repository) in a
-//! scratch folder where the repository's `worlds/` is visible, and compares standard output
-//! and standard error, together, with the block. What depends on the machine is masked on
+//! scratch folder where the repository's `worlds/` is visible, and compares what it printed
+//! (standard output and error, as a terminal interleaves them) with the block. What depends on the machine is masked on
 //! both sides: the wall-time line's figures and a log's size.
 //!
 //! `REGATTA_BLESS=1` rewrites the blocks from the commands, as the other expectation tests do.
@@ -50,8 +50,7 @@ fn samples(readme: &str) -> Vec<Sample> {
     out
 }
 
-/// Runs `command` as the README gives it; returns what it printed (standard output, then
-/// standard error).
+/// Runs `command` as the README gives it; returns what it printed.
 fn run(command: &str, scratch: &Path) -> String {
     let (dir, command) = match command.strip_prefix("cd ") {
         Some(rest) => {
@@ -62,15 +61,18 @@ fn run(command: &str, scratch: &Path) -> String {
     };
     let words: Vec<&str> = command.split_whitespace().collect();
     assert_eq!(words[0], "regatta", "a sample runs regatta: {command}");
-    let output = regatta()
+    // Standard output and error into one file, in the order they were written, as a terminal
+    // shows them.
+    let capture = scratch.join("printed.txt");
+    let file = std::fs::File::create(&capture).unwrap();
+    regatta()
         .args(&words[1..])
         .current_dir(&dir)
-        .env("NO_COLOR", "1")
-        .output()
+        .stdout(file.try_clone().unwrap())
+        .stderr(file)
+        .status()
         .expect("regatta runs");
-    let mut text = String::from_utf8_lossy(&output.stdout).into_owned();
-    text.push_str(&String::from_utf8_lossy(&output.stderr));
-    text
+    String::from_utf8_lossy(&std::fs::read(&capture).unwrap()).into_owned()
 }
 
 /// The figures that depend on the machine, replaced by `…`.
