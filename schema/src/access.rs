@@ -1,8 +1,11 @@
 //! What a world may read and how large it may grow: [`FileAccess`] (the folders a world's
 //! urls may lead into) and [`Limits`] (include depth, PROTO depth, nodes, nesting, file size).
 //!
-//! A world is untrusted input. It reads only files under its **root**: the folder of the world
-//! file given on the command line, plus folders the user names (`--allow-path DIR`). Every
+//! A world is untrusted input. It reads only files under its **root**: its project, plus
+//! folders the user names (`--allow-path DIR`). A world's project is the folder above it when
+//! the world's folder is named `worlds` (Webots' layout: `worlds/`, `protos/`, `controllers/`
+//! side by side, worlds naming `../protos/X.proto`), otherwise the world's own folder
+//! ([`project_root`]). Every
 //! url resolves relative to the file that names it; absolute paths, `..` that climbs out of
 //! the root, and symbolic links whose target lies outside it are refused, as is every network
 //! url (nothing is ever fetched). Refusals name the url and the rule, never a file's bytes.
@@ -17,6 +20,17 @@ use std::path::{Component, Path, PathBuf};
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct FileAccess {
     roots: Vec<PathBuf>,
+}
+
+/// The project of a world whose (canonical) folder is `world_folder`: the folder above it when
+/// `world_folder` is named `worlds`, as Webots lays out a project, else `world_folder` itself.
+pub fn project_root(world_folder: &Path) -> PathBuf {
+    match (world_folder.file_name(), world_folder.parent()) {
+        (Some(name), Some(parent)) if name == "worlds" && parent.parent().is_some() => {
+            parent.to_owned()
+        }
+        _ => world_folder.to_owned(),
+    }
 }
 
 /// Why a url was not read.
@@ -48,9 +62,9 @@ impl Refusal {
                 )
             }
             Refusal::Absolute => format!("'{url}' is an absolute path; a world may not read it"),
-            Refusal::OutsideRoot => format!("'{url}' leads outside the world's folder"),
+            Refusal::OutsideRoot => format!("'{url}' leads outside the world's project"),
             Refusal::LinkOutsideRoot => {
-                format!("'{url}' is a symbolic link to a place outside the world's folder")
+                format!("'{url}' is a symbolic link to a place outside the world's project")
             }
             Refusal::NoAccess => {
                 format!("'{url}' cannot be read: this world may read no file")
@@ -67,7 +81,7 @@ impl Refusal {
                 "to use the file, put a copy in the world's folder and name it by a relative path"
             }
             Refusal::Absolute | Refusal::OutsideRoot | Refusal::LinkOutsideRoot => {
-                "a world reads only files under its own folder (and folders given with --allow-path DIR); urls are relative to the file that names them"
+                "a world reads only files under its project (its folder, or the folder above it when that is named `worlds`, as in a Webots project) and folders given with --allow-path DIR; urls are relative to the file that names them"
             }
             Refusal::NoAccess => {
                 "a world read from standard input or from a log reads no file unless --allow-path DIR names a folder"
@@ -90,14 +104,14 @@ impl FileAccess {
         FileAccess::default()
     }
 
-    /// The root of the world file at `path`: its folder.
+    /// The root of the world file at `path`: its project ([`project_root`]).
     pub fn for_world(path: &Path) -> std::io::Result<FileAccess> {
         let mut access = FileAccess::none();
         let folder = match path.parent() {
             Some(parent) if !parent.as_os_str().is_empty() => parent.to_owned(),
             _ => PathBuf::from("."),
         };
-        access.allow(&folder)?;
+        access.allow(&project_root(&folder.canonicalize()?))?;
         Ok(access)
     }
 

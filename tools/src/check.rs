@@ -64,7 +64,8 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
     }
     let files = args.files.len();
     let noun = if files == 1 { "file" } else { "files" };
-    let counted = |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+    let counted =
+        |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
     eprintln!(
         "checked {files} {noun}: {}, {}",
         counted(errors, "error", "errors"),

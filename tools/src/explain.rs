@@ -21,10 +21,18 @@ pub struct Args {
 
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
     let loaded = crate::world::load(&args.world, &args.options, color)?;
-    print!(
-        "{}",
-        explain(&crate::world::world_name(&args.world), &loaded)
-    );
+    let text = explain(&crate::world::world_name(&args.world), &loaded);
+    // The world line first, then what the world may read.
+    let (first, rest) = text.split_once('\n').unwrap_or((&text, ""));
+    println!("{first}");
+    let roots = args.options.readable_roots(&args.world);
+    if roots.is_empty() {
+        println!("reads no file (standard input; --allow-path DIR lets it)");
+    } else {
+        let shown: Vec<String> = roots.iter().map(|r| r.display().to_string()).collect();
+        println!("reads files under {}", shown.join(", "));
+    }
+    print!("{rest}");
     Ok(Outcome::Clean)
 }
 

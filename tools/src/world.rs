@@ -18,7 +18,8 @@ pub struct WorldOptions {
     #[arg(long)]
     pub lenient: bool,
     /// Let the world read files under DIR too (repeatable). A world reads only files under
-    /// its own folder; one read from standard input reads none unless this names a folder.
+    /// its project (its folder, or the folder above a `worlds` folder); one read from
+    /// standard input reads none unless this names a folder.
     #[arg(long = "allow-path", value_name = "DIR")]
     pub allow_paths: Vec<PathBuf>,
     /// Raise a limit (repeatable): nesting (64), include-depth (16), proto-depth (32),
@@ -56,6 +57,28 @@ impl From<LogWorldOptions> for WorldOptions {
 }
 
 impl WorldOptions {
+    /// The folders a world at `world` may read files under: its project and `--allow-path`'s
+    /// folders (none for standard input, unless `--allow-path` names some).
+    pub fn readable_roots(&self, world: &Path) -> Vec<PathBuf> {
+        let mut roots = Vec::new();
+        if world != Path::new("-") {
+            let folder = world
+                .canonicalize()
+                .ok()
+                .and_then(|path| path.parent().map(Path::to_owned));
+            if let Some(folder) = folder {
+                roots.push(regatta_schema::access::project_root(&folder));
+            }
+        }
+        for dir in &self.allow_paths {
+            let dir = dir.canonicalize().unwrap_or_else(|_| dir.clone());
+            if !roots.contains(&dir) {
+                roots.push(dir);
+            }
+        }
+        roots
+    }
+
     /// The checking options these flags ask for.
     pub fn options(&self) -> anyhow::Result<Options> {
         let mut access = FileAccess::none();

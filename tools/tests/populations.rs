@@ -413,16 +413,16 @@ fn the_evolved_regatta_beats_the_hand_tuned_one_and_sails_an_arena_it_never_saw(
     assert!(unseen >= 100, "{unseen} cyclic visits");
 }
 
-/// `batch` and `evolve` read worlds as `run` does: a file outside the world's folder only
-/// with `--allow-path`, and the limits `--limit` sets.
+/// `batch` and `evolve` read worlds as `run` does: a file outside the world's project (here
+/// its folder, `arena/`) only with `--allow-path`, and the limits `--limit` sets.
 #[test]
 fn batch_and_evolve_take_the_reading_options_of_run() {
     let dir = temp_dir("reading");
-    std::fs::create_dir_all(dir.join("worlds")).unwrap();
+    std::fs::create_dir_all(dir.join("arena")).unwrap();
     std::fs::create_dir_all(dir.join("parts")).unwrap();
     let world = std::fs::read_to_string(root().join("worlds/regatta_neural.wbt")).unwrap();
     std::fs::write(
-        dir.join("worlds/w.wbt"),
+        dir.join("arena/w.wbt"),
         format!("{world}Inline {{\n  url \"../parts/box.wrl\"\n}}\n"),
     )
     .unwrap();
@@ -433,17 +433,10 @@ fn batch_and_evolve_take_the_reading_options_of_run() {
     )
     .unwrap();
     let output = |args: &[&str]| regatta().args(args).current_dir(&dir).output().unwrap();
-    let batch = [
-        "batch",
-        "worlds/w.wbt",
-        "--seeds",
-        "1..2",
-        "--duration",
-        "1",
-    ];
+    let batch = ["batch", "arena/w.wbt", "--seeds", "1..2", "--duration", "1"];
     let evolve = [
         "evolve",
-        "worlds/w.wbt",
+        "arena/w.wbt",
         "--fitness",
         "avoidance",
         "--generations",
@@ -462,7 +455,7 @@ fn batch_and_evolve_take_the_reading_options_of_run() {
         assert!(!refused.status.success(), "{command:?} read ../parts");
         let stderr = String::from_utf8_lossy(&refused.stderr);
         assert!(
-            stderr.contains("leads outside the world's folder"),
+            stderr.contains("leads outside the world's project"),
             "{stderr}"
         );
 

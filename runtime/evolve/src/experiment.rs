@@ -242,12 +242,13 @@ impl Experiment {
     ) -> Result<Experiment, LoadError> {
         let lenient = !options.strict;
         let text = apply_overrides(text, overrides)?;
-        // The world reads files under its own folder, and the folders the options allow,
-        // only (see regatta_schema::access).
+        // The world reads files under its project (its folder, or the folder above a
+        // `worlds` folder), and the folders the options allow, only (see
+        // regatta_schema::access).
         let base_dir = base_dir.and_then(|dir| dir.canonicalize().ok());
         let mut access = options.access.clone();
         if let Some(dir) = &base_dir {
-            let _ = access.allow(dir);
+            let _ = access.allow(&regatta_schema::access::project_root(dir));
         }
         let mut checked = regatta_schema::check(
             regatta_parser::SourceText::from_bytes(name.to_owned(), text.clone().into_bytes()),

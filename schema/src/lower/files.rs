@@ -97,8 +97,9 @@ impl<'c> Lowerer<'c> {
                         folder,
                         refusal,
                     } => {
-                        // Nothing was read: an error in both modes, as for the world's own
-                        // urls; the stand-in, if any, still stands in.
+                        // Nothing was read: an error in both modes, since the PROTO path is
+                        // the user's own setting and a link out of it is a mistake there;
+                        // the stand-in, if any, still stands in.
                         let why = match refusal {
                             Refusal::LinkOutsideRoot => {
                                 "is a symbolic link to a place outside that folder"
@@ -248,6 +249,10 @@ impl<'c> Lowerer<'c> {
         .with_note(format!("{}; {}", user.instead(), refusal.rule()))
         .with_code("file-access");
         match (&refusal, user) {
+            // An unavailable PROTO (missing, not allowed, or on the network) is skipped in
+            // lenient mode, as Webots skips it: its nodes are then unknown, and a robot among
+            // them is what `run` refuses to simulate. Nothing refused is read in either mode.
+            (_, UrlUse::ExternProto) => self.strict_or_warn(file, diagnostic),
             (Refusal::Missing | Refusal::Network { .. }, UrlUse::Image(_)) => {
                 let mut diagnostic = diagnostic;
                 diagnostic.severity = regatta_parser::Severity::Warning;

@@ -83,8 +83,8 @@ pub fn check_file_with_proto_path(
     )
 }
 
-/// Reads and checks a world file: its folder joins `options.access`, and its urls resolve
-/// against that folder. `Err` only when the file cannot be read at all.
+/// Reads and checks a world file: its project (its folder, or the folder above a `worlds`
+/// folder) joins `options.access`, and its urls resolve against its folder. `Err` only when the file cannot be read at all.
 pub fn check_path(path: &Path, options: &Options) -> Result<Checked, regatta_parser::SourceError> {
     let source = SourceText::read_limited(path, options.limits.file_size)?;
     let mut options = options.clone();
@@ -97,7 +97,10 @@ pub fn check_path(path: &Path, options: &Options) -> Result<Checked, regatta_par
         .parent()
         .map(Path::to_owned)
         .unwrap_or_else(|| PathBuf::from("/"));
-    options.access.allow(&folder).map_err(io)?;
+    options
+        .access
+        .allow(&crate::access::project_root(&folder))
+        .map_err(io)?;
     options.base_dir = Some(folder);
     let mut lowerer = Lowerer::new(options.clone());
     let file = lowerer.add_file(
