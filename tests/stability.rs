@@ -21,7 +21,10 @@ fn assert_finite(simulation: &Simulation) {
         if let Some(turret) = &robot.panoramic {
             let out = &turret.output;
             assert!(
-                out.luminance.iter().chain(&out.analog).all(|v| v.is_finite())
+                out.luminance
+                    .iter()
+                    .chain(&out.analog)
+                    .all(|v| v.is_finite())
                     && out
                         .filtered
                         .iter()
@@ -73,7 +76,10 @@ fn an_hour_of_the_regatta_stays_finite_inside_and_steady() {
     }
     // Today's figure is about 70 visits per ten minutes (README); steady means no window
     // falls below half of it.
-    assert!(windows.iter().all(|&v| v >= 35), "visits per 10 min: {windows:?}");
+    assert!(
+        windows.iter().all(|&v| v >= 35),
+        "visits per 10 min: {windows:?}"
+    );
 }
 
 /// A lone `braitenberg` robot in a 1 m arena for two simulated hours: it never stays wedged
@@ -123,7 +129,11 @@ fn the_regatta_is_the_same_moved_far_and_turned() {
     let home = world_text("regatta.wbt");
     let compiled = compile_text(&home);
     let reference = trajectory(&compiled, 2.0);
-    for (dx, dz, angle) in [(1000.0, -1000.0, 0.0), (0.0, 0.0, 1.0), (1000.0, 500.0, 2.5)] {
+    for (dx, dz, angle) in [
+        (1000.0, -1000.0, 0.0),
+        (0.0, 0.0, 1.0),
+        (1000.0, 500.0, 2.5),
+    ] {
         let moved = compile_text(&transformed(&home, dx, dz, angle));
         let run = trajectory(&moved, 2.0);
         let (s, c) = (f64::sin(angle), f64::cos(angle));
@@ -177,11 +187,7 @@ fn transformed(world: &str, dx: f64, dz: f64, angle: f64) -> String {
     let (s, c) = (f64::sin(angle), f64::cos(angle));
     // A rotation by θ about +y takes (x, z) to (x cos θ + z sin θ, −x sin θ + z cos θ).
     let (lx, lz) = (0.3, 0.2);
-    let light = format!(
-        "direction {} -1 {}",
-        lx * c + lz * s,
-        -lx * s + lz * c
-    );
+    let light = format!("direction {} -1 {}", lx * c + lz * s, -lx * s + lz * c);
     let head = head.replace("direction 0.3 -1 0.2", &light);
     format!(
         "{head}Transform {{\n  translation {dx} 0 {dz}\n  rotation 0 1 0 {angle}\n  children [\n{items}\n  ]\n}}\n"

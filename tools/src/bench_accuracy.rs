@@ -127,7 +127,14 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     writeln!(
         table,
         "{:>8} {:>9} {:>12} {:>12} {:>12} {:>10} {:>8} {:>7}",
-        "step ms", "run s", "pose 1 s m", "pose 10 s m", "pose 60 s m", "IR error", "visits", "cyclic"
+        "step ms",
+        "run s",
+        "pose 1 s m",
+        "pose 10 s m",
+        "pose 60 s m",
+        "IR error",
+        "visits",
+        "cyclic"
     )?;
     for r in &rungs {
         writeln!(
@@ -173,7 +180,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             r.cyclic_share
         )?;
     }
-    std::fs::write(&csv_path, csv).with_context(|| format!("cannot write {}", csv_path.display()))?;
+    std::fs::write(&csv_path, csv)
+        .with_context(|| format!("cannot write {}", csv_path.display()))?;
     println!("{}", csv_path.display());
     let name = crate::world::world_name(&args.world);
     crate::plot::save(&chart(&rungs, &name), &args.out, "accuracy", args.format)?;

@@ -307,7 +307,7 @@ pub fn drive(args: DriveArgs) -> anyhow::Result<Outcome> {
     };
     let controller =
         regatta_runtime::controllers::build(&args.controller, &args.args, control_period)
-        .with_context(|| format!("cannot build controller '{}'", args.controller))?;
+            .with_context(|| format!("cannot build controller '{}'", args.controller))?;
     let options = ClientOptions {
         timeout: Duration::from_millis(args.timeout.max(1)),
         tries: args.tries,

@@ -424,11 +424,17 @@ mod tests {
         // One light only, abeam on the left: the robot has never seen two, so it keeps it.
         let mut lone = Habituation::default();
         for _ in 0..10 {
-            assert_eq!(lone.choose(&[20.0], centre, limit, TRACK_PIXELS), Some(20.0));
+            assert_eq!(
+                lone.choose(&[20.0], centre, limit, TRACK_PIXELS),
+                Some(20.0)
+            );
         }
         // Two lights seen at once, then one abeam: kept for `limit` steps abeam, then left.
         let mut h = Habituation::default();
-        assert_eq!(h.choose(&[20.0, 140.0], centre, limit, TRACK_PIXELS), Some(20.0));
+        assert_eq!(
+            h.choose(&[20.0, 140.0], centre, limit, TRACK_PIXELS),
+            Some(20.0)
+        );
         // Sailing to a light near the centre never counts.
         for _ in 0..10 {
             assert_eq!(h.choose(&[70.0], centre, limit, TRACK_PIXELS), Some(70.0));
@@ -447,16 +453,28 @@ mod tests {
         );
         // Other lights appear: the one farthest right (the light left was on the left) is
         // the next mark, even if another is nearer the centre.
-        assert_eq!(h.choose(&[18.0, 60.0, 100.0], centre, limit, TRACK_PIXELS), Some(100.0));
+        assert_eq!(
+            h.choose(&[18.0, 60.0, 100.0], centre, limit, TRACK_PIXELS),
+            Some(100.0)
+        );
         // Once it is ahead, the usual rule again: the light nearest the centre.
-        assert_eq!(h.choose(&[18.0, 72.0, 80.0], centre, limit, TRACK_PIXELS), Some(80.0));
-        assert_eq!(h.choose(&[18.0, 74.0, 80.0], centre, limit, TRACK_PIXELS), Some(74.0));
+        assert_eq!(
+            h.choose(&[18.0, 72.0, 80.0], centre, limit, TRACK_PIXELS),
+            Some(80.0)
+        );
+        assert_eq!(
+            h.choose(&[18.0, 74.0, 80.0], centre, limit, TRACK_PIXELS),
+            Some(74.0)
+        );
         // The ignored light, lost from view, may be followed again.
         assert_eq!(h.choose(&[], centre, limit, TRACK_PIXELS), None);
         assert_eq!(h.choose(&[18.0], centre, limit, TRACK_PIXELS), Some(18.0));
         // habituation=0: never left.
         let mut off = Habituation::default();
-        assert_eq!(off.choose(&[20.0, 140.0], centre, 0, TRACK_PIXELS), Some(20.0));
+        assert_eq!(
+            off.choose(&[20.0, 140.0], centre, 0, TRACK_PIXELS),
+            Some(20.0)
+        );
         for _ in 0..100 {
             assert_eq!(off.choose(&[20.0], centre, 0, TRACK_PIXELS), Some(20.0));
         }
