@@ -120,7 +120,7 @@ fn check_measures_a_network_against_its_inputs_and_outputs() {
     let errors = check_short(&world(ctrnn, ""));
     assert!(
         errors[0].starts_with(
-            "net.wbt:7:56: error: time constant 0.01 s is shorter than the time step 0.032 s"
+            "net.wbt:7:56: error: time constant 0.01 s is shorter than the control period 0.032 s"
         ),
         "{errors:?}"
     );

@@ -272,6 +272,9 @@ pub struct Core {
     episode_steps: u64,
     log: Option<Log>,
     scratch: Vec<f64>,
+    /// Each robot's reward over the last step of the environment: the sum over the
+    /// physics steps of one control period.
+    rewards: Vec<f64>,
 }
 
 impl Core {
@@ -328,6 +331,7 @@ impl Core {
             commands,
         };
         let seed = seed.unwrap_or(experiment.compiled.settings.seed);
+        let robots = rigs.len();
         let (running, log) = drive.launch(&experiment, seed, None)?;
         let observer = Observer::new(running.borrow_dependent(), &fitness);
         Ok(Core {
@@ -339,6 +343,7 @@ impl Core {
             episode_steps,
             log,
             scratch: Vec::new(),
+            rewards: vec![0.0; robots],
         })
     }
 
@@ -402,11 +407,14 @@ impl Core {
         self.running = running;
         self.log = log;
         self.observer = Observer::new(self.running.borrow_dependent(), &self.fitness);
+        self.rewards.iter_mut().for_each(|r| *r = 0.0);
         Ok(())
     }
 
     /// One step: `actions` (two per controlled robot, in units of the robot's speed scale)
-    /// are applied, the world moves, the sensors are read for the next observation.
+    /// are applied, the world moves for one control period (physics steps until a controlled
+    /// robot's controller is next due, or the episode's end), the sensors are read for the
+    /// next observation. Rewards add up over the period's steps.
     pub fn step(&mut self, actions: &[f64]) -> Result<(), CoreError> {
         for ((command, observation), pair) in self
             .drive
@@ -425,9 +433,15 @@ impl Core {
             );
         }
         let (observer, log) = (&mut self.observer, &mut self.log);
-        self.running.with_dependent_mut(|_, simulation| {
+        let (controlled, rewards) = (&self.drive.controlled, &mut self.rewards);
+        let episode_steps = self.episode_steps;
+        rewards.iter_mut().for_each(|r| *r = 0.0);
+        self.running.with_dependent_mut(|_, simulation| loop {
             simulation.act();
             observer.after_step(simulation);
+            for (sum, &r) in rewards.iter_mut().zip(observer.rewards()) {
+                *sum += r;
+            }
             if let Some(log) = log {
                 log.recorder
                     .record(simulation)
@@ -437,7 +451,13 @@ impl Core {
                     })?;
             }
             simulation.sense();
-            Ok(())
+            let truncated = episode_steps > 0 && simulation.steps >= episode_steps;
+            if truncated
+                || controlled.is_empty()
+                || controlled.iter().any(|&r| simulation.control_due(r))
+            {
+                return Ok(());
+            }
         })
     }
 
@@ -463,7 +483,7 @@ impl Core {
 
     /// Each controlled robot's reward in the last step.
     pub fn write_rewards(&self, out: &mut [f64]) {
-        let rewards = self.observer.rewards();
+        let rewards = &self.rewards;
         for (o, &robot) in out.iter_mut().zip(&self.drive.controlled) {
             *o = rewards[robot];
         }
@@ -471,7 +491,7 @@ impl Core {
 
     /// Every robot's reward in the last step, in file order.
     pub fn rewards(&self) -> &[f64] {
-        self.observer.rewards()
+        &self.rewards
     }
 
     /// The run so far as `regatta run --json` prints it (without wall time).

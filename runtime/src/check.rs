@@ -7,6 +7,7 @@ use regatta_parser::Diagnostic;
 use regatta_schema::{Checked, FileDiagnostic, Scene, Value};
 
 use crate::compile::network::{network_from_scene, NetworkError};
+use crate::compile::rig::control_steps;
 use crate::compile::world_settings;
 use crate::sim::MAX_SUB_STEPS;
 
@@ -19,6 +20,7 @@ pub fn check_scene(checked: &mut Checked) {
     let networks = check_networks(&checked.scene);
     checked.diagnostics.extend(networks);
     check_time_step(checked);
+    check_control_periods(checked);
     checked.sort_diagnostics();
 }
 
@@ -29,11 +31,15 @@ pub fn check_networks(scene: &Scene) -> Vec<FileDiagnostic> {
     let time_step = world_settings(scene).time_step;
     let mut diagnostics = Vec::new();
     for robot in scene.find("DifferentialWheels") {
+        // A CTRNN integrates once per controller call; a period that is not whole steps is
+        // reported by `check_control_periods`.
+        let period = control_steps(scene.float(robot, "controlPeriod"), time_step)
+            .map_or(time_step, |steps| steps as f64 * time_step);
         let panoramic = scene
             .child(robot, "turret")
             .is_some_and(|t| scene.type_name(t) == "PanoramicTurret");
         let result = match scene.child(robot, "network") {
-            Some(network) => network_from_scene(scene, network, panoramic, time_step)
+            Some(network) => network_from_scene(scene, network, panoramic, period)
                 .map(|_| ())
                 .map_err(|e| (network, e)),
             None if scene.string(robot, "controller") == "neural" => {
@@ -115,4 +121,34 @@ fn check_time_step(checked: &mut Checked) {
         ))
         .with_code("time-step"),
     });
+}
+
+/// Refuses a robot's `controlPeriod` that is not a whole number of physics steps: a
+/// controller runs on the step grid, so such a period could only be rounded, and the
+/// rounding would change with the step.
+fn check_control_periods(checked: &mut Checked) {
+    let scene = &checked.scene;
+    let time_step = world_settings(scene).time_step;
+    let mut found = Vec::new();
+    for id in scene.find("DifferentialWheels") {
+        let period = scene.float(id, "controlPeriod");
+        if control_steps(period, time_step).is_ok() {
+            continue;
+        }
+        let at = scene.value_span(id, "controlPeriod");
+        found.push(FileDiagnostic {
+            file: at.file,
+            diagnostic: Diagnostic::error(
+                at.span,
+                format!(
+                    "a controlPeriod of {period} ms is not a whole number of {} ms steps",
+                    time_step * 1000.0
+                ),
+            )
+            .with_label("not a multiple of basicTimeStep")
+            .with_note("a controller runs on the physics step's grid: make basicTimeStep divide the period, or the period a multiple of the step")
+            .with_code("control-period"),
+        });
+    }
+    checked.diagnostics.extend(found);
 }

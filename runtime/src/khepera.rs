@@ -159,7 +159,9 @@ pub trait LinearCameraTurret {
     fn light_level(&mut self) -> Result<u16, KheperaError>;
 }
 
-/// A controller: called once per step with the robot to read and drive.
+/// A controller: called once per control period (the robot's `controlPeriod`, a whole
+/// number of physics steps) with the robot to read and drive; its commands hold until the
+/// next call. Whatever it times, it times in seconds, given the period when it is built.
 pub trait Controller: Send {
     fn step(&mut self, robot: &mut dyn Khepera) -> Result<(), KheperaError>;
 

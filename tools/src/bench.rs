@@ -25,6 +25,10 @@ enum What {
     /// Simulation steps per second: the regatta world, IR only, 10 robots, parallel worlds,
     /// and the peak memory of a one-robot run.
     Step(crate::bench_step::Args),
+    /// Accuracy against cost of the physics step: the world at a ladder of basicTimeSteps,
+    /// control and sensor periods fixed; pose divergence, sensor error and buoy visits
+    /// against the finest step, the observed order; a table, CSV and a chart.
+    Accuracy(crate::bench_accuracy::Args),
     /// Webots worlds: JavaScript templates against arithmetic ones, and the e-puck's camera.
     Webots(crate::bench_webots::Args),
     /// glTF export time on a generated world of about a million triangles.
@@ -55,6 +59,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         What::Retina(args) => crate::bench_retina::run(args),
         What::Step(args) => crate::bench_step::run(args),
         What::Webots(args) => crate::bench_webots::run(args),
+        What::Accuracy(args) => crate::bench_accuracy::run(args),
         What::Gltf { points, runs } => gltf(points, runs),
         What::Parse {
             points,

@@ -4,6 +4,7 @@
 
 mod batch;
 mod bench;
+mod bench_accuracy;
 mod bench_retina;
 mod bench_step;
 mod bench_swarm;

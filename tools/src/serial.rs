@@ -285,7 +285,9 @@ pub struct DriveArgs {
     /// Control steps to run (the robot is stopped at the end).
     #[arg(long, default_value_t = 1875)]
     steps: u64,
-    /// Milliseconds per control step; 0 runs as fast as replies come (for a lock-step world).
+    /// Milliseconds per control step; 0 runs as fast as replies come (for a lock-step world,
+    /// whose control period, 32 ms unless the world's robot sets `controlPeriod`, is then
+    /// the controller's: its timers count 32 ms per call).
     #[arg(long, default_value_t = 32)]
     period: u64,
     /// Milliseconds one try waits for a reply.
@@ -297,8 +299,15 @@ pub struct DriveArgs {
 }
 
 pub fn drive(args: DriveArgs) -> anyhow::Result<Outcome> {
-    let controller = regatta_runtime::controllers::build(&args.controller, &args.args)
-        .with_context(|| format!("cannot build controller '{}'", args.controller))?;
+    // The controller's timers are in seconds: they count calls of this period.
+    let control_period = if args.period == 0 {
+        regatta_runtime::compile::rig::DEFAULT_CONTROL_PERIOD
+    } else {
+        args.period as f64 / 1000.0
+    };
+    let controller =
+        regatta_runtime::controllers::build(&args.controller, &args.args, control_period)
+            .with_context(|| format!("cannot build controller '{}'", args.controller))?;
     let options = ClientOptions {
         timeout: Duration::from_millis(args.timeout.max(1)),
         tries: args.tries,

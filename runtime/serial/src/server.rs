@@ -253,8 +253,22 @@ impl<'s, 'c> Server<'s, 'c> {
             .is_some_and(|max| self.simulation.steps >= max)
     }
 
-    /// Ends the current step and reads the sensors for the next.
+    /// Ends the current control period: steps the world until the robot's controller is next
+    /// due (its `controlPeriod`, a whole number of steps), reading the sensors at each step,
+    /// so a served robot is read and commanded where a built-in controller would be.
     pub fn advance(&mut self) -> Flow {
+        loop {
+            if self.advance_step() == Flow::Done {
+                return Flow::Done;
+            }
+            if self.simulation.control_due(self.robot) {
+                return Flow::Continue;
+            }
+        }
+    }
+
+    /// Ends the current physics step and reads the sensors for the next.
+    pub fn advance_step(&mut self) -> Flow {
         self.simulation.act();
         if let Some(hook) = &mut self.on_step {
             if let Err(error) = hook(self.simulation) {
@@ -417,7 +431,7 @@ pub fn serve_real_time(
         // two reads of the link.
         let mut caught_up = 0;
         while server.simulation.steps - first_step < due && caught_up < LAG_WARNING_STEPS {
-            if server.advance() == Flow::Done {
+            if server.advance_step() == Flow::Done {
                 return Ok(Ended::Done);
             }
             caught_up += 1;

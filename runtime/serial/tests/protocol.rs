@@ -37,7 +37,8 @@ fn in_process(compiled: &regatta_runtime::Compiled, seed: u64, steps: u64) -> Ve
 fn served(compiled: &regatta_runtime::Compiled, seed: u64, steps: u64) -> Vec<Pose2> {
     let (mut server_end, client_end) = UnixStream::pair().unwrap();
     let rig = &compiled.rig.robots[0];
-    let mut controller = controllers::build(&rig.controller, &rig.controller_args).unwrap();
+    let mut controller =
+        controllers::build(&rig.controller, &rig.controller_args, rig.control_period).unwrap();
     std::thread::scope(|scope| {
         let server = scope.spawn(move || {
             let mut simulation = Simulation::new(compiled, Some(seed)).unwrap();
@@ -221,7 +222,8 @@ fn a_pty_pair_carries_the_protocol() {
             .expect("the pty opens as a serial port");
         let mut robot = RemoteKhepera::connect(port, ClientOptions::default()).unwrap();
         let rig = &compiled.rig.robots[0];
-        let mut controller = controllers::build(&rig.controller, &rig.controller_args).unwrap();
+        let mut controller =
+            controllers::build(&rig.controller, &rig.controller_args, rig.control_period).unwrap();
         for _ in 0..25 {
             controller.step(&mut robot).unwrap();
         }

@@ -485,6 +485,11 @@ impl Compiler<'_> {
             z: robot_frame.translation.z,
             heading: libm::atan2(-forward.z, forward.x),
         };
+        let time_step = world_settings(scene).time_step;
+        // `check` refuses a period that is not a whole number of steps; compiled unchecked,
+        // it is rounded to the nearest (at least one).
+        let control_steps = rig::control_steps(scene.float(node, "controlPeriod"), time_step)
+            .unwrap_or_else(|ratio| (libm::round(ratio).clamp(1.0, u32::MAX as f64) as u64).max(1));
         let index = self.rig.robots.len();
         if self.rig.robots.iter().any(|r| r.name == name) {
             self.warnings.push(format!(
@@ -501,6 +506,8 @@ impl Compiler<'_> {
             encoder_resolution: scene.float(node, "encoderResolution"),
             max_speed: scene.float(node, "maxSpeed"),
             wheel_speed_noise: scene.float(node, "wheelSpeedNoise"),
+            control_steps,
+            control_period: control_steps as f64 * time_step,
             body_radius: scene.float(node, "bodyRadius"),
             body_height: scene.float(node, "bodyHeight"),
             controller: scene.string(node, "controller").to_owned(),
@@ -510,11 +517,12 @@ impl Compiler<'_> {
                 let panoramic = scene
                     .child(node, "turret")
                     .is_some_and(|t| scene.type_name(t) == "PanoramicTurret");
+                // A CTRNN integrates once per controller call.
                 network::network_from_scene(
                     scene,
                     network,
                     panoramic,
-                    world_settings(scene).time_step,
+                    control_steps as f64 * time_step,
                 )
             }),
             distance_sensors: Vec::new(),

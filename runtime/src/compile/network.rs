@@ -78,7 +78,7 @@ pub struct Topology {
     pub output_scale: f64,
     /// CTRNN: one per neuron (interneurons, then the two motor neurons).
     pub time_constants: Vec<f64>,
-    /// The controller's step (s): the CTRNN's Euler step.
+    /// The robot's control period (s): the CTRNN's Euler step, one per controller call.
     pub time_step: f64,
 }
 
@@ -188,7 +188,7 @@ pub enum NetworkError {
     #[error("the CTRNN has {neurons} neurons but {found} time constants")]
     TimeConstantCount { neurons: usize, found: usize },
     #[error(
-        "time constant {tau} s is shorter than the time step {time_step} s: the Euler steps would be unstable"
+        "time constant {tau} s is shorter than the control period {time_step} s: the Euler steps would be unstable"
     )]
     TimeConstantTooShort { tau: f64, time_step: f64 },
     #[error("retina inputs need a PanoramicTurret on the robot")]
@@ -241,7 +241,8 @@ fn activation(name: &str) -> Activation {
 
 /// Reads a `NeuralNetwork` node (typed by the schema, so its strings are among the allowed
 /// values) and checks it against its inputs and outputs. `panoramic` says whether the robot
-/// carries a Panoramic turret; `time_step` is the world's (s).
+/// carries a Panoramic turret; `time_step` is the robot's control period (s), the step of a
+/// CTRNN's integration.
 pub fn network_from_scene(
     scene: &Scene,
     node: NodeId,

@@ -264,6 +264,10 @@ pub struct RobotRig {
     pub encoder_resolution: f64,
     pub max_speed: f64,
     pub wheel_speed_noise: f64,
+    /// Physics steps between controller calls (at least 1), and the period they make (s):
+    /// the `controlPeriod` field, or the Khepera's cycle rounded up to whole steps.
+    pub control_steps: u64,
+    pub control_period: f64,
     pub body_radius: f64,
     pub body_height: f64,
     pub controller: String,
@@ -278,6 +282,31 @@ pub struct RobotRig {
     pub turret: Option<TurretRig>,
     /// 2-D cameras, in the order the robot carries them.
     pub cameras: Vec<CameraRig>,
+}
+
+/// The Khepera's control cycle (s): what `controlPeriod 0` asks for, rounded up to a whole
+/// number of physics steps. At the default `basicTimeStep 32` it is one step, as before
+/// controllers had a period of their own.
+pub const DEFAULT_CONTROL_PERIOD: f64 = 0.032;
+
+/// Physics steps per control period for a `controlPeriod` field of `period_ms` (0: the
+/// default cycle) at a step of `time_step` seconds; `Err` with the ratio when the period is
+/// not a whole, positive number of steps.
+pub fn control_steps(period_ms: f64, time_step: f64) -> Result<u64, f64> {
+    if !(time_step > 0.0 && time_step.is_finite() && period_ms.is_finite()) {
+        return Err(f64::NAN);
+    }
+    if period_ms <= 0.0 {
+        // Rounded up, with a tolerance for steps written in decimal (0.1 ms).
+        let steps = libm::ceil(DEFAULT_CONTROL_PERIOD / time_step - 1e-6).max(1.0);
+        return Ok(steps.min(u32::MAX as f64) as u64);
+    }
+    let ratio = period_ms / 1000.0 / time_step;
+    let steps = libm::round(ratio);
+    if steps < 1.0 || (ratio - steps).abs() > 1e-6 * steps || steps > u32::MAX as f64 {
+        return Err(ratio);
+    }
+    Ok(steps as u64)
 }
 
 /// Every robot of the world, in the order they appear in the file.

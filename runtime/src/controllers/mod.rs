@@ -80,10 +80,11 @@ pub struct ControllerSpec {
     pub build: Builder,
 }
 
-/// How a registry entry makes its controller: from checked arguments and, for a run, the
-/// robot it drives.
+/// How a registry entry makes its controller: from checked arguments, for a run the robot it
+/// drives, and the control period (s) at which it will be called: every time a controller
+/// keeps (timers, integration) is in seconds and turned into calls with it.
 pub type Builder =
-    fn(&Arguments, Option<&RobotRig>) -> Result<Box<dyn Controller>, ControllerError>;
+    fn(&Arguments, Option<&RobotRig>, f64) -> Result<Box<dyn Controller>, ControllerError>;
 
 /// Every built-in controller.
 pub static CONTROLLERS: &[ControllerSpec] = &[
@@ -92,14 +93,14 @@ pub static CONTROLLERS: &[ControllerSpec] = &[
         aliases: &["", "<none>"],
         doc: "Does nothing: the robot stands still (its sensors still read).",
         parameters: &[],
-        build: |_, _| Ok(Box::new(Idle)),
+        build: |_, _, _| Ok(Box::new(Idle)),
     },
     ControllerSpec {
         name: "braitenberg",
         aliases: &[],
         doc: "Mondada's obstacle avoider: the Khepera BIOS's feed-forward IR network.",
         parameters: BRAITENBERG_PARAMETERS,
-        build: |args, _| {
+        build: |args, _, _| {
             Ok(Box::new(Braitenberg {
                 parameters: Parameters::from_arguments(args),
             }))
@@ -110,14 +111,19 @@ pub static CONTROLLERS: &[ControllerSpec] = &[
         aliases: &[],
         doc: "The paper's controller: the Braitenberg network plus light seeking with the Panoramic turret's odd filter.",
         parameters: REGATTA_PARAMETERS,
-        build: |args, _| Ok(Box::new(Regatta::new(Parameters::from_arguments(args)))),
+        build: |args, _, period| {
+            Ok(Box::new(Regatta::new(
+                Parameters::from_arguments(args),
+                period,
+            )))
+        },
     },
     ControllerSpec {
         name: "neural",
         aliases: &[],
         doc: "The robot's NeuralNetwork node (feed-forward, Elman or CTRNN); its parameters are the network's fields.",
         parameters: &[],
-        build: |_, rig| match rig.and_then(|rig| rig.network.as_ref()) {
+        build: |_, rig, _| match rig.and_then(|rig| rig.network.as_ref()) {
             Some(Ok(spec)) => Ok(Box::new(Neural::from_spec(spec)?)),
             Some(Err(error)) => Err(error.clone().into()),
             None => Err(NetworkError::NoNetwork.into()),
@@ -199,7 +205,7 @@ pub(super) fn argument(
         .ok()
         .filter(|v| v.is_finite())
         .filter(|v| parameter.kind == ParameterKind::Number || v.fract() == 0.0)
-        .filter(|v| parameter.kind != ParameterKind::Count || *v >= 0.0)
+        .filter(|v| parameter.kind != ParameterKind::Seconds || *v >= 0.0)
         .ok_or_else(|| ControllerError::NotANumber {
             key: key.to_owned(),
             value: value.to_owned(),
@@ -218,11 +224,15 @@ pub fn arguments(name: &str, args: &[String]) -> Result<Arguments, ControllerErr
     Ok(Arguments { values })
 }
 
-/// Builds a built-in controller from its name and arguments (`neural` needs its robot: see
-/// [`build_for`]).
-pub fn build(name: &str, args: &[String]) -> Result<Box<dyn Controller>, ControllerError> {
+/// Builds a built-in controller from its name and arguments, to be called every `period`
+/// seconds (`neural` needs its robot: see [`build_for`]).
+pub fn build(
+    name: &str,
+    args: &[String],
+    period: f64,
+) -> Result<Box<dyn Controller>, ControllerError> {
     let spec = spec_of(name)?;
-    (spec.build)(&arguments(name, args)?, None)
+    (spec.build)(&arguments(name, args)?, None, period)
 }
 
 /// Builds a robot's controller as its world sets it.
@@ -231,6 +241,7 @@ pub fn build_for(rig: &RobotRig) -> Result<Box<dyn Controller>, ControllerError>
     (spec.build)(
         &arguments(&rig.controller, &rig.controller_args)?,
         Some(rig),
+        rig.control_period,
     )
 }
 
@@ -266,7 +277,7 @@ mod tests {
             Err(ControllerError::NotANumber { .. })
         ));
         assert!(matches!(
-            build("wander", &[]),
+            build("wander", &[], 0.032),
             Err(ControllerError::Unknown { .. })
         ));
         assert!(matches!(
@@ -276,16 +287,15 @@ mod tests {
     }
 
     #[test]
-    fn habituation_is_a_number_of_steps() {
+    fn habituation_is_a_time_in_seconds() {
         let p = Parameters::parse("regatta", &["habituation=0".to_owned()]).unwrap();
         assert_eq!(p.habituation, 0.0);
+        assert_eq!(Parameters::default().habituation, 2.4);
         assert!(matches!(
             Parameters::parse("regatta", &["habituation=-3".to_owned()]),
             Err(ControllerError::NotANumber { .. })
         ));
-        assert!(matches!(
-            Parameters::parse("regatta", &["habituation=2.5".to_owned()]),
-            Err(ControllerError::NotANumber { .. })
-        ));
+        let p = Parameters::parse("regatta", &["habituation=2.5".to_owned()]).unwrap();
+        assert_eq!(p.habituation, 2.5);
     }
 }

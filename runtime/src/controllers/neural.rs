@@ -11,7 +11,8 @@
 //! - Outputs: tanh (−1 … 1), sigmoid mapped by `2y − 1`, or linear; a wheel command is
 //!   `round(outputScale · output)` clamped to the real robot's −127 … 127 pulses per 10 ms.
 //! - CTRNN (Beer 1995): `τ_i dy_i/dt = −y_i + Σ_j w_ij σ(y_j) + Σ_k g_ik I_k`, forward Euler
-//!   steps of the world's time step from y = 0, motor outputs `2σ(y) − 1`.
+//!   steps of the robot's control period (it runs once per controller call) from y = 0, motor
+//!   outputs `2σ(y) − 1`.
 
 use std::sync::Arc;
 

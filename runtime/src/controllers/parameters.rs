@@ -10,8 +10,9 @@ pub enum ParameterKind {
     Number,
     /// A whole number.
     Integer,
-    /// A whole number that is not negative (a count of steps).
-    Count,
+    /// A time in seconds, not negative. Every time a controller takes is in seconds, never
+    /// in steps: a count of steps would change meaning with the control period.
+    Seconds,
 }
 
 impl ParameterKind {
@@ -19,7 +20,7 @@ impl ParameterKind {
         match self {
             ParameterKind::Number => "a finite number",
             ParameterKind::Integer => "a whole number",
-            ParameterKind::Count => "a whole number of steps, not negative",
+            ParameterKind::Seconds => "a time in seconds, not negative",
         }
     }
 }
@@ -82,12 +83,12 @@ pub(crate) const REGATTA_PARAMETERS: &[ParameterSpec] = &[
     },
     ParameterSpec {
         key: "habituation",
-        kind: ParameterKind::Count,
-        // 2.4 s at the 32 ms control cycle, about 160° of a tight orbit: in the paper's
-        // arena the next light almost always takes over sooner; later, the next mark has
-        // turned past the bow and the rounding would change sense.
-        default: 75.0,
-        doc: "Control steps with the followed light abeam before the robot loses interest in it (0: never).",
+        kind: ParameterKind::Seconds,
+        // About 160° of a tight orbit: in the paper's arena the next light almost always
+        // takes over sooner; later, the next mark has turned past the bow and the rounding
+        // would change sense. (75 control cycles of 32 ms, the value it had in steps.)
+        default: 2.4,
+        doc: "Seconds with the followed light abeam before the robot loses interest in it (0: never).",
     },
 ];
 
@@ -102,7 +103,7 @@ pub struct Parameters {
     pub light_gain: f64,
     /// Least odd-filter lobe, in LSB, that counts as a light edge.
     pub min_contrast: f64,
-    /// Control steps with the followed light abeam before the robot loses interest in it
+    /// Seconds with the followed light abeam before the robot loses interest in it
     /// (0: never).
     pub habituation: f64,
 }

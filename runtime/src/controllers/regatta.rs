@@ -4,12 +4,14 @@
 //! of the retina steers the robot by `lightGain` pulses/10 ms per pixel of distance from the
 //! centre, added to the network's output. A robot that stalls facing an obstacle (both
 //! commands within ±`STALL_SPEED` while a front sensor reads more than `STALL_PROXIMITY`, for
-//! `STALL_STEPS` steps: the Braitenberg network's deadlock in a corner) turns on the spot,
-//! away from the nearer side, for `ESCAPE_STEPS` steps.
+//! `STALL_TIME` seconds: the Braitenberg network's deadlock in a corner) turns on the spot,
+//! away from the nearer side, for `ESCAPE_TIME` seconds. Every time here is in seconds and
+//! becomes a number of controller calls through the control period the controller is built
+//! with, so the robot behaves the same at any physics step.
 //!
 //! Habituation: a robot that has seen two lights at once (it knows there is more than one
 //! buoy) and has kept the light it follows abeam (more than `ABEAM_PIXELS` from the
-//! retina's centre: rounding it, not sailing to it) for `habituation` control steps loses
+//! retina's centre: rounding it, not sailing to it) for `habituation` seconds loses
 //! interest in it: the light is ignored until it leaves the view, and the robot sails on
 //! to the light farthest to the other side (the first one the rounding turned its bow
 //! to), as a sailor rounds a mark and leaves it. Near a buoy the retina's normalisation
@@ -148,15 +150,27 @@ fn partition_point_u16(holds: impl Fn(u32) -> bool) -> u32 {
 pub const STALL_SPEED: i32 = 1;
 /// A front IR reading above this counts as facing an obstacle.
 pub const STALL_PROXIMITY: u16 = 300;
-/// Steps stalled before turning away (about a second at 32 ms).
-pub const STALL_STEPS: u32 = 32;
-/// Steps of turning on the spot (about 0.8 s at 32 ms: roughly a right angle at the bias
-/// speed).
-pub const ESCAPE_STEPS: u32 = 24;
+/// Time stalled before turning away (s): 32 cycles of 32 ms, about a second.
+pub const STALL_TIME: f64 = 1.024;
+/// Time turning on the spot (s): 24 cycles of 32 ms, roughly a right angle at the bias speed.
+pub const ESCAPE_TIME: f64 = 0.768;
+
+/// The number of controller calls, `period` seconds apart, that last `seconds` (at least one).
+pub fn calls(seconds: f64, period: f64) -> u32 {
+    let calls = libm::round(seconds / period);
+    if calls.is_finite() {
+        calls.clamp(1.0, u32::MAX as f64) as u32
+    } else {
+        1
+    }
+}
 
 /// Turns a stalled robot away from what it faces.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct StallEscape {
+    /// [`STALL_TIME`] and [`ESCAPE_TIME`] in calls of the controller.
+    stall_calls: u32,
+    escape_calls: u32,
     stalled: u32,
     /// Steps left to turn, and the direction (+1 turns right).
     escaping: u32,
@@ -164,6 +178,17 @@ pub struct StallEscape {
 }
 
 impl StallEscape {
+    /// The escape of a controller called every `period` seconds.
+    pub fn new(period: f64) -> StallEscape {
+        StallEscape {
+            stall_calls: calls(STALL_TIME, period),
+            escape_calls: calls(ESCAPE_TIME, period),
+            stalled: 0,
+            escaping: 0,
+            direction: 0,
+        }
+    }
+
     /// The commands to send instead of `(left, right)`, if the robot must turn away.
     pub fn check(
         &mut self,
@@ -182,11 +207,11 @@ impl StallEscape {
         } else {
             self.stalled = 0;
         }
-        if self.stalled < STALL_STEPS {
+        if self.stalled < self.stall_calls {
             return None;
         }
         self.stalled = 0;
-        self.escaping = ESCAPE_STEPS - 1;
+        self.escaping = self.escape_calls - 1;
         // Away from the side that reads more (left sensors 0…2, right 3…5); right on a tie.
         let left_side: u32 = proximity[0..3].iter().map(|&v| v as u32).sum();
         let right_side: u32 = proximity[3..6].iter().map(|&v| v as u32).sum();
@@ -195,10 +220,15 @@ impl StallEscape {
     }
 }
 
-/// A light moves less than this many pixels from one step to the next while the robot
-/// turns at its speeds (an orbit turns it by about 1.4 pixels per 32 ms step): the maximum
-/// nearest a light's last position, within it, is the same light.
+/// A light moves less than this many pixels from one controller call to the next while the
+/// robot turns at its speeds (an orbit turns it by about 1.4 pixels per 32 ms): the maximum
+/// nearest a light's last position, within it, is the same light. With calls further apart
+/// the window widens at [`TRACK_PIXEL_RATE`].
 pub const TRACK_PIXELS: f64 = 8.0;
+
+/// How fast the tracking window grows with the time between calls (pixels per second: 8
+/// pixels per 32 ms).
+pub const TRACK_PIXEL_RATE: f64 = 250.0;
 
 /// A followed light this many pixels or more from the retina's centre (80°) is abeam.
 pub const ABEAM_PIXELS: f64 = 50.0;
@@ -222,12 +252,12 @@ pub struct Habituation {
     departing: Option<f64>,
 }
 
-/// The maximum in `maxima` nearest `position`, within [`TRACK_PIXELS`].
-fn track(maxima: &[f64], position: f64) -> Option<f64> {
+/// The maximum in `maxima` nearest `position`, within `window` pixels.
+fn track(maxima: &[f64], position: f64, window: f64) -> Option<f64> {
     maxima
         .iter()
         .copied()
-        .filter(|m| (m - position).abs() <= TRACK_PIXELS)
+        .filter(|m| (m - position).abs() <= window)
         .min_by(|a, b| (a - position).abs().total_cmp(&(b - position).abs()))
 }
 
@@ -244,13 +274,14 @@ fn nearest_to(maxima: &[f64], centre: f64, except: Option<f64>) -> Option<f64> {
 }
 
 impl Habituation {
-    /// The light to steer to among this step's `maxima` (in pixel order, `centre` the
-    /// retina's centre in the same units), if any. `habituation` is the parameter.
-    pub fn choose(&mut self, maxima: &[f64], centre: f64, habituation: f64) -> Option<f64> {
-        self.ignored = self.ignored.and_then(|p| track(maxima, p));
+    /// The light to steer to among this call's `maxima` (in pixel order, `centre` the
+    /// retina's centre in the same units), if any. `limit` is the habituation in calls (0:
+    /// never), `window` the tracking window in pixels (see [`TRACK_PIXELS`]).
+    pub fn choose(&mut self, maxima: &[f64], centre: f64, limit: u32, window: f64) -> Option<f64> {
+        self.ignored = self.ignored.and_then(|p| track(maxima, p, window));
         let followed = self
             .followed
-            .and_then(|(p, steps)| track(maxima, p).map(|m| (m, steps)));
+            .and_then(|(p, steps)| track(maxima, p, window).map(|m| (m, steps)));
         self.several |= maxima.len() >= 2;
         let target = match self.departing {
             // Leaving a light behind on one side: the next mark is the light farthest to
@@ -274,7 +305,7 @@ impl Habituation {
             Some((p, steps)) if p == target => steps.saturating_add(abeam),
             _ => abeam,
         };
-        if self.several && habituation > 0.0 && steps as f64 > habituation {
+        if self.several && limit > 0 && steps > limit {
             self.ignored = Some(target);
             self.departing = Some((target - centre).signum());
             self.followed = None;
@@ -296,18 +327,29 @@ pub struct Regatta {
     maxima: Vec<f64>,
     escape: StallEscape,
     habituation: Habituation,
+    /// The habituation parameter in calls (0: never) and the tracking window (pixels).
+    habituation_calls: u32,
+    track_window: f64,
 }
 
 impl Regatta {
-    /// The controller with its parameters, before its first step.
-    pub fn new(parameters: Parameters) -> Regatta {
+    /// The controller with its parameters, before its first call; it will be called every
+    /// `period` seconds.
+    pub fn new(parameters: Parameters, period: f64) -> Regatta {
+        let habituation_calls = if parameters.habituation > 0.0 {
+            calls(parameters.habituation, period)
+        } else {
+            0
+        };
         Regatta {
+            habituation_calls,
+            track_window: TRACK_PIXELS.max(TRACK_PIXEL_RATE * period),
             parameters,
             thresholds: None,
             enabled: false,
             odd: Vec::new(),
             maxima: Vec::new(),
-            escape: StallEscape::default(),
+            escape: StallEscape::new(period),
             habituation: Habituation::default(),
         }
     }
@@ -345,7 +387,8 @@ impl Controller for Regatta {
         let chosen = self.habituation.choose(
             &self.maxima,
             centre - first as f64,
-            self.parameters.habituation,
+            self.habituation_calls,
+            self.track_window,
         );
         if let Some(maximum) = chosen {
             let offset = maximum + first as f64 - centre;
@@ -377,25 +420,31 @@ mod tests {
     #[test]
     fn a_light_kept_abeam_too_long_is_left_for_the_farthest_on_the_other_side() {
         let centre = 75.0;
-        let limit = 3.0;
+        let limit = 3;
         // One light only, abeam on the left: the robot has never seen two, so it keeps it.
         let mut lone = Habituation::default();
         for _ in 0..10 {
-            assert_eq!(lone.choose(&[20.0], centre, limit), Some(20.0));
+            assert_eq!(
+                lone.choose(&[20.0], centre, limit, TRACK_PIXELS),
+                Some(20.0)
+            );
         }
         // Two lights seen at once, then one abeam: kept for `limit` steps abeam, then left.
         let mut h = Habituation::default();
-        assert_eq!(h.choose(&[20.0, 140.0], centre, limit), Some(20.0));
+        assert_eq!(
+            h.choose(&[20.0, 140.0], centre, limit, TRACK_PIXELS),
+            Some(20.0)
+        );
         // Sailing to a light near the centre never counts.
         for _ in 0..10 {
-            assert_eq!(h.choose(&[70.0], centre, limit), Some(70.0));
+            assert_eq!(h.choose(&[70.0], centre, limit, TRACK_PIXELS), Some(70.0));
         }
         // It drifts abeam (moving a pixel a step: the same light).
         let mut position = 24.0;
         let mut chosen = Vec::new();
         for _ in 0..5 {
             position -= 1.0;
-            chosen.push(h.choose(&[position], centre, limit));
+            chosen.push(h.choose(&[position], centre, limit, TRACK_PIXELS));
         }
         assert_eq!(
             chosen,
@@ -404,18 +453,30 @@ mod tests {
         );
         // Other lights appear: the one farthest right (the light left was on the left) is
         // the next mark, even if another is nearer the centre.
-        assert_eq!(h.choose(&[18.0, 60.0, 100.0], centre, limit), Some(100.0));
+        assert_eq!(
+            h.choose(&[18.0, 60.0, 100.0], centre, limit, TRACK_PIXELS),
+            Some(100.0)
+        );
         // Once it is ahead, the usual rule again: the light nearest the centre.
-        assert_eq!(h.choose(&[18.0, 72.0, 80.0], centre, limit), Some(80.0));
-        assert_eq!(h.choose(&[18.0, 74.0, 80.0], centre, limit), Some(74.0));
+        assert_eq!(
+            h.choose(&[18.0, 72.0, 80.0], centre, limit, TRACK_PIXELS),
+            Some(80.0)
+        );
+        assert_eq!(
+            h.choose(&[18.0, 74.0, 80.0], centre, limit, TRACK_PIXELS),
+            Some(74.0)
+        );
         // The ignored light, lost from view, may be followed again.
-        assert_eq!(h.choose(&[], centre, limit), None);
-        assert_eq!(h.choose(&[18.0], centre, limit), Some(18.0));
+        assert_eq!(h.choose(&[], centre, limit, TRACK_PIXELS), None);
+        assert_eq!(h.choose(&[18.0], centre, limit, TRACK_PIXELS), Some(18.0));
         // habituation=0: never left.
         let mut off = Habituation::default();
-        assert_eq!(off.choose(&[20.0, 140.0], centre, 0.0), Some(20.0));
+        assert_eq!(
+            off.choose(&[20.0, 140.0], centre, 0, TRACK_PIXELS),
+            Some(20.0)
+        );
         for _ in 0..100 {
-            assert_eq!(off.choose(&[20.0], centre, 0.0), Some(20.0));
+            assert_eq!(off.choose(&[20.0], centre, 0, TRACK_PIXELS), Some(20.0));
         }
     }
 

@@ -160,7 +160,7 @@ mod tests {
         assert_eq!(resolve("khepera_gripper"), Resolution::Unknown);
         // Every mapped name resolves to a controller regatta builds.
         for (_, builtin, _) in MAPPED {
-            assert!(crate::controllers::build(builtin, &[]).is_ok());
+            assert!(crate::controllers::build(builtin, &[], 0.032).is_ok());
         }
     }
 }

@@ -34,11 +34,14 @@ pub(super) struct Motion<'a> {
     /// Wall time spent in each phase, when profiling.
     pub(super) profile: &'a mut Option<PhaseTimes>,
     pub(super) time_step: f64,
+    /// Steps done before this one: which robots' control periods start here.
+    pub(super) steps: u64,
 }
 
 impl Motion<'_> {
     pub(super) fn move_robots(&mut self, clock: &mut PhaseClock) {
         let dt = self.time_step;
+        let steps = self.steps;
         let rigs = self.rigs;
         let mut speeds = std::mem::take(&mut self.scratch.speeds);
         // Wheel speeds (m/s) of every robot for this step.
@@ -49,8 +52,16 @@ impl Motion<'_> {
                 |command: i32| (command as f64 * to_metres).clamp(-rig.max_speed, rig.max_speed);
             let (mut left, mut right) = (clamp(robot.command.0), clamp(robot.command.1));
             if rig.wheel_speed_noise > 0.0 {
-                left *= 1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian();
-                right *= 1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian();
+                // Drawn with each control command and held for its period, so that the
+                // noise a robot's path integrates is the same at any physics step.
+                if steps % rig.control_steps == 0 {
+                    robot.wheel_noise = (
+                        1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian(),
+                        1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian(),
+                    );
+                }
+                left *= robot.wheel_noise.0;
+                right *= robot.wheel_noise.1;
             }
             (left, right)
         }));

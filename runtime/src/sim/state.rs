@@ -151,6 +151,9 @@ pub struct RobotState {
     pub(super) ir_period: Option<f64>,
     pub(super) ambient_streams: Vec<Stream>,
     pub(super) wheel_stream: Stream,
+    /// Each wheel's speed factor (1 + relative noise), drawn with each control command and
+    /// held for its period: the noise's statistics do not depend on the physics step.
+    pub(super) wheel_noise: (f64, f64),
     pub panoramic: Option<PanoramicState>,
     pub linear_camera: Option<LinearCameraState>,
     pub cameras: Vec<CameraState>,

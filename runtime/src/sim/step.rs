@@ -1,6 +1,8 @@
 //! The simulation and its step loop: fixed steps of `WorldInfo.basicTimeStep`. In each step, sensors that are
-//! due update (each at its own period), controllers read them and set wheel speeds, then
-//! kinematics and collisions run. All randomness comes from the run's seed, one stream per
+//! due update (each at its own period), controllers whose period is due read them and set
+//! wheel speeds (each robot at its own `controlPeriod`, a whole number of steps: the step
+//! sets how finely motion is integrated, never how often a robot decides), then kinematics
+//! and collisions run. All randomness comes from the run's seed, one stream per
 //! robot and per sensor; robots are visited in file order; nothing depends on wall time.
 //! A step is two halves: [`Simulation::sense`] (sensors, side by side where robots are many)
 //! and [`Simulation::act`] (controllers, then motion and collisions, falls and visits).
@@ -122,6 +124,7 @@ impl<'c> Simulation<'c> {
                     .map(|s| Stream::new(seed, index, kind::AMBIENT, s))
                     .collect(),
                 wheel_stream: Stream::new(seed, index, kind::WHEELS, 0),
+                wheel_noise: (1.0, 1.0),
                 panoramic: match &rig.turret {
                     Some(TurretRig::Panoramic(p)) => Some(PanoramicState {
                         model: Panoramic::new_like(
@@ -295,7 +298,13 @@ impl<'c> Simulation<'c> {
     pub fn act(&mut self) {
         let mut clock = PhaseClock::start(self.profile.is_some());
         let rigs = &self.compiled.rig.robots;
+        let steps = self.steps;
         let control = |index: usize, robot: &mut RobotState| {
+            // A controller runs at its own period, on the step grid from time 0; its
+            // commands hold in between.
+            if steps % rigs[index].control_steps != 0 {
+                return;
+            }
             let Some(mut controller) = robot.controller.take() else {
                 return;
             };
@@ -331,6 +340,7 @@ impl<'c> Simulation<'c> {
             scratch: &mut self.scratch,
             profile: &mut self.profile,
             time_step: self.time_step,
+            steps: self.steps,
         }
         .move_robots(&mut clock);
         self.steps += 1;
@@ -344,6 +354,12 @@ impl<'c> Simulation<'c> {
             &mut self.scratch,
         );
         clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));
+    }
+
+    /// Whether robot `robot`'s controller runs in the step about to be taken (its control
+    /// period's grid): where something driving it from outside reads and commands it.
+    pub fn control_due(&self, robot: usize) -> bool {
+        self.steps % self.compiled.rig.robots[robot].control_steps == 0
     }
 
     /// Takes a robot's built-in controller away, so that something outside drives it.
