@@ -70,7 +70,7 @@ struct Rung {
 }
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
-    if args.seeds == 0 || !(args.duration > 0.0) {
+    if args.seeds == 0 || args.duration.is_nan() || args.duration <= 0.0 {
         bail!("--seeds must be at least 1 and --duration positive");
     }
     let own = load(&args, None)?;

@@ -54,7 +54,7 @@ impl Motion<'_> {
             if rig.wheel_speed_noise > 0.0 {
                 // Drawn with each control command and held for its period, so that the
                 // noise a robot's path integrates is the same at any physics step.
-                if steps % rig.control_steps == 0 {
+                if steps.is_multiple_of(rig.control_steps) {
                     robot.wheel_noise = (
                         1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian(),
                         1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian(),

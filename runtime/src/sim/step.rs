@@ -302,7 +302,7 @@ impl<'c> Simulation<'c> {
         let control = |index: usize, robot: &mut RobotState| {
             // A controller runs at its own period, on the step grid from time 0; its
             // commands hold in between.
-            if steps % rigs[index].control_steps != 0 {
+            if !steps.is_multiple_of(rigs[index].control_steps) {
                 return;
             }
             let Some(mut controller) = robot.controller.take() else {
@@ -359,7 +359,7 @@ impl<'c> Simulation<'c> {
     /// Whether robot `robot`'s controller runs in the step about to be taken (its control
     /// period's grid): where something driving it from outside reads and commands it.
     pub fn control_due(&self, robot: usize) -> bool {
-        self.steps % self.compiled.rig.robots[robot].control_steps == 0
+        self.steps.is_multiple_of(self.compiled.rig.robots[robot].control_steps)
     }
 
     /// Takes a robot's built-in controller away, so that something outside drives it.
