@@ -110,11 +110,24 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         bail!("no step of the ladder fits the world's control and sensor periods");
     };
     let finest = *finest;
+    // Poses are compared at times every rung reaches in whole steps: each checkpoint rounded
+    // down to a multiple of the coarsest step (1 s is 31.25 steps of 32 ms).
+    let coarsest = ladder[0].0 / 1000.0;
+    let checkpoints: Vec<f64> = CHECKPOINTS
+        .iter()
+        .map(|&t| ((t.min(args.duration) / coarsest + 1e-9).floor().max(1.0)) * coarsest)
+        .collect();
     let mut traces = Vec::new();
     for (step_ms, experiment) in &ladder {
         let mut per_seed = Vec::new();
         for seed in 1..=args.seeds {
-            per_seed.push(trace(experiment, &periods, seed, args.duration)?);
+            per_seed.push(trace(
+                experiment,
+                &periods,
+                seed,
+                args.duration,
+                &checkpoints,
+            )?);
         }
         traces.push((*step_ms, per_seed));
     }
@@ -151,6 +164,14 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         )?;
     }
     print!("{table}");
+    println!(
+        "(poses compared at {} s: whole steps of every rung)",
+        checkpoints
+            .iter()
+            .map(|t| format!("{t:.3}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
     println!("(errors against the {finest} ms run, seed by seed; IR error in readings, 0…1023)");
     for (k, t) in CHECKPOINTS.iter().enumerate() {
         match order(&rungs, k) {
@@ -250,6 +271,7 @@ fn trace(
     periods: &[f64],
     seed: u64,
     duration: f64,
+    checkpoints: &[f64],
 ) -> anyhow::Result<Trace> {
     let mut compiled = experiment.compiled.clone();
     let step = compiled.settings.time_step;
@@ -263,9 +285,9 @@ fn trace(
     let fitness = Fitness::parse("regatta")?;
     let mut observer = Observer::new(&simulation, &fitness);
     let steps = (duration / step).round().max(1.0) as u64;
-    let at: Vec<u64> = CHECKPOINTS
+    let at: Vec<u64> = checkpoints
         .iter()
-        .map(|&t| ((t.min(duration) / step).round() as u64).clamp(1, steps))
+        .map(|&t| ((t / step).round() as u64).clamp(1, steps))
         .collect();
     let control = compiled.rig.robots[0].control_steps;
     let first_second = (1.0 / step).round() as u64;

@@ -204,7 +204,7 @@ pub(super) fn argument(
         .parse::<f64>()
         .ok()
         .filter(|v| v.is_finite())
-        .filter(|v| parameter.kind == ParameterKind::Number || v.fract() == 0.0)
+        .filter(|v| parameter.kind != ParameterKind::Integer || v.fract() == 0.0)
         .filter(|v| parameter.kind != ParameterKind::Seconds || *v >= 0.0)
         .ok_or_else(|| ControllerError::NotANumber {
             key: key.to_owned(),

@@ -359,7 +359,8 @@ impl<'c> Simulation<'c> {
     /// Whether robot `robot`'s controller runs in the step about to be taken (its control
     /// period's grid): where something driving it from outside reads and commands it.
     pub fn control_due(&self, robot: usize) -> bool {
-        self.steps.is_multiple_of(self.compiled.rig.robots[robot].control_steps)
+        self.steps
+            .is_multiple_of(self.compiled.rig.robots[robot].control_steps)
     }
 
     /// Takes a robot's built-in controller away, so that something outside drives it.
