@@ -50,6 +50,7 @@ pub struct Kymograph {
 }
 
 const COLOR_BAR: u32 = 250;
+const TITLE_HEIGHT: u32 = 60;
 /// The column right of the picture for marks: ticks and up to two columns of labels.
 const MARK_COLUMN: u32 = 100;
 
@@ -156,7 +157,26 @@ impl Figure for Kymograph {
         DB::ErrorType: 'static,
     {
         let (width, _) = self.size;
-        let (main, bar) = root.split_horizontally(width - COLOR_BAR);
+        // The title across the whole figure, above the marks' column and the colour bar, in
+        // the largest size that fits (a window and the rows' caption make it long).
+        let (head, body) = root.split_vertically(TITLE_HEIGHT);
+        let mut size = style::TITLE;
+        while size > style::TICK - 4
+            && head
+                .estimate_text_size(&self.title, &("sans-serif", size).into_text_style(&head))
+                .is_ok_and(|(w, _)| w + 48 > width)
+        {
+            size -= 2;
+        }
+        head.draw(&Text::new(
+            self.title.clone(),
+            (width as i32 / 2, TITLE_HEIGHT as i32 / 2 + 6),
+            ("sans-serif", size)
+                .into_font()
+                .color(&style::INK)
+                .pos(Pos::new(HPos::Center, VPos::Center)),
+        ))?;
+        let (main, bar) = body.split_horizontally(width - COLOR_BAR);
         let (t0, t1) = if self.time.1 > self.time.0 {
             self.time
         } else {
@@ -166,8 +186,8 @@ impl Figure for Kymograph {
         // y is −t (so that time runs downwards); the tick labels undo both signs.
         let (a0, a1) = (-self.azimuth.0, -self.azimuth.1);
         let mut context = ChartBuilder::on(&main)
-            .caption(&self.title, ("sans-serif", style::TITLE).into_font())
             .margin(24)
+            .margin_top(40)
             .margin_right(MARK_COLUMN)
             .x_label_area_size(90)
             .y_label_area_size(120)
@@ -263,15 +283,15 @@ impl Figure for Kymograph {
                 "visits".to_owned(),
                 (
                     xs.end + 8 - main.get_base_pixel().0,
-                    ys.start - 20 - main.get_base_pixel().1,
+                    ys.start - 12 - main.get_base_pixel().1,
                 ),
                 font.clone().pos(Pos::new(HPos::Left, VPos::Bottom)),
             ))?;
         }
         self.draw_color_bar(
             &bar,
-            ys.start - root.get_base_pixel().1,
-            ys.end - root.get_base_pixel().1,
+            ys.start - bar.get_base_pixel().1,
+            ys.end - bar.get_base_pixel().1,
         )
     }
 }

@@ -267,13 +267,16 @@ impl Figure for TimeSeries {
             let mut context = ChartBuilder::on(&plot)
                 .margin_left(SIDE_MARGIN)
                 .margin_right(SIDE_MARGIN)
-                .margin_top(10)
+                .margin_top(12)
+                // A gap under each panel, so that its lowest tick label and the next panel's
+                // highest never touch.
+                .margin_bottom(if last { 0 } else { 14 })
                 .x_label_area_size(if last { X_AXIS_HEIGHT } else { 0 })
                 .y_label_area_size(Y_AXIS_WIDTH)
                 .build_cartesian_2d(t0..t1, low..high)?;
             let mut mesh = context.configure_mesh();
             // Few tick labels on a short panel, so that they never touch.
-            let y_ticks = ((panel_height as usize) / 60).clamp(2, 5);
+            let y_ticks = ((panel_height as usize) / 50).clamp(3, 5);
             house_axes(&mut mesh)
                 .y_desc(&panel.label)
                 .axis_desc_style(
