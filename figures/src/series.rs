@@ -402,7 +402,7 @@ pub fn summarise(
     step: f64,
     steps: bool,
 ) -> Vec<Summary> {
-    if points.is_empty() || !(step > 0.0) {
+    if points.is_empty() || step.is_nan() || step <= 0.0 {
         return Vec::new();
     }
     let first = (t0 / step).floor();

@@ -79,7 +79,10 @@ pub struct PlotArgs {
         default_value_t
     )]
     color_by: ColorBy,
-    /// Also draw each robot's time series: IR, ambient, wheel speeds, visits and contacts.
+    /// Also draw each robot's time series: IR and ambient light per mirror pair of sensors,
+    /// each wheel's encoders and command, visits and contacts. A window with more samples than
+    /// the plot has pixels across (a long run) is summarised per interval: the mean as a line,
+    /// the minimum to maximum shaded.
     #[arg(long)]
     series: bool,
     /// Kymograph rows at most (longer runs are averaged into this many).
