@@ -50,7 +50,9 @@ pub struct Kymograph {
 }
 
 const COLOR_BAR: u32 = 250;
-const MARK_COLUMN: u32 = 70;
+const TITLE_HEIGHT: u32 = 60;
+/// The column right of the picture for marks: ticks and up to two columns of labels.
+const MARK_COLUMN: u32 = 100;
 
 impl Kymograph {
     pub fn new(title: impl Into<String>, rows: Vec<Vec<f64>>, time: (f64, f64)) -> Kymograph {
@@ -155,7 +157,26 @@ impl Figure for Kymograph {
         DB::ErrorType: 'static,
     {
         let (width, _) = self.size;
-        let (main, bar) = root.split_horizontally(width - COLOR_BAR);
+        // The title across the whole figure, above the marks' column and the colour bar, in
+        // the largest size that fits (a window and the rows' caption make it long).
+        let (head, body) = root.split_vertically(TITLE_HEIGHT);
+        let mut size = style::TITLE;
+        while size > style::TICK - 4
+            && head
+                .estimate_text_size(&self.title, &("sans-serif", size).into_text_style(&head))
+                .is_ok_and(|(w, _)| w + 48 > width)
+        {
+            size -= 2;
+        }
+        head.draw(&Text::new(
+            self.title.clone(),
+            (width as i32 / 2, TITLE_HEIGHT as i32 / 2 + 6),
+            ("sans-serif", size)
+                .into_font()
+                .color(&style::INK)
+                .pos(Pos::new(HPos::Center, VPos::Center)),
+        ))?;
+        let (main, bar) = body.split_horizontally(width - COLOR_BAR);
         let (t0, t1) = if self.time.1 > self.time.0 {
             self.time
         } else {
@@ -165,8 +186,8 @@ impl Figure for Kymograph {
         // y is −t (so that time runs downwards); the tick labels undo both signs.
         let (a0, a1) = (-self.azimuth.0, -self.azimuth.1);
         let mut context = ChartBuilder::on(&main)
-            .caption(&self.title, ("sans-serif", style::TITLE).into_font())
             .margin(24)
+            .margin_top(40)
             .margin_right(MARK_COLUMN)
             .x_label_area_size(90)
             .y_label_area_size(120)
@@ -188,53 +209,71 @@ impl Figure for Kymograph {
             .x_labels(9)
             .y_labels(10)
             .draw()?;
-        // Marks: a tick inward from the right edge at each time (a line across would hide the
-        // picture), its label in the column to the right; labels closer than a line of text to
-        // the previous one are left out (the ticks stay).
-        // Each distinct label gets its own colour, so that ticks read without their labels;
-        // labels shrink (to 14 px) before any is left out.
+        // Marks: a tick in the column to the right of the picture at each time (over the
+        // picture it would hide the data at the last azimuths), and its label beside it. Every
+        // tick is labelled: labels closer than a line of text to the one before go to a second
+        // column, and shrink (to 14 px) before two would touch in both.
+        // Each distinct label gets its own colour, so that ticks read without their labels.
         let mut kinds: Vec<&str> = Vec::new();
         for mark in &self.marks {
             if !kinds.contains(&mark.label.as_str()) {
                 kinds.push(&mark.label);
             }
         }
-        let times: Vec<i32> = self
+        let shown: Vec<&Mark> = self
             .marks
+            .iter()
+            .filter(|m| m.t >= t0 && m.t <= t1)
+            .collect();
+        let times: Vec<i32> = shown
             .iter()
             .map(|m| context.backend_coord(&(0.0, -m.t)).1)
             .collect();
+        // Two columns: a label's neighbour in its own column is two marks away.
         let gap = times
-            .windows(2)
-            .map(|w| (w[1] - w[0]).abs())
+            .windows(3)
+            .map(|w| (w[2] - w[0]).abs())
             .min()
             .unwrap_or(i32::MAX);
         let size = (gap as f64 * 0.95).clamp(14.0, (style::TICK - 4) as f64) as u32;
-        let mut last_label: Option<i32> = None;
-        for mark in &self.marks {
+        let widest = shown
+            .iter()
+            .map(|m| m.label.chars().count())
+            .max()
+            .unwrap_or(1) as i32;
+        let column = widest * size as i32 * 2 / 3 + 6;
+        let (tick_from, tick_to) = (xs.end + 4, xs.end + 26);
+        let mut last_label: [Option<i32>; 2] = [None, None];
+        let base = main.get_base_pixel();
+        for (mark, &y) in shown.iter().zip(&times) {
             let kind = kinds.iter().position(|k| *k == mark.label).unwrap_or(0);
             let ink = style::color(kind);
-            let font = ("sans-serif", size).into_font().color(&ink);
-            if mark.t < t0 || mark.t > t1 {
-                continue;
-            }
-            let inward = 0.04 * (a0 - a1).abs();
-            context.draw_series(std::iter::once(PathElement::new(
-                vec![(a0.max(a1) - inward, -mark.t), (a0.max(a1), -mark.t)],
+            main.draw(&PathElement::new(
+                vec![
+                    (tick_from - base.0, y - base.1),
+                    (tick_to - base.0, y - base.1),
+                ],
                 ink.stroke_width(3),
-            )))?;
-            let (_, y) = context.backend_coord(&(a0.max(a1), -mark.t));
-            if last_label.is_none_or(|last| y - last >= size as i32) {
-                main.draw(&Text::new(
-                    mark.label.clone(),
-                    (
-                        xs.end + 10 - main.get_base_pixel().0,
-                        y - main.get_base_pixel().1,
-                    ),
-                    font.clone().pos(Pos::new(HPos::Left, VPos::Center)),
-                ))?;
-                last_label = Some(y);
-            }
+            ))?;
+            let free = |c: usize| last_label[c].is_none_or(|last| y - last >= size as i32);
+            let c = if free(0) {
+                0
+            } else if free(1) {
+                1
+            } else if last_label[0] <= last_label[1] {
+                0
+            } else {
+                1
+            };
+            main.draw(&Text::new(
+                mark.label.clone(),
+                (tick_to + 6 + c as i32 * column - base.0, y - base.1),
+                ("sans-serif", size)
+                    .into_font()
+                    .color(&ink)
+                    .pos(Pos::new(HPos::Left, VPos::Center)),
+            ))?;
+            last_label[c] = Some(y);
         }
         if !self.marks.is_empty() {
             let font = ("sans-serif", style::TICK - 4)
@@ -244,15 +283,15 @@ impl Figure for Kymograph {
                 "visits".to_owned(),
                 (
                     xs.end + 8 - main.get_base_pixel().0,
-                    ys.start - 20 - main.get_base_pixel().1,
+                    ys.start - 12 - main.get_base_pixel().1,
                 ),
                 font.clone().pos(Pos::new(HPos::Left, VPos::Bottom)),
             ))?;
         }
         self.draw_color_bar(
             &bar,
-            ys.start - root.get_base_pixel().1,
-            ys.end - root.get_base_pixel().1,
+            ys.start - bar.get_base_pixel().1,
+            ys.end - bar.get_base_pixel().1,
         )
     }
 }

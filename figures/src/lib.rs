@@ -8,7 +8,8 @@
 //! - [`Chart`]: lines, markers and bands on linear or log axes (benchmarks, fitness curves).
 //! - [`TopView`]: the arena from above in metres with obstacles, buoys, trajectories, contacts.
 //! - [`Kymograph`]: a retina's values over azimuth and time, with a colour bar.
-//! - [`TimeSeries`]: stacked panels sharing one time axis.
+//! - [`TimeSeries`]: stacked panels sharing one time window, long traces summarised per
+//!   interval.
 //!
 //! Text is drawn with DejaVu Sans, embedded from the `dejavu` crate (the Bitstream Vera
 //! licence allows embedding and redistribution; it is matplotlib's default face): a fresh
@@ -29,7 +30,7 @@ use plotters::prelude::*;
 pub use chart::{Axis, Chart, Corner, Series, SeriesStyle};
 pub use figure::{DrawResult, Figure, Rasters};
 pub use kymograph::{average_rows, ColorScale, Kymograph, Mark};
-pub use series::{envelope, Panel, TimeSeries, Trace};
+pub use series::{summarise, Panel, Summary, TimeSeries, Trace};
 pub use style::number;
 pub use top_view::{Buoy, ContactMark, Obstacle, Outline, TopView, Track};
 

@@ -241,23 +241,6 @@ impl Figure for TopView {
                 ring,
                 style::INK.stroke_width(2),
             )))?;
-            // The number sits outside the buoy, up and to the right, on a white disc.
-            let offset = buoy.radius + 0.02 * (self.extent().1 - self.extent().0).max(0.1);
-            let label_at = page((buoy.center.0 + offset, buoy.center.1 - offset));
-            context.draw_series(std::iter::once(Circle::new(
-                label_at,
-                style::LABEL as i32 * 2 / 3,
-                WHITE.mix(0.85).filled(),
-            )))?;
-            context.draw_series(std::iter::once(Text::new(
-                buoy.label.clone(),
-                label_at,
-                ("sans-serif", style::LABEL)
-                    .into_font()
-                    .style(FontStyle::Bold)
-                    .color(&style::INK)
-                    .pos(Pos::new(HPos::Center, VPos::Center)),
-            )))?;
         }
         // Trajectories.
         let (t0, t1) = self.time_span();
@@ -341,6 +324,33 @@ impl Figure for TopView {
                 page(contact.at),
                 10,
                 color.stroke_width(4),
+            )))?;
+        }
+        // Buoy numbers last, so that no trajectory covers them: outside the buoy, up and to
+        // the right, each on an opaque white disc ringed in the buoy's colour.
+        let offset = 0.02 * (x1 - x0).max(0.1);
+        for buoy in &self.buoys {
+            let offset = buoy.radius + offset;
+            let label_at = page((buoy.center.0 + offset, buoy.center.1 - offset));
+            let radius = style::LABEL as i32 * 2 / 3 + 2;
+            context.draw_series(std::iter::once(Circle::new(
+                label_at,
+                radius,
+                WHITE.filled(),
+            )))?;
+            context.draw_series(std::iter::once(Circle::new(
+                label_at,
+                radius,
+                buoy_color.stroke_width(2),
+            )))?;
+            context.draw_series(std::iter::once(Text::new(
+                buoy.label.clone(),
+                label_at,
+                ("sans-serif", style::LABEL)
+                    .into_font()
+                    .style(FontStyle::Bold)
+                    .color(&style::INK)
+                    .pos(Pos::new(HPos::Center, VPos::Center)),
             )))?;
         }
         self.draw_legend(&side, (t0, t1))

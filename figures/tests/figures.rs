@@ -144,23 +144,33 @@ fn kymograph() -> Kymograph {
         })
         .collect();
     let mut k = Kymograph::new(
-        "khepera: odd filter, λ = 0.3",
+        "khepera: odd filter, λ = 0.3 px",
         average_rows(&frames, 600, (0.0, 60.0)),
         (0.0, 60.0),
     );
     k.value_label = "odd filter, digital (LSB)".into();
     k.value_range = (0.0, 63.0);
     k.scale = ColorScale::Diverging { center: 31.5 };
+    // Visits every 9 s, and two close together (0.4 s apart): every one gets its label.
     k.marks = (0..6)
         .map(|i| Mark {
             t: 5.0 + 9.0 * i as f64,
             label: (i % 3 + 1).to_string(),
         })
+        .chain([(23.4, "1"), (23.8, "2")].map(|(t, label)| Mark {
+            t,
+            label: label.to_string(),
+        }))
         .collect();
+    k.marks.sort_by(|a, b| a.t.total_cmp(&b.t));
     k
 }
 
+/// Small multiples as `regatta plot --series` draws them, in a window (10 to 50 s) of a
+/// minute's data: long enough to be summarised per interval.
 fn time_series() -> TimeSeries {
+    // A fixed, noise-like wiggle: the same numbers on every machine.
+    let wiggle = |t: f64| (t * 7919.0).sin() * (t * 104.729).cos();
     let trace = |name: &str, f: &dyn Fn(f64) -> f64| {
         Trace::new(
             name,
@@ -169,34 +179,59 @@ fn time_series() -> TimeSeries {
                 .collect(),
         )
     };
-    TimeSeries::new("khepera: sensors and wheels", (0.0, 60.0))
+    let pair = |place: &str, phase: f64| {
+        Panel::new(
+            place,
+            vec![
+                trace(&format!("{place} left"), &move |t| {
+                    (900.0 * (-(((t + phase) % 12.0) - 6.0).powi(2)).exp() + 30.0 * wiggle(t))
+                        .max(0.0)
+                }),
+                trace(&format!("{place} right"), &move |t| {
+                    (700.0 * (-(((t + phase) % 12.0) - 8.0).powi(2)).exp() + 30.0 * wiggle(t + 1.0))
+                        .max(0.0)
+                }),
+            ],
+        )
+        .range(0.0, 1023.0)
+        .height(130)
+    };
+    let command = |t: f64| if (t % 12.0) < 1.0 { -10.0 } else { 10.0 };
+    TimeSeries::new("khepera: sensors and wheels", (10.0, 50.0))
+        .with(pair("front", 0.0).heading("IR proximity (0–1023)"))
+        .with(pair("sides", 3.0))
         .with(
             Panel::new(
-                "IR proximity (0–1023)",
-                (0..8)
-                    .map(|s| {
-                        trace(&format!("IR {s}"), &move |t| {
-                            500.0 + 400.0 * (t * 0.3 + s as f64).sin()
-                        })
+                "left",
+                vec![
+                    trace("left, encoders", &move |t| {
+                        command(t) * (1.0 + 0.1 * wiggle(t))
                     })
-                    .collect(),
+                    .width(4),
+                    trace("left, command", &command)
+                        .steps()
+                        .color(regatta_figures::style::INK)
+                        .width(1)
+                        .without_band(),
+                ],
             )
-            .range(0.0, 1023.0),
+            .heading("wheel speed (pulses/10 ms)")
+            .height(170),
         )
-        .with(Panel::new(
-            "wheel speed (pulses/10 ms)",
-            vec![
-                trace("left", &|t| 8.0 * (t * 0.1).cos()),
-                trace("right", &|t| 8.0 * (t * 0.1).sin()),
-            ],
-        ))
-        .with(Panel::new(
-            "cumulative count",
-            vec![
-                trace("visits", &|t| (t / 7.0).floor()).steps(),
-                trace("contacts", &|t| (t / 25.0).floor()).steps(),
-            ],
-        ))
+        .with(
+            Panel::new(
+                "cumulative count",
+                vec![
+                    Trace::new(
+                        "visits",
+                        (0..9).map(|k| (k as f64 * 7.0, k as f64)).collect(),
+                    )
+                    .steps(),
+                    Trace::new("contacts", vec![(0.0, 0.0), (25.0, 1.0), (50.0, 2.0)]).steps(),
+                ],
+            )
+            .height(150),
+        )
 }
 
 /// Draws a figure: its PNG bytes and its SVG text.
@@ -249,7 +284,7 @@ fn figures() -> Vec<(&'static str, Draw, Vec<&'static str>)> {
                 "azimuth (°, left of heading > 0)",
                 "simulated time (s)",
                 "odd filter, digital (LSB)",
-                "khepera: odd filter, λ = 0.3",
+                "khepera: odd filter, λ = 0.3 px",
             ],
         ),
         (
@@ -259,6 +294,9 @@ fn figures() -> Vec<(&'static str, Draw, Vec<&'static str>)> {
                 "simulated time (s)",
                 "IR proximity (0–1023)",
                 "wheel speed (pulses/10 ms)",
+                "front left",
+                "left, command",
+                "each trace per 0.1 s: the line is its mean, the shading its minimum to maximum",
             ],
         ),
     ]
@@ -379,6 +417,41 @@ fn figures_match_their_golden_images() {
         "{}\n(REGATTA_BLESS=1 rewrites the golden images)",
         failures.join("\n")
     );
+}
+
+#[test]
+fn a_time_series_shows_its_window_only() {
+    let texts = svg_texts(&render_svg(&time_series()).unwrap());
+    // The time axis runs from 10 to 50 s: its ticks say so, and nothing outside.
+    for tick in ["10", "20", "30", "40", "50"] {
+        assert!(
+            texts.iter().any(|t| t == tick),
+            "no tick {tick} in {texts:?}"
+        );
+    }
+    assert!(!texts.iter().any(|t| t == "60"), "{texts:?}");
+    // Few points: drawn point by point, and the note says so.
+    let short = TimeSeries::new("short", (0.0, 10.0)).with(Panel::new(
+        "value",
+        vec![Trace::new(
+            "a",
+            (0..100).map(|i| (i as f64 * 0.1, 1.0)).collect(),
+        )],
+    ));
+    assert_eq!(short.summary_interval(), None);
+    let texts = svg_texts(&render_svg(&short).unwrap());
+    assert!(texts.iter().any(|t| t == "every sample drawn"), "{texts:?}");
+}
+
+#[test]
+fn every_kymograph_mark_is_labelled_outside_the_picture() {
+    let figure = kymograph();
+    let svg = render_svg(&figure).unwrap();
+    let labels = svg_texts(&svg)
+        .into_iter()
+        .filter(|t| ["1", "2", "3"].contains(&t.as_str()))
+        .count();
+    assert_eq!(labels, figure.marks.len(), "{svg}");
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! `regatta plot`: a log's figures, drawn by `regatta-figures`: the top view of the run, a
 //! kymograph per robot and retina filter, and with `--series` each robot's sensors, wheels,
-//! visits and contacts over time. PNG by default, SVG with `--format svg`.
+//! visits and contacts over time. PNG by default, SVG with `--format svg`. `--from`/`--to`
+//! narrow every figure to a window of simulated time.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -78,12 +79,23 @@ pub struct PlotArgs {
         default_value_t
     )]
     color_by: ColorBy,
-    /// Also draw each robot's time series: IR, ambient, wheel speeds, visits and contacts.
+    /// Also draw each robot's time series: IR and ambient light per mirror pair of sensors,
+    /// each wheel's encoders and command, visits and contacts. A window with more samples than
+    /// the plot has pixels across (a long run) is summarised per interval: the mean as a line,
+    /// the minimum to maximum shaded.
     #[arg(long)]
     series: bool,
     /// Kymograph rows at most (longer runs are averaged into this many).
     #[arg(long, default_value_t = 600)]
     rows: usize,
+    /// Start of the time window every figure shows (simulated seconds; default: the log's
+    /// start). The top view draws the trajectory within it, the kymograph its rows, the series
+    /// its time axis.
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    from: Option<f64>,
+    /// End of the time window (simulated seconds; default: the log's end).
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    to: Option<f64>,
     #[command(flatten)]
     world: crate::world::LogWorldOptions,
 }
@@ -112,8 +124,6 @@ pub fn plot(args: PlotArgs) -> anyhow::Result<Outcome> {
     if args.rows == 0 {
         bail!("--rows must be at least 1");
     }
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut robots = decode(&contents, &compiled)?;
     // Visits: from the log's visit channels; a log without them (older, or written without
     // `visits`) gets them found as the simulation finds them, entering a visit disc.
@@ -144,6 +154,25 @@ pub fn plot(args: PlotArgs) -> anyhow::Result<Outcome> {
         .and_then(|t| t.parse::<f64>().ok())
         .or_else(|| contents.messages.last().map(|m| m.1 as f64 / 1e9))
         .unwrap_or(0.0);
+    let window = window(args.from, args.to, end)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let whole = window == (0.0, end);
+    // Said in titles: the window, and of how long a run when it is not the whole.
+    let span = |what: &str| {
+        let seconds = |t: f64| regatta_figures::number((t * 1000.0).round() / 1000.0);
+        if whole {
+            format!("{} s {what}", seconds(end))
+        } else {
+            format!(
+                "{}–{} s of {} s {what}",
+                seconds(window.0),
+                seconds(window.1),
+                seconds(end)
+            )
+        }
+    };
+    let within = |t: f64| t >= window.0 && t <= window.1;
     let tokens = robot_tokens(compiled.rig.robots.iter().map(|r| r.name.as_str()));
     let world = Path::new(&contents.run.world_name)
         .file_name()
@@ -153,9 +182,9 @@ pub fn plot(args: PlotArgs) -> anyhow::Result<Outcome> {
     // The top view.
     let slab = Slab::new(&compiled.graph, &compiled.rig);
     let mut view = TopView::new(format!(
-        "{world}, seed {}: {} s simulated",
+        "{world}, seed {}: {}",
         contents.run.seed,
-        regatta_figures::number((end * 1000.0).round() / 1000.0)
+        span("simulated")
     ));
     view.obstacles = slab
         .obstacles
@@ -199,15 +228,19 @@ pub fn plot(args: PlotArgs) -> anyhow::Result<Outcome> {
     for (index, (data, rig)) in robots.iter().zip(&compiled.rig.robots).enumerate() {
         view.tracks.push(Track {
             name: rig.name.clone(),
-            poses: data.poses.clone(),
+            poses: data.poses.iter().copied().filter(|p| within(p.0)).collect(),
             body_radius: rig.body_radius,
         });
-        view.contacts
-            .extend(data.contacts.iter().map(|&(t, x, z)| ContactMark {
-                robot: index,
-                t,
-                at: (x, z),
-            }));
+        view.contacts.extend(
+            data.contacts
+                .iter()
+                .filter(|c| within(c.0))
+                .map(|&(t, x, z)| ContactMark {
+                    robot: index,
+                    t,
+                    at: (x, z),
+                }),
+        );
     }
     view.color_by_time = args.color_by == ColorBy::Time;
     if view.tracks.iter().all(|t| t.poses.is_empty()) && view.obstacles.is_empty() {
@@ -230,27 +263,35 @@ pub fn plot(args: PlotArgs) -> anyhow::Result<Outcome> {
             .collect();
         let only_one = data.retina.len() == 1;
         for (output, frames) in &data.retina {
-            let rows = average_rows(frames, args.rows, (0.0, end));
+            let first = frames.partition_point(|f| f.0 < window.0);
+            let last = frames.partition_point(|f| f.0 <= window.1);
+            let frames = &frames[first..last.max(first)];
+            let rows = average_rows(frames, args.rows, window);
             let per_row = frames.len() as f64 / rows.len().max(1) as f64;
             let kind = FilterKind::ALL.iter().find(|k| k.name() == output).copied();
             let parameters = match kind {
+                // λ is a length along the retina, in photodiodes (pixels).
                 Some(FilterKind::Lowpass | FilterKind::Highpass | FilterKind::Odd) => {
-                    format!(", λ = {}", turret.lambda)
+                    format!(", λ = {} px", turret.lambda)
                 }
                 Some(FilterKind::Bandpass) => {
-                    format!(", λ = {} and {}", turret.bandpass.0, turret.bandpass.1)
+                    format!(", λ = {} and {} px", turret.bandpass.0, turret.bandpass.1)
                 }
                 _ => String::new(),
             };
-            let averaged = if per_row > 1.0 {
-                format!(" (rows: means of {per_row:.1} frames)")
+            // Bins of equal time hold whole frames: a whole number when they all hold the
+            // same, else about the mean.
+            let averaged = if per_row > 1.0 && per_row.fract() == 0.0 {
+                format!(" (rows: means of {per_row} frames)")
+            } else if per_row > 1.0 {
+                format!(" (rows: means of about {} frames)", per_row.round())
             } else {
                 String::new()
             };
             let mut figure = Kymograph::new(
                 format!("{}: {output} filter{parameters}{averaged}", rig.name),
                 rows,
-                (0.0, end),
+                window,
             );
             let roi = turret.roi;
             let (first, last) = if kind.is_some() {
@@ -308,27 +349,86 @@ pub fn plot(args: PlotArgs) -> anyhow::Result<Outcome> {
     // Time series.
     if args.series {
         for ((data, rig), token) in robots.iter().zip(&compiled.rig.robots).zip(&tokens) {
-            let figure = series(rig, data, end, contents.run.seed);
+            let title = format!(
+                "{}: sensors and wheels (seed {}), {}",
+                rig.name,
+                contents.run.seed,
+                span("simulated")
+            );
+            let figure = series(data, title, window, end);
             save(&figure, &args.out, &format!("{token}-series"), args.format)?;
         }
     }
     Ok(Outcome::Clean)
 }
 
-/// A robot's time series: IR, ambient, wheel speeds, cumulative visits and contacts.
-fn series(
-    rig: &regatta_runtime::compile::rig::RobotRig,
-    data: &RobotData,
-    end: f64,
-    seed: u64,
-) -> TimeSeries {
-    let eight = |readings: &[(f64, [u16; 8])], name: &str| -> Vec<Trace> {
-        (0..8)
-            .map(|s| {
-                Trace::new(
-                    format!("{name} {s}"),
-                    readings.iter().map(|(t, v)| (*t, v[s] as f64)).collect(),
+/// The time window `--from`/`--to` ask for, checked against the log's span `0..=end`.
+fn window(from: Option<f64>, to: Option<f64>, end: f64) -> anyhow::Result<(f64, f64)> {
+    let covers = format!(
+        "the log covers 0 to {} s of simulated time",
+        regatta_figures::number((end * 1000.0).round() / 1000.0)
+    );
+    for (flag, value) in [("--from", from), ("--to", to)] {
+        let Some(value) = value else { continue };
+        if !value.is_finite() {
+            bail!("{flag} must be a finite number of seconds, found {value}");
+        }
+        // A thousandth of a millisecond of slack: the end is read back from printed text.
+        if value < 0.0 || value > end + 1e-6 {
+            bail!("{flag} {value} s is outside the log: {covers}");
+        }
+    }
+    let window = (from.unwrap_or(0.0), to.unwrap_or(end).min(end));
+    if window.0 >= window.1 {
+        bail!(
+            "the window is empty: --from {} s must come before --to {} s ({covers})",
+            window.0,
+            window.1
+        );
+    }
+    Ok(window)
+}
+
+/// The Khepera's IR and ambient sensors in left/right mirror pairs, front to back: (left,
+/// right, where). Sensor 0 looks left, 2 and 3 ahead, 5 right, 6 and 7 back.
+const PAIRS: [(usize, usize, &str); 4] = [
+    (2, 3, "front"),
+    (1, 4, "diagonal"),
+    (0, 5, "sides"),
+    (7, 6, "back"),
+];
+
+/// A robot's time series as small multiples: one panel per mirror pair of IR sensors and of
+/// ambient sensors (left in blue, right in vermillion), one per wheel (its encoders' speed in
+/// colour, the command over it in black), and the cumulative visits and contacts. Long windows
+/// are summarised per interval by the figure itself.
+fn series(data: &RobotData, title: String, window: (f64, f64), end: f64) -> TimeSeries {
+    let palette = regatta_figures::style::color;
+    let ink = regatta_figures::style::INK;
+    let sensor = |readings: &[(f64, [u16; 8])], s: usize| -> Vec<(f64, f64)> {
+        readings.iter().map(|(t, v)| (*t, v[s] as f64)).collect()
+    };
+    let pairs = |readings: &[(f64, [u16; 8])], name: &str, heading: &str| -> Vec<Panel> {
+        PAIRS
+            .iter()
+            .enumerate()
+            .map(|(k, &(left, right, place))| {
+                let panel = Panel::new(
+                    place,
+                    vec![
+                        Trace::new(format!("{name} {left}, left"), sensor(readings, left))
+                            .color(palette(0)),
+                        Trace::new(format!("{name} {right}, right"), sensor(readings, right))
+                            .color(palette(1)),
+                    ],
                 )
+                .range(0.0, 1023.0)
+                .height(125);
+                if k == 0 {
+                    panel.heading(heading)
+                } else {
+                    panel
+                }
             })
             .collect()
     };
@@ -353,24 +453,29 @@ fn series(
             .map(|w| (w.0, if side == 0 { w.1 } else { w.2 } as f64))
             .collect()
     };
+    // The encoders first and wide, the command last and thin: both stay visible where they
+    // agree, which is almost everywhere.
+    let wheel = |side: usize, name: &str| -> Panel {
+        Panel::new(
+            name,
+            vec![
+                Trace::new(format!("{name}, encoders"), measured(side))
+                    .color(palette(side))
+                    .width(4),
+                Trace::new(format!("{name}, command"), command(side))
+                    .steps()
+                    .color(ink)
+                    .width(1)
+                    .without_band(),
+            ],
+        )
+        .height(170)
+    };
     let counted = |times: Vec<f64>| -> Vec<(f64, f64)> {
         let mut points = vec![(0.0, 0.0)];
         points.extend(times.iter().enumerate().map(|(k, &t)| (t, (k + 1) as f64)));
         points
     };
-    let palette = regatta_figures::style::color;
-    let mut wheel_traces = vec![
-        Trace::new("left, command", command(0)).steps(),
-        Trace::new("right, command", command(1)).steps(),
-        Trace::new("left, encoders", measured(0)),
-        Trace::new("right, encoders", measured(1)),
-    ];
-    for (k, trace) in wheel_traces.iter_mut().enumerate() {
-        trace.color = Some(palette(k % 2));
-        if k >= 2 {
-            trace.color = Some(palette(k % 2 + 4));
-        }
-    }
     let mut cumulative = vec![
         Trace::new(
             "buoy visits",
@@ -386,14 +491,28 @@ fn series(
     if data.contact_counts.is_empty() && data.contacts.is_empty() {
         cumulative[1].points.push((end, 0.0));
     }
-    TimeSeries::new(
-        format!("{}: sensors and wheels (seed {seed})", rig.name),
-        (0.0, end),
+    let mut figure = TimeSeries::new(title, window);
+    for panel in pairs(
+        &data.proximity,
+        "IR",
+        "IR proximity (0–1023, higher is nearer), sensor pairs",
     )
-    .with(Panel::new("IR proximity (0–1023)", eight(&data.proximity, "IR")).range(0.0, 1023.0))
-    .with(Panel::new("ambient light (0–1023)", eight(&data.ambient, "ambient")).range(0.0, 1023.0))
-    .with(Panel::new("wheel speed (pulses / 10 ms)", wheel_traces))
-    .with(Panel::new("cumulative count", cumulative))
+    .into_iter()
+    .chain(pairs(&data.ambient, "ambient", "ambient light (0–1023)"))
+    {
+        figure = figure.with(panel);
+    }
+    figure
+        .with(
+            wheel(0, "left")
+                .heading("wheel speed (pulses / 10 ms): encoders, and the command in black"),
+        )
+        .with(wheel(1, "right"))
+        .with(
+            Panel::new("count", cumulative)
+                .heading("buoy visits and contacts since the run began")
+                .height(150),
+        )
 }
 
 /// Every robot's data, in the rig's order. Topics are `/{token}/{kind}`, where the token is

@@ -85,14 +85,14 @@ fn plot_writes_png_and_svg_figures_with_labelled_axes() {
                 "azimuth (°, left of heading &gt; 0)",
                 "simulated time (s)",
                 "odd output, digital (LSB)",
-                "λ = 5",
+                "λ = 5 px",
             ],
         ),
         (
             "khepera-series.svg",
             vec![
-                "IR proximity (0–1023)",
-                "wheel speed (pulses / 10 ms)",
+                "IR proximity (0–1023, higher is nearer), sensor pairs",
+                "wheel speed (pulses / 10 ms): encoders, and the command in black",
                 "simulated time (s)",
             ],
         ),
@@ -111,6 +111,138 @@ fn plot_writes_png_and_svg_figures_with_labelled_axes() {
         .output()
         .unwrap();
     assert_eq!(bad.status.code(), Some(2));
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// The texts of an SVG file's `<text>` elements (unescaped enough for titles and numbers).
+fn svg_texts(path: &Path) -> Vec<String> {
+    let svg = std::fs::read_to_string(path).unwrap();
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|part| {
+            let start = part.find('>')? + 1;
+            let end = part.find("</text>")?;
+            Some(
+                part[start..end]
+                    .trim()
+                    .replace("&gt;", ">")
+                    .replace("&amp;", "&"),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_time_window_narrows_every_figure_and_is_checked() {
+    let dir = temp_dir("window");
+    // 400 steps of 32 ms: 12.8 s.
+    let log = run(&dir, "run.mcap", "400", &[]);
+    let out = dir.join("window");
+    ok(regatta()
+        .arg("plot")
+        .arg(&log)
+        .args([
+            "--format", "svg", "--series", "--from", "2", "--to", "10", "--rows", "50", "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap());
+    let top = svg_texts(&out.join("top.svg"));
+    assert!(
+        top.iter()
+            .any(|t| t == "regatta.wbt, seed 1: 2–10 s of 12.8 s simulated"),
+        "{top:?}"
+    );
+    // 250 frames in the window, 50 rows: five frames each; λ with its unit.
+    let kymograph = svg_texts(&out.join("khepera-kymograph.svg"));
+    assert!(
+        kymograph
+            .iter()
+            .any(|t| t == "khepera: odd filter, λ = 5 px (rows: means of 5 frames)"),
+        "{kymograph:?}"
+    );
+    let series = svg_texts(&out.join("khepera-series.svg"));
+    assert!(
+        series
+            .iter()
+            .any(|t| t == "khepera: sensors and wheels (seed 1), 2–10 s of 12.8 s simulated"),
+        "{series:?}"
+    );
+    for label in [
+        "IR 0, left",
+        "IR 5, right",
+        "left, command",
+        "right, encoders",
+        "sides",
+    ] {
+        assert!(
+            series.iter().any(|t| t == label),
+            "no '{label}' in {series:?}"
+        );
+    }
+    // The time axes: ticks inside the window only (the kymograph's run downwards).
+    for (name, texts) in [("kymograph", &kymograph), ("series", &series)] {
+        assert!(
+            texts.iter().any(|t| t == "2") && texts.iter().any(|t| t == "10"),
+            "{name}: {texts:?}"
+        );
+        assert!(!texts.iter().any(|t| t == "12"), "{name}: {texts:?}");
+    }
+    // Rows that hold unequal numbers of frames say "about".
+    ok(regatta()
+        .arg("plot")
+        .arg(&log)
+        .args([
+            "--format", "svg", "--from", "2", "--to", "10", "--rows", "60", "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap());
+    let kymograph = svg_texts(&out.join("khepera-kymograph.svg"));
+    assert!(
+        kymograph
+            .iter()
+            .any(|t| t == "khepera: odd filter, λ = 5 px (rows: means of about 4 frames)"),
+        "{kymograph:?}"
+    );
+    // A window outside the log, empty or not a number: a clear error, and no figure.
+    for (window, message) in [
+        (
+            vec!["--from", "20"],
+            "--from 20 s is outside the log: the log covers 0 to 12.8 s of simulated time",
+        ),
+        (
+            vec!["--from", "-1"],
+            "--from -1 s is outside the log: the log covers 0 to 12.8 s of simulated time",
+        ),
+        (vec!["--to", "13"], "--to 13 s is outside the log"),
+        (
+            vec!["--from", "5", "--to", "3"],
+            "the window is empty: --from 5 s must come before --to 3 s",
+        ),
+        (
+            vec!["--to", "0"],
+            "the window is empty: --from 0 s must come before --to 0 s",
+        ),
+        (
+            vec!["--to", "NaN"],
+            "--to must be a finite number of seconds, found NaN",
+        ),
+    ] {
+        let none = dir.join("none");
+        let output = regatta()
+            .arg("plot")
+            .arg(&log)
+            .args(&window)
+            .arg("--out")
+            .arg(&none)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(1), "{window:?}: {stderr}");
+        assert!(stderr.contains(message), "{window:?}: {stderr}");
+        assert!(!none.exists(), "{window:?}");
+    }
     std::fs::remove_dir_all(dir).ok();
 }
 
