@@ -322,6 +322,17 @@ pub fn warn_about_cost(checked: &mut Checked) {
     if checked.has_errors() {
         return;
     }
+    // Compiling is what costs here (a large mesh is triangulated): a world without a vision
+    // device has nothing to warn about and is not compiled for it.
+    let has_vision = checked.scene.walk().into_iter().any(|id| {
+        matches!(
+            checked.scene.type_name(id),
+            "PanoramicTurret" | "LinearCamera"
+        )
+    });
+    if !has_vision {
+        return;
+    }
     let compiled = compile(&checked.scene);
     let rays = compiled.plan.renderer == RendererChoice::Rays;
     let time_step = compiled.settings.time_step;

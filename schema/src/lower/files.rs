@@ -134,7 +134,7 @@ impl<'c> Lowerer<'c> {
                     crate::proto_path::Lookup::Absent => {}
                 }
                 if WEBOTS_STANDINS.iter().any(|(n, _, _)| *n == name) {
-                    // The stand-in is already in the table, after regatta's own PROTOs.
+                    // The stand-in answers where the name is used (`Lowerer::standin`).
                     self.standin_urls
                         .entry(name)
                         .or_insert_with(|| url.value.clone());

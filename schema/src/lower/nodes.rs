@@ -173,7 +173,10 @@ impl<'c> Lowerer<'c> {
                 }
                 let empty = Vec::new();
                 let items = body.as_ref().map_or(&empty, |b| &b.items);
-                let id = if let Some(proto) = scope.find_proto(&type_name.text) {
+                let proto = scope
+                    .find_proto(&type_name.text)
+                    .or_else(|| self.standin(&type_name.text));
+                let id = if let Some(proto) = proto {
                     self.instantiate(&proto, node, items, scope)?
                 } else if let Some(spec) = self.catalogue().lookup(&type_name.text) {
                     self.lower_builtin(spec, node, items, scope)?
@@ -294,6 +297,7 @@ impl<'c> Lowerer<'c> {
             }
             let mut candidates: Vec<&str> = self.catalogue().names().collect();
             candidates.extend(scope.protos.iter().map(|(n, _)| n.as_str()));
+            candidates.extend(crate::protos::WEBOTS_STANDINS.iter().map(|(n, _, _)| *n));
             if let Some(close) = did_you_mean(name, candidates) {
                 diagnostic = diagnostic.with_note(format!("did you mean '{close}'?"));
             }

@@ -19,27 +19,21 @@ use super::checked::Substitution;
 use super::state::{Frame, Lowerer, ProtoDef, ProtoTable, Scope, UrlBase};
 
 impl<'c> Lowerer<'c> {
+    /// regatta's own PROTOs (`Khepera`, `Buoy`, `Arena`), parsed once per check: the table
+    /// every file's PROTOs come after.
     pub(super) fn builtins(&mut self) -> ProtoTable {
         if let Some(builtins) = &self.builtins {
             return builtins.clone();
         }
         let mut list = Vec::new();
-        let regatta = BUILTIN_PROTOS
-            .iter()
-            .map(|(name, text)| (*name, *text, crate::webots::Authoring::Regatta));
-        let webots = WEBOTS_STANDINS.iter().copied();
-        for (name, text, authoring) in regatta.chain(webots) {
-            let folder = if authoring == crate::webots::Authoring::Regatta {
-                "protos"
-            } else {
-                "protos/webots"
-            };
+        for (name, text) in BUILTIN_PROTOS {
             let file = self.add_text(
-                &format!("<builtin>/{folder}/{name}.proto"),
+                &format!("<builtin>/protos/{name}.proto"),
                 text,
                 UrlBase::NoFiles,
             );
-            self.file_authoring.insert(file.0, authoring);
+            self.file_authoring
+                .insert(file.0, crate::webots::Authoring::Regatta);
             let parsed = self.parse(file);
             for item in &parsed.items {
                 if let Item::Proto(proto) = item {
@@ -53,6 +47,37 @@ impl<'c> Lowerer<'c> {
         }
         self.builtins = Some(builtins.clone());
         builtins
+    }
+
+    /// The Webots stand-in PROTO `name`, parsed the first time a node names it and no table
+    /// in scope defines it (so a world's own or imported definition wins, as it would over
+    /// a table entry). A check that meets no Webots PROTO parses none of them.
+    pub(super) fn standin(&mut self, name: &str) -> Option<Rc<ProtoDef>> {
+        if let Some(found) = self.standins.get(name) {
+            return found.clone();
+        }
+        let &(file_name, text, authoring) = WEBOTS_STANDINS.iter().find(|(n, _, _)| *n == name)?;
+        let file = self.add_text(
+            &format!("<builtin>/protos/webots/{file_name}.proto"),
+            text,
+            UrlBase::NoFiles,
+        );
+        self.file_authoring.insert(file.0, authoring);
+        let parsed = self.parse(file);
+        let mut list: Vec<(String, Rc<ProtoDef>)> = self.builtins().iter().cloned().collect();
+        let mut found = None;
+        for item in &parsed.items {
+            if let Item::Proto(proto) = item {
+                let (proto_name, def) = ProtoDef::file_level(file, proto);
+                if proto_name == name {
+                    found = Some(def.clone());
+                }
+                list.push((proto_name, def));
+            }
+        }
+        self.file_scopes.insert(file.0, Rc::new(list));
+        self.standins.insert(name.to_owned(), found.clone());
+        found
     }
 
     /// The PROTOs a file defines or imports, after the built-in ones (later entries win).

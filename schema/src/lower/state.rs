@@ -144,6 +144,8 @@ pub(super) struct Lowerer<'c> {
     pub(super) dropped: usize,
     pub(super) refined_missing: BTreeSet<(u32, u32)>,
     pub(super) builtins: Option<ProtoTable>,
+    /// Webots stand-ins parsed so far, by name (`None`: looked for, not a stand-in's name).
+    pub(super) standins: HashMap<String, Option<Rc<ProtoDef>>>,
     /// EXTERNPROTO names that point where regatta does not go, with the URL.
     pub(super) unresolved: HashMap<String, String>,
     /// The PROTO instances being expanded, outermost first.
@@ -236,6 +238,7 @@ impl<'c> Lowerer<'c> {
             file_authoring: HashMap::new(),
             instance_authoring: HashMap::new(),
             body_authoring: HashMap::new(),
+            standins: HashMap::new(),
             standin_urls: HashMap::new(),
             substitutions: Vec::new(),
             unbuilt_robots: Vec::new(),
