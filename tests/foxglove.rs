@@ -540,7 +540,7 @@ fn camera_images_are_logged_as_the_camera_took_them() {
 #[test]
 fn a_log_cut_short_keeps_all_but_its_last_seconds() {
     use regatta_runtime::log::CHUNK_SECONDS;
-    let steps = 500; // 16 s of 32 ms steps
+    let steps = 1900; // 60.8 s of 32 ms steps: six chunks
     let log = record("regatta.wbt", steps, Channels::ALL);
     let whole = regatta_runtime::log::read(&log).unwrap();
     assert!(whole.truncated.is_none());
