@@ -272,7 +272,9 @@ impl Parser<'_> {
                             ),
                         }
                     }
-                } else {
+                } else if !matches!(&value.items, Items::Numbers(numbers) if numbers.values.is_empty())
+                {
+                    // `[ ]` is an empty url list (an unavailable PROTO, said when typing).
                     self.error(Diagnostic::error(
                         value.span,
                         "Expected a URL string, found numbers.",

@@ -165,10 +165,32 @@ impl<'c> Lowerer<'c> {
         if let Some((refusal, url)) = refused {
             self.refuse(file, url.span, &url.value, refusal, UrlUse::ExternProto);
         }
+        if extern_proto.urls.is_empty() {
+            // ISO/IEC 14772-1, 4.9.3: a PROTO none of whose urls can be read is unavailable;
+            // with no url at all, that is said where it is declared.
+            if let Some(name) = &extern_proto.name {
+                let diagnostic = Diagnostic::error(
+                    name.span,
+                    format!(
+                        "EXTERNPROTO '{}' lists no url: its PROTO is unavailable",
+                        name.text
+                    ),
+                )
+                .with_label("no url")
+                .with_note("its nodes are unknown; give the url of the file that defines it")
+                .with_code("externproto");
+                self.strict_or_warn(file, diagnostic);
+            }
+        }
     }
 
-    /// Reads the PROTO `name` from the file at `path` (already resolved) into `list`; false
-    /// (after reporting) when the file cannot be read or defines no such PROTO.
+    /// Reads a PROTO from the file at `path` (already resolved) into `list`, under `name`;
+    /// false (after reporting) when the file cannot be read or defines no such PROTO.
+    ///
+    /// Which PROTO (ISO/IEC 14772-1, 4.9.3): the one a `#Name` fragment of the url names;
+    /// without one, the PROTO called `name` if the file has it, else the file's first. A url
+    /// naming the very file the EXTERNPROTO stands in is no include loop: it refers to one of
+    /// that file's own PROTOs.
     pub(super) fn extern_from_file(
         &mut self,
         file: FileId,
@@ -177,17 +199,33 @@ impl<'c> Lowerer<'c> {
         name: &str,
         list: &mut Vec<(String, Rc<ProtoDef>)>,
     ) -> bool {
-        let Some(loaded) = self.load_resolved(file, path, &url.value, url.span) else {
-            return false;
+        let fragment = url.value.split_once('#').map(|(_, f)| f);
+        let loaded = if self.loaded.get(path) == Some(&file) {
+            file
+        } else {
+            let Some(loaded) = self.load_resolved(file, path, &url.value, url.span) else {
+                return false;
+            };
+            loaded
         };
         let parsed = self.parse(loaded);
-        let found = parsed.items.iter().find_map(|item| match item {
-            Item::Proto(p) if p.name.text == name => Some(p.clone()),
-            _ => None,
-        });
+        let protos = || {
+            parsed.items.iter().filter_map(|item| match item {
+                Item::Proto(p) => Some(p),
+                _ => None,
+            })
+        };
+        let found = match fragment {
+            Some(wanted) => protos().find(|p| p.name.text == wanted),
+            None => protos()
+                .find(|p| p.name.text == name)
+                .or_else(|| protos().next()),
+        }
+        .cloned();
+        let name_wanted = fragment.unwrap_or(name);
         match found {
             Some(proto) => {
-                if !self.file_scopes.contains_key(&loaded.0) {
+                if loaded != file && !self.file_scopes.contains_key(&loaded.0) {
                     self.includes.push(loaded);
                     self.file_protos(loaded, &parsed);
                     self.includes.pop();
@@ -207,7 +245,7 @@ impl<'c> Lowerer<'c> {
                     file,
                     Diagnostic::error(
                         url.span,
-                        format!("'{}' defines no PROTO named '{name}'", url.value),
+                        format!("'{}' defines no PROTO named '{name_wanted}'", url.value),
                     )
                     .with_code("externproto"),
                 );

@@ -50,7 +50,16 @@ pub fn check(source: SourceText, options: &Options) -> Checked {
         Some(dir) => UrlBase::Dir(dir.clone()),
         None => UrlBase::CurrentDir,
     };
+    // The file the text was read from, when it is there: an EXTERNPROTO naming it refers to
+    // this text's own PROTOs, and an Inline of it is an include loop.
+    let on_disk = options.base_dir.as_ref().and_then(|dir| {
+        let name = Path::new(&source.name).file_name()?;
+        dir.join(name).canonicalize().ok()
+    });
     let file = lowerer.add_file(source, base);
+    if let Some(path) = on_disk {
+        lowerer.loaded.insert(path, file);
+    }
     lowerer.lower_world(file);
     lowerer.finish()
 }
