@@ -320,12 +320,14 @@ impl<'c> Lowerer<'c> {
             definition: def.file,
             key: key.1,
         });
-        // Defaults, typed in the PROTO's own file.
-        let mut default_scope = Scope {
-            protos: self.visible_protos(def),
-            ..Scope::new(def.file)
-        };
+        // Defaults, typed in the PROTO's own file, each in a DEF scope of its own (VRML97): a
+        // default cannot USE a node another default DEFines.
+        let visible = self.visible_protos(def);
         for declaration in &proto.interface {
+            let mut default_scope = Scope {
+                protos: visible.clone(),
+                ..Scope::new(def.file)
+            };
             let Some(ty) = FieldType::parse(&declaration.field_type.text) else {
                 continue;
             };
