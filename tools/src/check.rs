@@ -51,12 +51,15 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         }
         let keep = |d: &regatta_schema::FileDiagnostic| !args.quiet || d.diagnostic.is_error();
         if args.short {
-            let map = checked.source_map();
-            for diagnostic in checked.diagnostics.iter().filter(|d| keep(d)) {
-                eprintln!(
-                    "{}",
-                    map.short(diagnostic.file.0 as usize, &diagnostic.diagnostic)
-                );
+            // The map finds every line of every file: built only when something is shown.
+            if checked.diagnostics.iter().any(keep) {
+                let map = checked.source_map();
+                for diagnostic in checked.diagnostics.iter().filter(|d| keep(d)) {
+                    eprintln!(
+                        "{}",
+                        map.short(diagnostic.file.0 as usize, &diagnostic.diagnostic)
+                    );
+                }
             }
         } else {
             eprint!("{}", checked.render_where(keep, color));
