@@ -345,10 +345,11 @@ fn checked(mut topology: Topology, panoramic: bool) -> Result<Topology, NetworkE
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn topology(hidden: Vec<usize>, recurrence: Recurrence) -> Topology {
+    /// A small network's topology for tests (also the neural controller's).
+    pub(crate) fn topology(hidden: Vec<usize>, recurrence: Recurrence) -> Topology {
         Topology {
             inputs: vec![Input::Bias, Input::Ir(0), Input::Ir(1), Input::Retina],
             retina_filter: FilterKind::Raw,

@@ -234,24 +234,8 @@ impl Controller for Neural {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::compile::network::tests::topology;
     use crate::compile::network::{Activation, Input, Pooling, Recurrence};
-    use crate::retina::FilterKind;
-
-    fn topology(hidden: Vec<usize>, recurrence: Recurrence) -> Topology {
-        Topology {
-            inputs: vec![Input::Bias, Input::Ir(0), Input::Ir(1), Input::Retina],
-            retina_filter: FilterKind::Raw,
-            retina_sectors: 4,
-            retina_pooling: Pooling::Max,
-            hidden,
-            recurrence,
-            activation: Activation::Tanh,
-            output_activation: Activation::Tanh,
-            output_scale: 20.0,
-            time_constants: Vec::new(),
-            time_step: 0.032,
-        }
-    }
 
     #[test]
     fn sectors_pool_left_to_right_and_are_never_empty() {
