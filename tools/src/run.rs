@@ -73,6 +73,7 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
         args.options.lenient,
         None,
     )?;
+    loaded.release_scene();
     let compiled = &loaded.compiled;
     let name = crate::world::world_name(&args.world);
     let mut simulation =
