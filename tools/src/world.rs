@@ -58,25 +58,21 @@ impl From<LogWorldOptions> for WorldOptions {
 
 impl WorldOptions {
     /// The folders a world at `world` may read files under: its project and `--allow-path`'s
-    /// folders (none for standard input, unless `--allow-path` names some).
+    /// folders (none for standard input, unless `--allow-path` names some), canonical and
+    /// without repeats, as `FileAccess` keeps them.
     pub fn readable_roots(&self, world: &Path) -> Vec<PathBuf> {
-        let mut roots = Vec::new();
-        if world != Path::new("-") {
-            let folder = world
-                .canonicalize()
-                .ok()
-                .and_then(|path| path.parent().map(Path::to_owned));
-            if let Some(folder) = folder {
-                roots.push(regatta_schema::access::project_root(&folder));
-            }
+        let mut access = FileAccess::none();
+        let folder = (world != Path::new("-"))
+            .then(|| world.canonicalize().ok())
+            .flatten()
+            .and_then(|path| path.parent().map(Path::to_owned));
+        if let Some(folder) = folder {
+            let _ = access.allow(&regatta_schema::access::project_root(&folder));
         }
         for dir in &self.allow_paths {
-            let dir = dir.canonicalize().unwrap_or_else(|_| dir.clone());
-            if !roots.contains(&dir) {
-                roots.push(dir);
-            }
+            let _ = access.allow(dir);
         }
-        roots
+        access.roots().to_vec()
     }
 
     /// The checking options these flags ask for.
