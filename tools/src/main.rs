@@ -184,3 +184,26 @@ fn report(error: &anyhow::Error) -> String {
     }
     line
 }
+
+#[cfg(test)]
+mod tests {
+    use super::report;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("cannot write the log: {0}")]
+    struct Outer(#[source] Inner);
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("I/O error")]
+    struct Inner(#[source] std::io::Error);
+
+    #[test]
+    fn a_cause_already_said_is_not_said_again() {
+        let io = std::io::Error::other("No space left on device");
+        let error = anyhow::Error::new(Outer(Inner(io))).context("while logging step 938");
+        assert_eq!(
+            report(&error),
+            "while logging step 938: cannot write the log: I/O error: No space left on device"
+        );
+    }
+}
