@@ -89,10 +89,11 @@ proptest! {
             };
             let eye = DVec3::new(rig.start.x, rig.floor_y + turret.height, rig.start.z);
             let (mut fast, mut reference) = (vec![0.0; PIXELS], vec![0.0; PIXELS]);
+            let detail = Detail::new(turret.samples, turret.stride);
             scene.integrate_for(&frame, Some(index), eye, rig.start.heading, &strip,
-                turret.samples, turret.stride, &mut fast);
+                detail, &mut fast);
             scene.integrate_exhaustive(&frame, Some(index), eye, rig.start.heading, &strip,
-                turret.samples, turret.stride, &mut reference);
+                detail, &mut reference);
             for (pixel, (a, b)) in fast.iter().zip(&reference).enumerate() {
                 prop_assert_eq!(a.to_bits(), b.to_bits(), "robot {} pixel {}: {} vs {}",
                     index, pixel, a, b);

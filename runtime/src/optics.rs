@@ -19,7 +19,7 @@ use crate::compile::plan::{Plan, RendererChoice};
 use crate::compile::rig::{LinearCameraRig, Optics, PanoramicRig, Pose2};
 use crate::render::column::{ColumnFrame, ColumnScene, Look, Strip};
 use crate::render::raycast::{Prepared, RayCaster};
-use crate::render::Poses;
+use crate::render::{Detail, Poses};
 use crate::retina::{
     self, calibrate_i_bda, convert_scaled, luminance, normalize, Filter, FilterKind,
     FilterSettings, HALF_BAND, PIXELS, PIXEL_WIDTH,
@@ -107,11 +107,10 @@ impl<'g> Renderer<'g> {
         eye: DVec3,
         heading: f64,
         strip: &Strip,
-        samples: usize,
-        stride: usize,
+        detail: Detail,
         out: &mut [f64],
     ) {
-        self.integrate_of(view.of(), eye, heading, strip, samples, stride, out)
+        self.integrate_of(view.of(), eye, heading, strip, detail, out)
     }
 
     /// [`Renderer::integrate`] from any frame (see [`ViewOf`]).
@@ -122,16 +121,15 @@ impl<'g> Renderer<'g> {
         eye: DVec3,
         heading: f64,
         strip: &Strip,
-        samples: usize,
-        stride: usize,
+        detail: Detail,
         out: &mut [f64],
     ) {
         match (self, view) {
             (Renderer::Columns(scene), ViewOf::Columns(frame, viewer)) => {
-                scene.integrate_for(frame, viewer, eye, heading, strip, samples, stride, out)
+                scene.integrate_for(frame, viewer, eye, heading, strip, detail, out)
             }
             (Renderer::Rays(caster), ViewOf::Rays(frame)) => {
-                let n = samples.max(1);
+                let n = detail.samples.max(1);
                 let half_band = libm::atan(strip.tan_half_band);
                 for (pixel, pixel_out) in out.iter_mut().enumerate().take(strip.centers.len()) {
                     let mut sum = 0.0;
@@ -315,8 +313,11 @@ impl Panoramic {
                 eye,
                 pose.heading,
                 &self.strip,
-                self.rig.samples,
-                self.rig.stride,
+                Detail {
+                    samples: self.rig.samples,
+                    stride: self.rig.stride,
+                    crowd_distance: self.rig.crowd_distance,
+                },
                 &mut luminance,
             ),
             Optics::Paper => paper(
@@ -585,8 +586,7 @@ impl LinearCamera {
             eye,
             pose.heading,
             &self.strip,
-            self.rig.samples,
-            1,
+            Detail::new(self.rig.samples, 1),
             &mut self.luminance,
         );
         out.luminance.clear();

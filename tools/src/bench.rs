@@ -22,6 +22,10 @@ enum What {
     /// Retina update time against error, for paper and exact optics at several densities,
     /// against a converged reference. Prints a table; writes CSV and a PNG plot.
     Retina(crate::bench_retina::Args),
+    /// The crowd level of detail on generated swarms: time per retina against error
+    /// (6-bit outputs and photocurrents) for each crowd distance, against every robot drawn;
+    /// `--behaviour N` compares buoy visits too. Prints a table; writes CSV and a chart.
+    Crowd(crate::bench_crowd::Args),
     /// Simulation steps per second: the regatta world, IR only, 10 robots, parallel worlds,
     /// and the peak memory of a one-robot run.
     Step(crate::bench_step::Args),
@@ -57,6 +61,7 @@ enum What {
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     match args.what {
         What::Retina(args) => crate::bench_retina::run(args),
+        What::Crowd(args) => crate::bench_crowd::run(args),
         What::Step(args) => crate::bench_step::run(args),
         What::Webots(args) => crate::bench_webots::run(args),
         What::Accuracy(args) => crate::bench_accuracy::run(args),

@@ -43,6 +43,10 @@ pub struct Args {
     /// Swarms: simulate this many seconds per size and time them, instead of `--millis`.
     #[arg(long, allow_negative_numbers = true)]
     seconds: Option<f64>,
+    /// Swarms: the turrets' crowd level of detail (`crowdDistance`, m): other robots farther
+    /// than this are not drawn. Without it, every robot is (exact).
+    #[arg(long, value_name = "METRES")]
+    crowd_distance: Option<f64>,
     /// Swarms: seed of the placements.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -109,6 +113,7 @@ fn swarms(args: Args, threads: usize) -> anyhow::Result<Outcome> {
         buoys: args.buoys,
         ir_only: args.ir_only,
         seed: args.seed,
+        crowd_distance: args.crowd_distance,
     };
     if let Some(directory) = &args.write_worlds {
         std::fs::create_dir_all(directory)

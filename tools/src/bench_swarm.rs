@@ -32,6 +32,8 @@ pub struct SwarmSpec {
     pub buoys: Option<usize>,
     pub ir_only: bool,
     pub seed: u64,
+    /// The turrets' `crowdDistance` (m); `None`: exact, every robot drawn.
+    pub crowd_distance: Option<f64>,
 }
 
 impl SwarmSpec {
@@ -146,7 +148,11 @@ pub fn swarm_world(spec: &SwarmSpec) -> String {
     } else {
         (
             "regatta",
-            "\n  turret PanoramicTurret {\n    optics \"exact\"\n    filters [\n      \"odd\"\n    ]\n    lambda 5\n  }".to_owned(),
+            format!(
+                "\n  turret PanoramicTurret {{\n    optics \"exact\"{}\n    filters [\n      \"odd\"\n    ]\n    lambda 5\n  }}",
+                spec.crowd_distance
+                    .map_or(String::new(), |d| format!("\n    crowdDistance {d}"))
+            ),
         )
     };
     for (i, (x, z, heading)) in robots.into_iter().enumerate() {
@@ -448,6 +454,7 @@ mod tests {
                 buoys: None,
                 ir_only: robots == 37,
                 seed: 3,
+                crowd_distance: None,
             };
             let compiled = compile_text("swarm.wbt", swarm_world(&spec)).unwrap();
             assert_eq!(compiled.rig.robots.len(), robots);

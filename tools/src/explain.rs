@@ -321,7 +321,14 @@ fn robot_description(robot: &regatta_runtime::compile::rig::RobotRig) -> String 
                 "    PanoramicTurret \"{}\" at {}: {} optics, samples {}, stride {}, filters [{}], λ {}, bandpass λ {}/{}, {} bits, I_bda {}, region of interest {}…{}",
                 p.name,
                 mm(p.height),
-                if p.optics == Optics::Paper { "paper" } else { "exact" },
+                match (p.optics, p.crowd_distance.is_finite()) {
+                    (Optics::Paper, _) => "paper".to_owned(),
+                    (Optics::Exact, false) => "exact".to_owned(),
+                    (Optics::Exact, true) => format!(
+                        "exact (crowd level of detail: other robots drawn within {})",
+                        mm(p.crowd_distance)
+                    ),
+                },
                 p.samples,
                 p.stride,
                 filters.join(", "),

@@ -681,6 +681,10 @@ impl Compiler<'_> {
                     },
                     samples: scene.int(node, "samples").max(1) as usize,
                     stride: scene.int(node, "stride").max(1) as usize,
+                    crowd_distance: match scene.float(node, "crowdDistance") {
+                        d if d > 0.0 => d,
+                        _ => f64::INFINITY,
+                    },
                     filters: filter_set(scene.strings(node, "filters")),
                     lambda: scene.float(node, "lambda"),
                     bandpass: (bandpass[0].min(bandpass[1]), bandpass[0].max(bandpass[1])),

@@ -158,6 +158,8 @@ pub struct PanoramicRig {
     pub samples: usize,
     /// Exact optics: pixels between evaluated columns in edge-free runs (1 = every pixel).
     pub stride: usize,
+    /// Exact optics: other robots farther than this (m) are not drawn (infinite: all are).
+    pub crowd_distance: f64,
     pub filters: FilterSet,
     pub lambda: f64,
     pub bandpass: (f64, f64),

@@ -16,6 +16,30 @@ use crate::compile::plan::Plan;
 use crate::compile::rig::Pose2;
 use crate::geometry::Frame;
 
+/// How finely exact optics integrate a strip: the world file's dial between cost and error.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Detail {
+    /// Evaluations per piece of a window between silhouette edges (columns), or rays per axis
+    /// of a window (ray casting).
+    pub samples: usize,
+    /// Pixels between evaluated columns in edge-free runs (1: every pixel); columns only.
+    pub stride: usize,
+    /// Other robots whose centre is farther than this from the eye (m) are left out: the
+    /// crowd level of detail. Infinite: every robot (the reference). Columns only.
+    pub crowd_distance: f64,
+}
+
+impl Detail {
+    /// `samples` and `stride`, every robot drawn.
+    pub fn new(samples: usize, stride: usize) -> Detail {
+        Detail {
+            samples,
+            stride,
+            crowd_distance: f64::INFINITY,
+        }
+    }
+}
+
 /// Where every robot is now: what moves robot-attached primitives and lights.
 #[derive(Clone, Debug, Default)]
 pub struct Poses {

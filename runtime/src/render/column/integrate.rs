@@ -12,8 +12,9 @@ use super::photodiode::{
 };
 use super::scene::{ColumnFrame, ColumnScene};
 use super::strip::Strip;
-use super::sweep::{self, Look, Sector, Sweep};
+use super::sweep::{self, Look, Reach, Sector, Sweep};
 use crate::compile::graph::LightKind;
+use crate::render::Detail;
 use crate::retina::luminance;
 
 /// The region sampler's buffers.
@@ -73,20 +74,10 @@ impl ColumnScene<'_> {
         eye: DVec3,
         heading: f64,
         strip: &Strip,
-        samples: usize,
-        stride: usize,
+        detail: Detail,
         out: &mut [f64],
     ) {
-        self.integrate_for(
-            frame,
-            frame.viewer,
-            eye,
-            heading,
-            strip,
-            samples,
-            stride,
-            out,
-        )
+        self.integrate_for(frame, frame.viewer, eye, heading, strip, detail, out)
     }
 
     /// [`ColumnScene::integrate`] for `viewer` in a frame shared by every viewer of a step.
@@ -98,13 +89,12 @@ impl ColumnScene<'_> {
         eye: DVec3,
         heading: f64,
         strip: &Strip,
-        samples: usize,
-        stride: usize,
+        detail: Detail,
         out: &mut [f64],
     ) {
         with_workspace(|workspace| {
             self.integrate_with(
-                workspace, frame, viewer, eye, heading, strip, samples, stride, false, out,
+                workspace, frame, viewer, eye, heading, strip, detail, false, out,
             )
         })
     }
@@ -120,13 +110,12 @@ impl ColumnScene<'_> {
         eye: DVec3,
         heading: f64,
         strip: &Strip,
-        samples: usize,
-        stride: usize,
+        detail: Detail,
         out: &mut [f64],
     ) {
         with_workspace(|workspace| {
             self.integrate_with(
-                workspace, frame, viewer, eye, heading, strip, samples, stride, true, out,
+                workspace, frame, viewer, eye, heading, strip, detail, true, out,
             )
         })
     }
@@ -140,11 +129,11 @@ impl ColumnScene<'_> {
         eye: DVec3,
         heading: f64,
         strip: &Strip,
-        samples: usize,
-        stride: usize,
+        detail: Detail,
         exhaustive: bool,
         out: &mut [f64],
     ) {
+        let (samples, stride) = (detail.samples, detail.stride);
         let Workspace {
             look,
             sweep,
@@ -163,7 +152,11 @@ impl ColumnScene<'_> {
                     .and_then(|(lo, hi)| Sector::new(heading, lo, hi))
             })
             .flatten();
-        self.look_into(frame, viewer, eye, heading, sector, look);
+        let reach = Reach {
+            sector,
+            crowd_distance: detail.crowd_distance,
+        };
+        self.look_into(frame, viewer, eye, heading, reach, look);
         let look = &*look;
         sweep.start(look, exhaustive);
         let band = 2.0 * band_atan(strip.tan_half_band);
@@ -656,8 +649,22 @@ mod tests {
                 dropped += b.breaks.len() - a.breaks.len();
                 views += 1;
                 let (mut image_a, mut image_b) = (vec![0.0; PIXELS], vec![0.0; PIXELS]);
-                with.integrate(&frame_with, eye, heading, &strip, 512, 1, &mut image_a);
-                without.integrate(&frame_without, eye, heading, &strip, 512, 1, &mut image_b);
+                with.integrate(
+                    &frame_with,
+                    eye,
+                    heading,
+                    &strip,
+                    Detail::new(512, 1),
+                    &mut image_a,
+                );
+                without.integrate(
+                    &frame_without,
+                    eye,
+                    heading,
+                    &strip,
+                    Detail::new(512, 1),
+                    &mut image_b,
+                );
                 // Finely, not to the last bit: a wall's foot crossing the band's edge is a kink
                 // that no edge marks, and near a corner the dropped edge used to split its
                 // piece. The two differ by 2e-5 at 64 samples a piece, 1e-8 at 2048: the same

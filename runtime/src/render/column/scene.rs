@@ -4,9 +4,12 @@
 //! for every viewer. What one eye sees of it is `sweep.rs`'s; integrating it,
 //! `integrate.rs`'s.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
+
+use glam::DVec2;
 
 use super::super::{world_lights, Poses, WorldLight};
+use super::crowd::CrowdGrid;
 use super::footprint::{corner_hiders, upright_of, Hider, Upright};
 use super::shading::{FastShade, Shades};
 use crate::compile::graph::{Owner, RenderGraph};
@@ -25,6 +28,9 @@ pub struct ColumnScene<'g> {
     pub(super) statics_fast: bool,
     /// Primitives attached to robots, in graph order, with their robot.
     pub(super) robot_parts: Vec<(usize, usize)>,
+    /// Each robot's entries of `robot_parts`, when every robot's are contiguous (the crowd
+    /// level of detail then visits the near robots' parts only).
+    pub(super) parts_of: Option<Vec<std::ops::Range<usize>>>,
     /// Lights and every primitive's fast shading, when no light moves (shared by every frame).
     pub(super) cached: Option<(Arc<[WorldLight]>, Arc<Shades>)>,
     /// Per static object, what may hide its corners' silhouette edges.
@@ -47,6 +53,10 @@ pub struct ColumnFrame {
     pub(super) own: Vec<Option<Upright>>,
     /// The robot of each entry.
     pub(super) part_robot: Vec<usize>,
+    /// Where each robot stands (x, z).
+    pub(super) robot_at: Vec<DVec2>,
+    /// The robots binned for the crowd level of detail, by the first look that needs it.
+    pub(super) crowd: OnceLock<CrowdGrid>,
     pub(super) lights: Arc<[WorldLight]>,
     pub(super) shades: Arc<Shades>,
     /// Whether every object of the frame has fast shading.
@@ -79,12 +89,13 @@ impl<'g> ColumnScene<'g> {
         for &p in plan.own_visible.iter().flatten() {
             own_visible[p] = true;
         }
-        let robot_parts = (0..graph.primitives.len())
+        let robot_parts: Vec<(usize, usize)> = (0..graph.primitives.len())
             .filter_map(|p| match graph.primitives[p].owner {
                 Owner::Robot(robot) => Some((p, robot)),
                 Owner::Static => None,
             })
             .collect();
+        let parts_of = contiguous_parts(&robot_parts);
         // With every light static, lighting is the same each frame: shade once.
         let static_lights = plan
             .lights
@@ -119,6 +130,7 @@ impl<'g> ColumnScene<'g> {
             statics,
             visible,
             robot_parts,
+            parts_of,
             cached,
         }
     }
@@ -138,6 +150,8 @@ impl<'g> ColumnScene<'g> {
             others: Vec::new(),
             own: Vec::new(),
             part_robot: Vec::new(),
+            robot_at: Vec::new(),
+            crowd: OnceLock::new(),
             lights: self
                 .cached
                 .as_ref()
@@ -159,6 +173,11 @@ impl<'g> ColumnScene<'g> {
         }
         frame.others.clear();
         frame.own.clear();
+        frame.robot_at.clear();
+        frame
+            .robot_at
+            .extend(poses.poses.iter().map(|p| DVec2::new(p.x, p.z)));
+        frame.crowd = OnceLock::new();
         if frame.part_robot.len() != self.robot_parts.len() {
             frame.part_robot.clear();
             frame
@@ -205,4 +224,25 @@ impl<'g> ColumnScene<'g> {
         };
         frame.all_fast = statics_fast && frame.others.iter().chain(&frame.own).flatten().all(fast);
     }
+}
+
+/// Each robot's range of entries in `parts` (primitive, robot), when each robot's entries are
+/// contiguous; `None` otherwise.
+fn contiguous_parts(parts: &[(usize, usize)]) -> Option<Vec<std::ops::Range<usize>>> {
+    let robots = parts.iter().map(|&(_, robot)| robot + 1).max().unwrap_or(0);
+    let mut ranges = vec![0..0; robots];
+    let mut seen = vec![false; robots];
+    let mut start = 0;
+    for (index, &(_, robot)) in parts.iter().enumerate() {
+        let ends_run = parts.get(index + 1).is_none_or(|&(_, next)| next != robot);
+        if ends_run {
+            if seen[robot] {
+                return None;
+            }
+            seen[robot] = true;
+            ranges[robot] = start..index + 1;
+            start = index + 1;
+        }
+    }
+    Some(ranges)
 }

@@ -5,6 +5,7 @@
 
 use glam::{DVec2, DVec3};
 
+use super::crowd::CrowdGrid;
 use super::footprint::Relative;
 use super::footprint::{azimuth_interval, corner_of, wrap, Interval, PendingEdge, Upright};
 use super::photodiode::rotate_small;
@@ -68,6 +69,8 @@ pub struct Look {
     pub(super) static_slots: Vec<u32>,
     /// Edges waiting for the hidden-edge test.
     pub(super) edges: Vec<PendingEdge>,
+    /// The robots within the crowd distance.
+    near: Vec<u32>,
 }
 
 impl Look {
@@ -289,6 +292,23 @@ impl Sweep {
     }
 }
 
+/// What a look may leave out.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Reach {
+    /// Robot parts wholly outside this sector face no photodiode.
+    pub(super) sector: Option<Sector>,
+    /// Other robots farther than this are not drawn (infinite: all are).
+    pub(super) crowd_distance: f64,
+}
+
+impl Reach {
+    /// Nothing left out.
+    pub(super) const EVERYTHING: Reach = Reach {
+        sector: None,
+        crowd_distance: f64::INFINITY,
+    };
+}
+
 /// The azimuth sector a strip covers, as the rays bounding its complement: a robot part whose
 /// footprint lies wholly beyond both (behind the retina) faces no photodiode and is left out.
 #[derive(Clone, Copy, Debug)]
@@ -362,27 +382,30 @@ impl ColumnScene<'_> {
         heading: f64,
     ) -> Look {
         let mut look = Look::default();
-        self.look_into(frame, viewer, eye, heading, None, &mut look);
+        self.look_into(frame, viewer, eye, heading, Reach::EVERYTHING, &mut look);
         look
     }
 
-    /// [`ColumnScene::look`] into `look`, reusing its buffers, for `viewer`. With a `sector`,
-    /// robot parts wholly outside it are left out (they could face no photodiode).
+    /// [`ColumnScene::look`] into `look`, reusing its buffers, for `viewer`. With a sector,
+    /// robot parts wholly outside it are left out (they could face no photodiode); with a
+    /// crowd distance, other robots farther than it.
     pub(super) fn look_into(
         &self,
         frame: &ColumnFrame,
         viewer: Option<usize>,
         eye: DVec3,
         heading: f64,
-        sector: Option<Sector>,
+        reach: Reach,
         look: &mut Look,
     ) {
+        let sector = reach.sector;
         let eye2 = DVec2::new(eye.x, eye.z);
         let Look {
             objects,
             breaks,
             edges,
             static_slots,
+            near,
             ..
         } = look;
         objects.clear();
@@ -508,10 +531,46 @@ impl ColumnScene<'_> {
         for object in frame.statics.iter() {
             place(object);
         }
-        for ((other, own), &robot) in frame.others.iter().zip(&frame.own).zip(&frame.part_robot) {
-            let part = if Some(robot) == viewer { own } else { other };
-            if let Some(object) = part {
-                place(object);
+        let part = |entry: usize| {
+            if Some(frame.part_robot[entry]) == viewer {
+                frame.own[entry].as_ref()
+            } else {
+                frame.others[entry].as_ref()
+            }
+        };
+        match &self.parts_of {
+            Some(parts_of) if reach.crowd_distance.is_finite() => {
+                let grid = frame
+                    .crowd
+                    .get_or_init(|| CrowdGrid::new(&frame.robot_at, reach.crowd_distance));
+                grid.within(&frame.robot_at, eye2, reach.crowd_distance, near);
+                // The viewer's own parts, as its turret sees them, wherever the eye is.
+                if let Some(viewer) = viewer.filter(|&v| v < frame.robot_at.len()) {
+                    if let Err(at) = near.binary_search(&(viewer as u32)) {
+                        near.insert(at, viewer as u32);
+                    }
+                }
+                for &robot in near.iter() {
+                    for entry in parts_of.get(robot as usize).cloned().unwrap_or(0..0) {
+                        if let Some(object) = part(entry) {
+                            place(object);
+                        }
+                    }
+                }
+            }
+            _ => {
+                let distance2 = reach.crowd_distance * reach.crowd_distance;
+                for entry in 0..frame.part_robot.len() {
+                    let robot = frame.part_robot[entry];
+                    let far = Some(robot) != viewer
+                        && frame
+                            .robot_at
+                            .get(robot)
+                            .is_some_and(|at| at.distance_squared(eye2) > distance2);
+                    if let Some(object) = part(entry).filter(|_| !far) {
+                        place(object);
+                    }
+                }
             }
         }
         for edge in edges.iter() {

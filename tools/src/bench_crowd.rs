@@ -1,0 +1,365 @@
+//! `regatta bench crowd`: run time against error for the crowd level of detail.
+//!
+//! On the generated swarms of `bench step --robots` (10 robots/m², N/10 buoys), every sampled
+//! robot's retina is rendered from the same shared frame with every robot drawn (the
+//! reference, `crowdDistance 0`) and with each crowd distance; the 6-bit outputs (odd filter)
+//! and the photocurrents are compared. Frames: the start, and the crowd after the IR-only
+//! Braitenberg avoider has scattered it for a few seconds (robots anywhere, headings any).
+//! `--behaviour` also runs whole swarms with the regatta controller under both settings and
+//! compares buoy visits per robot per minute over several seeds.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{bail, Context};
+use regatta_runtime::compile::rig::{Pose2, TurretRig};
+use regatta_runtime::optics::{Panoramic, Renderer, RetinaOutput, ViewOf};
+use regatta_runtime::render::Poses;
+use regatta_runtime::sim::Simulation;
+use regatta_runtime::Compiled;
+
+use crate::bench_swarm::{compile_text, swarm_world, SwarmSpec};
+use crate::outcome::Outcome;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Swarm sizes.
+    #[arg(long, value_delimiter = ',', default_values_t = [10usize, 100, 1000])]
+    robots: Vec<usize>,
+    /// Crowd distances to measure (m).
+    #[arg(long, value_delimiter = ',', default_values_t = [0.25f64, 0.5, 1.0])]
+    distances: Vec<f64>,
+    /// Robots whose retina is compared per frame (spread evenly over the swarm).
+    #[arg(long, default_value_t = 40)]
+    viewers: usize,
+    /// Frames compared: the start, then one every `--spacing` seconds of the IR-only swarm.
+    #[arg(long, default_value_t = 3)]
+    frames: usize,
+    /// Seconds between frames.
+    #[arg(long, default_value_t = 4.0)]
+    spacing: f64,
+    /// Seed of the placements.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Also compare behaviour: buoy visits per robot per minute of swarms of this size with
+    /// the regatta controller, exact against each crowd distance, over `--seeds` seeds.
+    #[arg(long, value_name = "ROBOTS")]
+    behaviour: Option<usize>,
+    /// Seeds (placements and noise) of the behaviour comparison.
+    #[arg(long, default_value_t = 5)]
+    seeds: u64,
+    /// Simulated seconds per behaviour run.
+    #[arg(long, default_value_t = 60.0)]
+    seconds: f64,
+    /// Directory for crowd.csv and the chart (crowd.png or crowd.svg).
+    #[arg(long, default_value = "out/bench")]
+    out: PathBuf,
+    /// File format of the chart.
+    #[arg(long, value_enum, default_value_t)]
+    format: crate::plot::FigureFormat,
+}
+
+/// One swarm size at one crowd distance.
+struct Row {
+    robots: usize,
+    /// `None`: the reference (every robot drawn).
+    distance: Option<f64>,
+    micros_per_retina: f64,
+    outputs: usize,
+    lsb_mean: f64,
+    beyond_one_lsb: f64,
+    lsb_max: u32,
+    analog_mean: f64,
+    analog_max: f64,
+}
+
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    if args.robots.is_empty() || args.robots.contains(&0) {
+        bail!("--robots: give sizes of at least 1");
+    }
+    if let Some(bad) = args
+        .distances
+        .iter()
+        .find(|d| !(d.is_finite() && **d > 0.0))
+    {
+        bail!("--distances: {bad} is not a distance above 0 m");
+    }
+    if args.viewers == 0 || args.frames == 0 {
+        bail!("--viewers and --frames must be at least 1");
+    }
+    if !(args.spacing.is_finite() && args.spacing > 0.0) {
+        bail!("--spacing must be a time above 0 s");
+    }
+    println!(
+        "crowd bench: generated swarms (10 robots/m², N/10 buoys, seed {}), {} frames {} s apart, up to {} retinas per frame, odd filter, 6 bits, single thread",
+        args.seed, args.frames, args.spacing, args.viewers
+    );
+    println!(
+        "{:>6} {:>10} {:>12} {:>16} {:>10} {:>10} {:>8} {:>12} {:>12}",
+        "robots",
+        "distance",
+        "µs/retina",
+        "vision ms/step",
+        "LSB mean",
+        ">1 LSB %",
+        "LSB max",
+        "analog mean",
+        "analog max"
+    );
+    let mut rows = Vec::new();
+    for &robots in &args.robots {
+        for row in measure(robots, &args)? {
+            println!(
+                "{:>6} {:>10} {:>12.2} {:>16.3} {:>10.4} {:>10.3} {:>8} {:>12.2e} {:>12.2e}",
+                row.robots,
+                row.distance
+                    .map_or("exact".to_owned(), |d| format!("{d} m")),
+                row.micros_per_retina,
+                row.micros_per_retina * robots as f64 / 1000.0,
+                row.lsb_mean,
+                100.0 * row.beyond_one_lsb,
+                row.lsb_max,
+                row.analog_mean,
+                row.analog_max
+            );
+            rows.push(row);
+        }
+    }
+    let mut csv = String::from("robots,crowd_distance_m,micros_per_retina,outputs_compared,digital_lsb_error_mean,share_beyond_1_lsb,digital_lsb_error_max,analog_rel_error_mean,analog_rel_error_max\n");
+    for row in &rows {
+        let _ = writeln!(
+            csv,
+            "{},{},{:.3},{},{:.6},{:.6},{},{:.6e},{:.6e}",
+            row.robots,
+            row.distance.map_or("exact".to_owned(), |d| d.to_string()),
+            row.micros_per_retina,
+            row.outputs,
+            row.lsb_mean,
+            row.beyond_one_lsb,
+            row.lsb_max,
+            row.analog_mean,
+            row.analog_max
+        );
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let csv_path = args.out.join("crowd.csv");
+    std::fs::write(&csv_path, csv)
+        .with_context(|| format!("cannot write {}", csv_path.display()))?;
+    println!("{}", csv_path.display());
+    crate::plot::save(&chart(&rows), &args.out, "crowd", args.format)?;
+    if let Some(robots) = args.behaviour {
+        behaviour(robots, &args)?;
+    }
+    Ok(Outcome::Clean)
+}
+
+/// The swarm's frames: the start, then the IR-only swarm every `spacing` seconds.
+fn frames(robots: usize, args: &Args) -> anyhow::Result<Vec<Poses>> {
+    let spec = SwarmSpec {
+        robots,
+        buoys: None,
+        ir_only: true,
+        seed: args.seed,
+        crowd_distance: None,
+    };
+    let compiled = compile_text("swarm-ir.wbt", swarm_world(&spec))?;
+    let mut simulation = Simulation::new(&compiled, Some(args.seed))?;
+    let floor_y: Vec<f64> = compiled.rig.robots.iter().map(|r| r.floor_y).collect();
+    let poses_now = |simulation: &Simulation| Poses {
+        poses: simulation.robots.iter().map(|r| r.pose).collect(),
+        floor_y: floor_y.clone(),
+    };
+    let mut out = vec![poses_now(&simulation)];
+    let steps = (args.spacing / simulation.time_step).ceil() as u64;
+    while out.len() < args.frames {
+        simulation.run(steps);
+        out.push(poses_now(&simulation));
+    }
+    Ok(out)
+}
+
+fn measure(robots: usize, args: &Args) -> anyhow::Result<Vec<Row>> {
+    let spec = SwarmSpec {
+        robots,
+        buoys: None,
+        ir_only: false,
+        seed: args.seed,
+        crowd_distance: None,
+    };
+    let compiled = compile_text("swarm.wbt", swarm_world(&spec))?;
+    let frames = frames(robots, args)?;
+    let viewers: Vec<usize> = {
+        let count = args.viewers.min(robots);
+        let mut picked: Vec<usize> = (0..count).map(|i| i * robots / count).collect();
+        picked.dedup();
+        picked
+    };
+    let renderer = Renderer::new(&compiled.graph, &compiled.plan, false);
+    let settings: Vec<Option<f64>> = std::iter::once(None)
+        .chain(args.distances.iter().map(|&d| Some(d)))
+        .collect();
+    // outputs[setting][frame × viewer]
+    let mut outputs: Vec<Vec<RetinaOutput>> = vec![Vec::new(); settings.len()];
+    let mut seconds = vec![0.0f64; settings.len()];
+    for poses in &frames {
+        let mut shared = None;
+        renderer.prepare_shared(&compiled.plan, poses, &mut shared);
+        let frame = shared.context("exact optics on a swarm render by columns")?;
+        for &viewer in &viewers {
+            let Some(TurretRig::Panoramic(turret)) = &compiled.rig.robots[viewer].turret else {
+                bail!("robot {viewer} of the swarm has no Panoramic turret");
+            };
+            let pose: Pose2 = poses.poses[viewer];
+            let floor = compiled.rig.robots[viewer].floor_y;
+            for (slot, setting) in settings.iter().enumerate() {
+                let mut rig = turret.clone();
+                rig.crowd_distance = setting.unwrap_or(f64::INFINITY);
+                let mut retina = Panoramic::new(&rig);
+                let mut out = RetinaOutput::default();
+                let view = ViewOf::Columns(&frame, Some(viewer));
+                let started = Instant::now();
+                retina.update_of(&renderer, view, pose, floor, &mut out);
+                seconds[slot] += started.elapsed().as_secs_f64();
+                outputs[slot].push(out);
+            }
+        }
+    }
+    let retinas = (frames.len() * viewers.len()) as f64;
+    Ok(settings
+        .iter()
+        .enumerate()
+        .map(|(slot, &distance)| {
+            let errors = compare(&outputs[slot], &outputs[0]);
+            Row {
+                robots,
+                distance,
+                micros_per_retina: seconds[slot] / retinas * 1e6,
+                outputs: errors.outputs,
+                lsb_mean: errors.lsb_mean,
+                beyond_one_lsb: errors.beyond_one,
+                lsb_max: errors.lsb_max,
+                analog_mean: errors.analog_mean,
+                analog_max: errors.analog_max,
+            }
+        })
+        .collect())
+}
+
+struct Errors {
+    outputs: usize,
+    lsb_mean: f64,
+    beyond_one: f64,
+    lsb_max: u32,
+    analog_mean: f64,
+    analog_max: f64,
+}
+
+/// Digital error in LSB over every enabled output, and the photocurrents' relative error.
+fn compare(results: &[RetinaOutput], reference: &[RetinaOutput]) -> Errors {
+    let (mut lsb_sum, mut beyond, mut lsb_max, mut outputs) = (0u64, 0usize, 0u32, 0usize);
+    let (mut analog_sum, mut analog_max, mut analog_count) = (0.0, 0.0f64, 0usize);
+    for (result, reference) in results.iter().zip(reference) {
+        for ((_, d), (_, e)) in result.digital.iter().zip(&reference.digital) {
+            for (x, y) in d.iter().zip(e) {
+                let error = (*x as i32 - *y as i32).unsigned_abs();
+                lsb_sum += error as u64;
+                beyond += (error > 1) as usize;
+                lsb_max = lsb_max.max(error);
+                outputs += 1;
+            }
+        }
+        for (a, r) in result.luminance.iter().zip(&reference.luminance) {
+            let error = (a - r).abs() / r.abs().max(1e-3);
+            analog_sum += error;
+            analog_max = analog_max.max(error);
+            analog_count += 1;
+        }
+    }
+    Errors {
+        outputs,
+        lsb_mean: lsb_sum as f64 / outputs.max(1) as f64,
+        beyond_one: beyond as f64 / outputs.max(1) as f64,
+        lsb_max,
+        analog_mean: analog_sum / analog_count.max(1) as f64,
+        analog_max,
+    }
+}
+
+/// Buoy visits per robot per minute, exact against each crowd distance, over seeds.
+fn behaviour(robots: usize, args: &Args) -> anyhow::Result<()> {
+    println!(
+        "behaviour: {robots} robots, regatta controller, {} s, seeds 1…{}",
+        args.seconds, args.seeds
+    );
+    println!(
+        "{:>10} {:>28} {:>12}",
+        "distance", "visits/robot/min per seed", "mean"
+    );
+    let mut exact_mean = None;
+    for setting in std::iter::once(None).chain(args.distances.iter().map(|&d| Some(d))) {
+        let mut rates = Vec::new();
+        for seed in 1..=args.seeds {
+            let spec = SwarmSpec {
+                robots,
+                buoys: None,
+                ir_only: false,
+                seed,
+                crowd_distance: setting,
+            };
+            let compiled: Compiled = compile_text("swarm.wbt", swarm_world(&spec))?;
+            let mut simulation = Simulation::new(&compiled, Some(seed))?;
+            let steps = (args.seconds / simulation.time_step).round() as u64;
+            simulation.run(steps);
+            let visits: u64 = simulation
+                .robots
+                .iter()
+                .map(|r| r.visits.sequence.len() as u64)
+                .sum();
+            rates.push(visits as f64 / robots as f64 / (simulation.time / 60.0));
+        }
+        let mean = rates.iter().sum::<f64>() / rates.len().max(1) as f64;
+        let relative = exact_mean.map_or(String::new(), |e: f64| {
+            format!(" ({:+.1} % of exact)", 100.0 * (mean - e) / e.max(1e-12))
+        });
+        if setting.is_none() {
+            exact_mean = Some(mean);
+        }
+        println!(
+            "{:>10} {:>28} {:>12.3}{relative}",
+            setting.map_or("exact".to_owned(), |d| format!("{d} m")),
+            rates
+                .iter()
+                .map(|r| format!("{r:.2}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+            mean
+        );
+    }
+    Ok(())
+}
+
+/// Time per retina against mean error, one series per swarm size, log axes.
+fn chart(rows: &[Row]) -> regatta_figures::Chart {
+    use regatta_figures::{Axis, Chart, Corner, Series};
+    let floor = 1e-4;
+    let mut chart = Chart::new(
+        "crowd level of detail: time per retina against error",
+        Axis::log("time per retina update (µs)"),
+        Axis::log("mean digital error (LSB; exact drawn at 0.0001)"),
+    )
+    .legend(Corner::UpperRight);
+    let mut sizes: Vec<usize> = rows.iter().map(|r| r.robots).collect();
+    sizes.dedup();
+    for robots in sizes {
+        let mut points: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.robots == robots)
+            .map(|r| (r.micros_per_retina, r.lsb_mean.max(floor)))
+            .collect();
+        points.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chart = chart.with(Series::line_markers(format!("{robots} robots"), points));
+    }
+    chart
+}
