@@ -1,12 +1,15 @@
 //! Swarms: the column renderer's sweep against the exhaustive reference on random crowded
 //! scenes (bit for bit), one simulation across thread counts, and a packed crowd that never
-//! overlaps beyond the documented tolerance.
+//! overlaps beyond the documented tolerance. The crowd level of detail: exact where every
+//! robot is within its distance, within its documented error bound on random crowds, and the
+//! same on any number of threads.
 
 use glam::{DVec2, DVec3};
 use proptest::prelude::*;
 use regatta_runtime::compile::rig::TurretRig;
 use regatta_runtime::optics::{Panoramic, Renderer, RetinaOutput};
 use regatta_runtime::render::column::Strip;
+use regatta_runtime::render::Detail;
 use regatta_runtime::retina::{pixel_azimuth, HALF_BAND, PIXELS, PIXEL_WIDTH};
 use regatta_runtime::sim::{Simulation, PENETRATION_TOLERANCE};
 use regatta_tests::{compile_text, start_poses};
@@ -105,6 +108,142 @@ proptest! {
             prop_assert_eq!(&out_fast.digital, &out_reference.digital);
         }
     }
+}
+
+/// Every retina of a crowd at its start, through the shared frame, with `detail`: each
+/// robot's photocurrents and 6-bit outputs.
+fn crowd_retinas(text: &str, detail: impl Fn(Detail) -> Detail) -> Vec<(Vec<f64>, RetinaOutput)> {
+    let compiled = compile_text(text);
+    let renderer = Renderer::new(&compiled.graph, &compiled.plan, false);
+    let Renderer::Columns(scene) = &renderer else {
+        panic!("an upright crowd renders by columns");
+    };
+    let poses = start_poses(&compiled);
+    let mut shared = None;
+    renderer.prepare_shared(&compiled.plan, &poses, &mut shared);
+    let frame = shared.expect("the column renderer shares its frame");
+    let strip = strip();
+    let mut out = Vec::new();
+    for (index, rig) in compiled.rig.robots.iter().enumerate() {
+        let Some(TurretRig::Panoramic(turret)) = &rig.turret else {
+            continue;
+        };
+        let eye = DVec3::new(rig.start.x, rig.floor_y + turret.height, rig.start.z);
+        let mut analog = vec![0.0; PIXELS];
+        let base = Detail::new(turret.samples, turret.stride);
+        scene.integrate_for(
+            &frame,
+            Some(index),
+            eye,
+            rig.start.heading,
+            &strip,
+            detail(base),
+            &mut analog,
+        );
+        let mut output = RetinaOutput::default();
+        Panoramic::new(turret).accept(&analog, &mut output);
+        out.push((analog, output));
+    }
+    out
+}
+
+/// The documented bound of the crowd level of detail at 0.5 m on crowds of 10 robots/m²
+/// (docs/crowd.md): the mean error of a scene's 6-bit outputs, and the largest.
+const CROWD_MEAN_LSB: f64 = 0.3;
+const CROWD_MAX_LSB: u32 = 3;
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+
+    /// With every robot within the crowd distance, the crowd level of detail is exact: the
+    /// same photocurrents to the last bit.
+    #[test]
+    fn the_crowd_level_of_detail_is_exact_when_every_robot_is_within_reach(
+        side in 0.3f64..1.2,
+        robots in prop::collection::vec((0.0f64..1.0, 0.0f64..1.0, -3.2f64..3.2), 2..40),
+        buoys in prop::collection::vec((0.0f64..1.0, 0.0f64..1.0), 0..4),
+        stride in prop::sample::select(vec![1u32, 16]),
+    ) {
+        let text = crowd_world(side, &robots, &buoys, &[], stride, 1);
+        let exact = crowd_retinas(&text, |d| d);
+        let reach = side * 1.5;
+        let crowd = crowd_retinas(&text, |d| Detail { crowd_distance: reach, ..d });
+        for (robot, ((a, _), (b, _))) in crowd.iter().zip(&exact).enumerate() {
+            for (pixel, (x, y)) in a.iter().zip(b).enumerate() {
+                prop_assert_eq!(x.to_bits(), y.to_bits(), "robot {} pixel {}", robot, pixel);
+            }
+        }
+    }
+
+    /// On random crowds of about 10 robots/m², leaving out the robots beyond 0.5 m keeps
+    /// each scene's 6-bit outputs within the documented bound of the exact ones.
+    #[test]
+    fn the_crowd_level_of_detail_stays_within_its_documented_error(
+        count in 20usize..60,
+        seed in 0u64..1_000_000,
+    ) {
+        let side = (count as f64 / 10.0).sqrt();
+        let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+        let mut unit = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let robots: Vec<(f64, f64, f64)> = (0..count)
+            .map(|_| (unit(), unit(), unit() * 6.4 - 3.2))
+            .collect();
+        let buoys: Vec<(f64, f64)> = (0..count / 10).map(|_| (unit(), unit())).collect();
+        let text = crowd_world(side, &robots, &buoys, &[], 16, 1);
+        let exact = crowd_retinas(&text, |d| d);
+        let crowd = crowd_retinas(&text, |d| Detail { crowd_distance: 0.5, ..d });
+        let (mut sum, mut outputs, mut worst) = (0u64, 0u64, 0u32);
+        for ((_, a), (_, b)) in crowd.iter().zip(&exact) {
+            for ((_, x), (_, y)) in a.digital.iter().zip(&b.digital) {
+                for (p, q) in x.iter().zip(y) {
+                    let error = (*p as i32 - *q as i32).unsigned_abs();
+                    sum += error as u64;
+                    worst = worst.max(error);
+                    outputs += 1;
+                }
+            }
+        }
+        let mean = sum as f64 / outputs.max(1) as f64;
+        prop_assert!(mean <= CROWD_MEAN_LSB, "mean error {} LSB over {} outputs", mean, outputs);
+        prop_assert!(worst <= CROWD_MAX_LSB, "largest error {} LSB", worst);
+    }
+}
+
+/// The crowd level of detail runs the same on any number of threads (the robots' grid is
+/// built by whichever viewer comes first, and must not matter).
+#[test]
+fn a_crowd_with_its_level_of_detail_runs_the_same_on_any_number_of_threads() {
+    let text = swarm_text(40, 2.0).replace(
+        "PanoramicTurret { lambda 5 }",
+        "PanoramicTurret { lambda 5 crowdDistance 0.4 }",
+    );
+    let compiled = compile_text(&text);
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let mut simulation = Simulation::new(&compiled, None).unwrap();
+                simulation.sense_everything();
+                simulation.run(40);
+                fingerprint(&simulation)
+            })
+    };
+    let one = run(1);
+    assert_eq!(one, run(2));
+    assert_eq!(one, run(3));
+    // And it is a crowd setting: some robot's retina differs from the exact run's.
+    let exact = compile_text(&swarm_text(40, 2.0));
+    let mut simulation = Simulation::new(&exact, None).unwrap();
+    simulation.sense_everything();
+    simulation.run(40);
+    assert_ne!(one, fingerprint(&simulation), "nothing was left out");
 }
 
 /// A generated swarm with retinas (the bench's kind of world, small).

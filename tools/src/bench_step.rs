@@ -44,9 +44,9 @@ pub struct Args {
     #[arg(long, allow_negative_numbers = true)]
     seconds: Option<f64>,
     /// Swarms: the turrets' crowd level of detail (`crowdDistance`, m): other robots farther
-    /// than this are not drawn. Without it, every robot is (exact).
-    #[arg(long, value_name = "METRES")]
-    crowd_distance: Option<f64>,
+    /// than this are not drawn (its error: `regatta bench crowd`). 0 draws every robot (exact).
+    #[arg(long, value_name = "METRES", default_value_t = 0.5)]
+    crowd_distance: f64,
     /// Swarms: seed of the placements.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -113,7 +113,7 @@ fn swarms(args: Args, threads: usize) -> anyhow::Result<Outcome> {
         buoys: args.buoys,
         ir_only: args.ir_only,
         seed: args.seed,
-        crowd_distance: args.crowd_distance,
+        crowd_distance: (args.crowd_distance > 0.0).then_some(args.crowd_distance),
     };
     if let Some(directory) = &args.write_worlds {
         std::fs::create_dir_all(directory)
@@ -184,7 +184,12 @@ fn swarms(args: Args, threads: usize) -> anyhow::Result<Outcome> {
         );
         rows.push(row);
     }
-    crate::bench_swarm::print_table(&rows, threads, args.ir_only);
+    crate::bench_swarm::print_table(
+        &rows,
+        threads,
+        args.ir_only,
+        (args.crowd_distance > 0.0).then_some(args.crowd_distance),
+    );
     if let Some((slope, from, to)) = crate::bench_swarm::fitted_exponent(&rows) {
         println!("fitted exponent {from}→{to}: cost per step ∝ N^{slope:.2}");
     }

@@ -1,7 +1,8 @@
 //! `regatta bench step --robots 1,10,100,1000`: how a step's cost grows with the group.
 //!
 //! The worlds are generated, not read: N Kheperas running the `regatta` controller, each with
-//! a Panoramic turret (exact optics, odd filter; `--ir-only` takes it off and runs the
+//! a Panoramic turret (exact optics, odd filter, the crowd level of detail at 0.5 m unless
+//! `--crowd-distance` says otherwise, 0 being exact; `--ir-only` takes it off and runs the
 //! `braitenberg` obstacle avoider, which needs no turret), and N/10 light
 //! buoys (at least 3), at 10 robots per square metre on a square arena whose side grows as
 //! √N. Robots stand on a jittered grid with seeded headings; buoys are scattered (seeded) where
@@ -304,14 +305,19 @@ pub fn fitted_exponent(rows: &[Row]) -> Option<(f64, usize, usize)> {
 }
 
 /// The table's lines.
-pub fn print_table(rows: &[Row], threads: usize, ir_only: bool) {
+pub fn print_table(rows: &[Row], threads: usize, ir_only: bool, crowd_distance: Option<f64>) {
     println!(
         "swarm step bench: {} thread(s), {}; 10 robots/m²",
         threads,
-        if ir_only {
-            "IR only (no turret), braitenberg controller"
-        } else {
-            "Panoramic turrets (exact optics, odd filter), regatta controller"
+        match (ir_only, crowd_distance) {
+            (true, _) => "IR only (no turret), braitenberg controller".to_owned(),
+            (false, None) => {
+                "Panoramic turrets (exact optics, every robot drawn, odd filter), regatta controller"
+                    .to_owned()
+            }
+            (false, Some(d)) => format!(
+                "Panoramic turrets (exact optics, other robots drawn within {d} m, odd filter), regatta controller"
+            ),
         }
     );
     println!(
