@@ -56,7 +56,7 @@ pub struct ColumnFrame {
     /// Where each robot stands (x, z).
     pub(super) robot_at: Vec<DVec2>,
     /// The robots binned for the crowd level of detail, by the first look that needs it.
-    pub(super) crowd: OnceLock<CrowdGrid>,
+    pub(super) crowd: OnceLock<Box<CrowdGrid>>,
     pub(super) lights: Arc<[WorldLight]>,
     pub(super) shades: Arc<Shades>,
     /// Whether every object of the frame has fast shading.

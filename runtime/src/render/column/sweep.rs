@@ -540,9 +540,9 @@ impl ColumnScene<'_> {
         };
         match &self.parts_of {
             Some(parts_of) if reach.crowd_distance.is_finite() => {
-                let grid = frame
-                    .crowd
-                    .get_or_init(|| CrowdGrid::new(&frame.robot_at, reach.crowd_distance));
+                let grid = frame.crowd.get_or_init(|| {
+                    Box::new(CrowdGrid::new(&frame.robot_at, reach.crowd_distance))
+                });
                 grid.within(&frame.robot_at, eye2, reach.crowd_distance, near);
                 // The viewer's own parts, as its turret sees them, wherever the eye is.
                 if let Some(viewer) = viewer.filter(|&v| v < frame.robot_at.len()) {
