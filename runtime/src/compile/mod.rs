@@ -69,8 +69,10 @@ pub struct Compiled {
 
 /// Compiles a scene.
 pub fn compile(scene: &Scene) -> Compiled {
+    let settings = world_settings(scene);
     let mut compiler = Compiler {
         scene,
+        time_step: settings.time_step,
         graph: RenderGraph {
             primitives: Vec::new(),
             meshes: Vec::new(),
@@ -101,7 +103,6 @@ pub fn compile(scene: &Scene) -> Compiled {
     }
     index_static(&mut compiler.graph);
     find_floors(&mut compiler.graph, &mut compiler.rig);
-    let settings = world_settings(scene);
     let plan = Plan::new(&compiler.graph, &compiler.rig);
     // The graph lives as long as the simulation: no spare room (a swarm's vectors are long).
     compiler.graph.primitives.shrink_to_fit();
@@ -136,6 +137,8 @@ pub fn world_settings(scene: &Scene) -> WorldSettings {
 
 struct Compiler<'s> {
     scene: &'s Scene,
+    /// WorldInfo.basicTimeStep (s), read once: finding WorldInfo walks the whole scene.
+    time_step: f64,
     graph: RenderGraph,
     rig: SensorRig,
     warnings: Vec<String>,
@@ -485,7 +488,7 @@ impl Compiler<'_> {
             z: robot_frame.translation.z,
             heading: libm::atan2(-forward.z, forward.x),
         };
-        let time_step = world_settings(scene).time_step;
+        let time_step = self.time_step;
         // `check` refuses a period that is not a whole number of steps; compiled unchecked,
         // it is rounded to the nearest (at least one).
         let control_steps = rig::control_steps(scene.float(node, "controlPeriod"), time_step)
