@@ -68,6 +68,7 @@ class World:
         control: Optional[Sequence[str]] = None,
         fitness: str = "regatta",
         text: Optional[str] = None,
+        vary: Sequence[str] = (),
     ) -> None: ...
     def reset(self, seed: Optional[int] = None) -> npt.NDArray[np.float32]:
         """Restarts the world; returns the first observation (driven robots, length)."""
@@ -126,6 +127,7 @@ class VectorWorld:
         threads: int = 0,
         autoreset: str = "next_step",
         text: Optional[str] = None,
+        vary: Sequence[str] = (),
     ) -> None: ...
     def reset(
         self,
@@ -177,6 +179,7 @@ def evaluate(
     lenient: bool = False,
     overrides: Sequence[str] = (),
     text: Optional[str] = None,
+    vary: Sequence[str] = (),
 ) -> npt.NDArray[np.float64]:
     """Fitness of each candidate (row of `weights`) under each seed: (candidates, seeds)."""
 
@@ -191,6 +194,7 @@ def batch(
     lenient: bool = False,
     overrides: Sequence[str] = (),
     text: Optional[str] = None,
+    vary: Sequence[str] = (),
 ) -> list[str]:
     """The JSON lines `regatta batch --json` writes for the same runs."""
 

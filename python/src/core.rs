@@ -225,7 +225,14 @@ impl Drive {
         seed: u64,
         log: Option<&LogRequest>,
     ) -> Result<(Running, Option<Log>), CoreError> {
-        let mut running = Running::try_new(experiment.clone(), |e| e.simulation(seed, None))?;
+        // A world with variations is drawn anew for each seed; the trial's world owns its
+        // simulation (and its log embeds the drawn text).
+        let world = match experiment.for_seed(seed)? {
+            Some(varied) => Arc::new(varied),
+            None => experiment.clone(),
+        };
+        let experiment = &world;
+        let mut running = Running::try_new(world.clone(), |e| e.simulation(seed, None))?;
         let opened = running.with_dependent_mut(|_, simulation| {
             for ((&robot, observation), command) in self
                 .controlled
@@ -562,6 +569,8 @@ fn open_log(
                 )
             })
             .collect(),
+        variations: (!experiment.drawn.is_empty())
+            .then(|| serde_json::to_string(&experiment.drawn).unwrap_or_default()),
     };
     let recorder =
         Recorder::new(BufWriter::new(file), simulation, &run).map_err(|e| failed(e.to_string()))?;

@@ -45,6 +45,7 @@ pub fn load(
     text: Option<&str>,
     lenient: bool,
     driven: Driven<'_>,
+    vary: &[String],
 ) -> PyResult<Arc<Experiment>> {
     let experiment = match text {
         Some(text) => Experiment::from_text_driven(
@@ -57,9 +58,8 @@ pub fn load(
         ),
         None => Experiment::load_driven(path, lenient, &[], driven),
     };
-    experiment
-        .map(Arc::new)
-        .map_err(|e| to_py(CoreError::Load(e)))
+    let experiment = experiment.map_err(|e| to_py(CoreError::Load(e)))?;
+    crate::vary(experiment, vary).map(Arc::new)
 }
 
 /// Reads actions (any array-like of numbers) into `out`, which must match its size.
@@ -141,7 +141,7 @@ impl World {
 #[pymethods]
 impl World {
     #[new]
-    #[pyo3(signature = (path, *, seed=None, lenient=false, control=None, fitness="regatta", text=None))]
+    #[pyo3(signature = (path, *, seed=None, lenient=false, control=None, fitness="regatta", text=None, vary=vec![]))]
     fn new(
         path: PathBuf,
         seed: Option<u64>,
@@ -149,13 +149,14 @@ impl World {
         control: Option<Vec<String>>,
         fitness: &str,
         text: Option<&str>,
+        vary: Vec<String>,
     ) -> PyResult<World> {
         let fitness = Fitness::parse(fitness).map_err(|e| value_error(e.to_string()))?;
         let driven = match &control {
             Some(names) => Driven::Named(names),
             None => Driven::Every,
         };
-        let experiment = load(&path, text, lenient, driven)?;
+        let experiment = load(&path, text, lenient, driven, &vary)?;
         let core = Core::new(experiment, control.as_deref(), fitness, seed, 0).map_err(to_py)?;
         let lengths: Vec<usize> = core.observations().iter().map(|o| o.len()).collect();
         if lengths.windows(2).any(|w| w[0] != w[1]) {

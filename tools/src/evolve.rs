@@ -69,6 +69,8 @@ pub struct Args {
     #[arg(long = "set", value_name = "NODE.FIELD=VALUE", value_parser = crate::batch::parse_override)]
     overrides: Vec<Override>,
     #[command(flatten)]
+    vary: crate::vary::VaryOptions,
+    #[command(flatten)]
     reading: crate::world::WorldOptions,
 }
 
@@ -122,6 +124,17 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             experiments[0].name
         );
     }
+    // Every world's trials draw the same variations, each from its trial's seed.
+    let variations = args.vary.all()?;
+    let experiments: Vec<Experiment> = experiments
+        .into_iter()
+        .map(|experiment| {
+            let name = experiment.name.clone();
+            experiment
+                .with_variations(variations.clone())
+                .with_context(|| format!("cannot vary {name}"))
+        })
+        .collect::<anyhow::Result<_>>()?;
     let dimension = experiments[0].parameter_count().with_context(|| {
         format!(
             "{} has no robot with controller \"neural\" and a NeuralNetwork to evolve",
@@ -318,6 +331,7 @@ fn write_outputs(
         steps_requested: evolution.settings.steps,
         channels: regatta_runtime::log::Channels::ALL,
         controllers: Vec::new(),
+        variations: None,
     };
     let mut recorder =
         regatta_runtime::log::Recorder::new(std::io::BufWriter::new(file), &mut simulation, &run)?;
