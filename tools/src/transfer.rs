@@ -212,7 +212,17 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             seeds_text(&args.seeds.0)
         ),
         value_label: format!("mean {} fitness", args.fitness.name()),
-        rows: names.clone(),
+        // The worlds' stems: a row's label has a third of the figure.
+        rows: args
+            .controllers
+            .iter()
+            .map(|p| {
+                p.file_stem().map_or_else(
+                    || crate::world::world_name(p),
+                    |s| s.to_string_lossy().into_owned(),
+                )
+            })
+            .collect(),
         columns: conditions.iter().map(|c| c.name.clone()).collect(),
         values: table
             .iter()
