@@ -24,7 +24,7 @@ pub struct HeatMap {
 
 const CELL_HEIGHT: u32 = 90;
 const TITLE_HEIGHT: u32 = 70;
-const HEADER_HEIGHT: u32 = 60;
+const HEADER_HEIGHT: u32 = 80;
 const FOOTER_HEIGHT: u32 = 60;
 const LEFT: u32 = 330;
 const WIDTH: u32 = 1200;
@@ -41,6 +41,22 @@ impl HeatMap {
             (low - 0.5, high + 0.5)
         }
     }
+}
+
+/// A label in at most two lines of about `chars` characters, cut where it is longer.
+fn wrapped(text: &str, chars: usize) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    for word in text.split_whitespace() {
+        let full = lines.len() == 2;
+        match lines.last_mut() {
+            Some(line) if full || line.chars().count() + 1 + word.chars().count() <= chars => {
+                line.push(' ');
+                line.push_str(word);
+            }
+            _ => lines.push(word.to_owned()),
+        }
+    }
+    lines.iter().map(|l| shortened(l, chars)).collect()
 }
 
 /// A label cut to `chars` characters (an ellipsis marks the cut).
@@ -81,15 +97,22 @@ impl Figure for HeatMap {
         let columns = self.columns.len().max(1) as u32;
         let cell_width = (WIDTH - LEFT - 30) / columns;
         let top = (TITLE_HEIGHT + HEADER_HEIGHT) as i32;
-        // Column names over the cells, shorter as columns narrow.
-        let chars = (cell_width / 14).max(4) as usize;
+        // Column names over the cells, on two lines where columns are narrow (about 12
+        // pixels a character at this size).
+        let size = style::TICK - 4;
+        let chars = (cell_width / 12).max(4) as usize;
         for (c, name) in self.columns.iter().enumerate() {
             let x = LEFT as i32 + (c as u32 * cell_width + cell_width / 2) as i32;
-            root.draw(&Text::new(
-                shortened(name, chars),
-                (x, top - HEADER_HEIGHT as i32 / 2),
-                font(style::TICK).pos(centred),
-            ))?;
+            let lines = wrapped(name, chars);
+            let step = size as i32 + 4;
+            let first = top - 12 - step * (lines.len() as i32 - 1) - step / 2;
+            for (i, line) in lines.iter().enumerate() {
+                root.draw(&Text::new(
+                    line.clone(),
+                    (x, first + step * i as i32),
+                    font(size).pos(centred),
+                ))?;
+            }
         }
         let (low, high) = self.range();
         for (r, name) in self.rows.iter().enumerate() {

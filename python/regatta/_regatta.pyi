@@ -70,6 +70,10 @@ class World:
         text: Optional[str] = None,
         vary: Sequence[str] = (),
     ) -> None: ...
+    @property
+    def variations(self) -> list[tuple[str, str]]:
+        """The values this episode's variations drew: (``Node[i].field``, value) pairs."""
+        ...
     def reset(self, seed: Optional[int] = None) -> npt.NDArray[np.float32]:
         """Restarts the world; returns the first observation (driven robots, length)."""
     def step(self, actions: Optional[npt.ArrayLike] = None) -> npt.NDArray[np.float32]:

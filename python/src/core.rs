@@ -358,6 +358,11 @@ impl Core {
         &self.experiment
     }
 
+    /// The values the current episode's variations drew (empty when nothing varies).
+    pub fn drawn(&self) -> &[regatta_evolve::variations::Drawn] {
+        &self.running.borrow_owner().drawn
+    }
+
     pub fn simulation(&self) -> &Simulation<'_> {
         self.running.borrow_dependent()
     }
@@ -503,9 +508,10 @@ impl Core {
 
     /// The run so far as `regatta run --json` prints it (without wall time).
     pub fn summary_json(&self) -> String {
-        let summary = self
+        let mut summary = self
             .observer
             .summary(self.simulation(), &self.experiment.name, None);
+        summary.variations = self.drawn().to_vec();
         serde_json::to_string_pretty(&summary).unwrap_or_default()
     }
 

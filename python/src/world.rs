@@ -252,6 +252,17 @@ impl World {
     }
 
     /// The names of the observation's columns (`ir0`, …, `ambient7`, `retina0`, …).
+    /// The values this episode's variations drew (`vary=`), as (`Node[i].field`, value
+    /// text) pairs; empty when nothing varies.
+    #[getter]
+    fn variations(&self) -> Vec<(String, String)> {
+        self.core()
+            .drawn()
+            .iter()
+            .map(|d| (d.key(), d.value.clone()))
+            .collect()
+    }
+
     #[getter]
     fn observation_names(&self) -> Vec<String> {
         self.core().observation_names()

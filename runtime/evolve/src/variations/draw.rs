@@ -17,6 +17,9 @@ use serde::Serialize;
 use super::spec::{How, Variation, VaryError};
 use crate::world::{apply, set_field, world_nodes};
 
+/// A text edit: the byte range replaced and its replacement.
+type Edit = (usize, usize, String);
+
 /// How many draws a trial may take before its variations are refused.
 pub const TRIES: usize = 100;
 
@@ -205,7 +208,7 @@ impl Plan {
         file: &regatta_parser::syntax::SourceFile,
         rng: &mut Xoshiro256StarStar,
         only: Option<usize>,
-    ) -> Result<(Vec<(usize, usize, String)>, Vec<Drawn>), VaryError> {
+    ) -> Result<(Vec<Edit>, Vec<Drawn>), VaryError> {
         let mut edits = Vec::new();
         let mut drawn = Vec::new();
         for (i, v) in self.variations.iter().enumerate() {
