@@ -16,7 +16,6 @@ use std::path::{Path, PathBuf};
 
 use numpy::{AllowTypeChange, PyArray2, PyArrayLike2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use regatta_evolve::variations::Variation;
 use regatta_evolve::world::Override;
 use regatta_evolve::{Experiment, Fitness, RunSummary};
 
@@ -52,18 +51,7 @@ fn load_experiment(
         }
         None => Experiment::load(world, lenient, &overrides),
     };
-    vary(loaded.map_err(|e| to_py(e.into()))?, variations)
-}
-
-/// `experiment` with `vary` (`regatta batch --vary` texts) drawn anew for each seed.
-pub(crate) fn vary(experiment: Experiment, vary: &[String]) -> PyResult<Experiment> {
-    let variations = vary
-        .iter()
-        .map(|v| Variation::parse_flag(v).map_err(|e| value_error(e.to_string())))
-        .collect::<PyResult<Vec<_>>>()?;
-    experiment
-        .with_variations(variations)
-        .map_err(|e| value_error(e.to_string()))
+    world::vary(loaded.map_err(|e| to_py(e.into()))?, variations)
 }
 
 fn parse_fitness(fitness: &str) -> PyResult<Fitness> {

@@ -59,7 +59,21 @@ pub fn load(
         None => Experiment::load_driven(path, lenient, &[], driven),
     };
     let experiment = experiment.map_err(|e| to_py(CoreError::Load(e)))?;
-    crate::vary(experiment, vary).map(Arc::new)
+    self::vary(experiment, vary).map(Arc::new)
+}
+
+/// `experiment` with `vary` (`regatta batch --vary` texts) drawn anew for each seed.
+pub fn vary(experiment: Experiment, vary: &[String]) -> PyResult<Experiment> {
+    let variations = vary
+        .iter()
+        .map(|v| {
+            regatta_evolve::variations::Variation::parse_flag(v)
+                .map_err(|e| value_error(e.to_string()))
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    experiment
+        .with_variations(variations)
+        .map_err(|e| value_error(e.to_string()))
 }
 
 /// Reads actions (any array-like of numbers) into `out`, which must match its size.
