@@ -44,10 +44,8 @@ def test_reset_draws_from_its_seed():
     w.reset(5)
     assert w.variations == first
     assert json.loads(w.summary_json())["variations"][0]["value"] == first[0][1]
-    pytest.importorskip("gymnasium")
-    import regatta.gym
-
-    env = regatta.gym.RegattaEnv(REGATTA, vary=VARY, duration=2.0)
+    gym = pytest.importorskip("regatta.gym")
+    env = gym.RegattaEnv(REGATTA, vary=VARY, duration=2.0)
     a, _ = env.reset(seed=11)
     env.step(np.zeros(2, dtype=np.float32))
     b, _ = env.reset(seed=11)

@@ -351,3 +351,44 @@ fn transfer_equals_the_batches_it_stands_for() {
     );
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn evolution_with_variations_is_the_same_at_any_jobs_and_logs_its_trial_as_drawn() {
+    let dir = common::temp_dir("variations-evolve");
+    let evolve = |jobs: &str| {
+        let out = dir.join(format!("j{jobs}"));
+        ok(&regatta()
+            .args([
+                "evolve",
+                &world("regatta_neural.wbt"),
+                "--fitness",
+                "regatta",
+            ])
+            .args(["--generations", "2", "--population", "4", "--trials", "2"])
+            .args(["--duration", "3", "--seed", "2", "-j", jobs])
+            .args(["--out", &out.display().to_string()])
+            .args(["--vary", "DirectionalLight.intensity=0.02..0.8"])
+            .args(["--vary", "Khepera.rotation=any"])
+            .output()
+            .unwrap());
+        out
+    };
+    let (one, two) = (evolve("1"), evolve("2"));
+    // best.mcap names its folder, so it differs by that; its messages replay below.
+    for file in ["fitness.csv", "best.wbt"] {
+        let same = std::fs::read(one.join(file)).unwrap() == std::fs::read(two.join(file)).unwrap();
+        assert!(same, "{file} differs between -j 1 and -j 2");
+    }
+    let log = one.join("best.mcap").display().to_string();
+    let replay = ok(&regatta()
+        .args(["replay", "--verify", &log])
+        .output()
+        .unwrap());
+    assert!(replay.starts_with("OK: "), "{replay}");
+    let info = ok(&regatta().args(["log", "info", &log]).output().unwrap());
+    assert!(
+        info.contains("varied:       Khepera[1].rotation = 0 1 0 "),
+        "{info}"
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
