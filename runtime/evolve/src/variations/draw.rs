@@ -141,13 +141,30 @@ impl Plan {
             base_problems: problems(base, arena),
         };
         let parsed = regatta_parser::parse(text);
-        for (i, v) in plan.variations.iter().enumerate() {
-            let mut rng = stream(0);
-            let (edits, _) = plan.edits(&parsed.file, &mut rng, Some(i))?;
-            check(&apply(text, edits)).map_err(|rendered| VaryError::Check {
-                origins: v.origin.to_string(),
-                rendered,
-            })?;
+        for v in &plan.variations {
+            // Alone, and each of a choice's values once: a value the field does not take is
+            // refused now rather than in the trial that happens to draw it.
+            let alone: Vec<Variation> = match &v.how {
+                How::Choice(values) => values
+                    .iter()
+                    .map(|value| Variation {
+                        how: How::Choice(vec![value.clone()]),
+                        ..v.clone()
+                    })
+                    .collect(),
+                _ => vec![v.clone()],
+            };
+            for one in alone {
+                let trial = Plan {
+                    variations: vec![one],
+                    ..plan.clone()
+                };
+                let (edits, _) = trial.edits(&parsed.file, &mut stream(0))?;
+                check(&apply(text, edits)).map_err(|rendered| VaryError::Check {
+                    origins: v.origin.to_string(),
+                    rendered,
+                })?;
+            }
         }
         Ok(plan)
     }
@@ -179,7 +196,7 @@ impl Plan {
         let mut rng = stream(seed);
         let mut last = String::new();
         for _ in 0..TRIES {
-            let (edits, drawn) = self.edits(&parsed.file, &mut rng, None)?;
+            let (edits, drawn) = self.edits(&parsed.file, &mut rng)?;
             let text = apply(&self.text, edits);
             let checked = check(&text).map_err(|rendered| VaryError::Check {
                 origins: self.origins(),
@@ -201,20 +218,16 @@ impl Plan {
         })
     }
 
-    /// The text edits of one draw of every variation (or of variation `only`), in order:
-    /// variations as declared, each over its nodes in file order.
+    /// The text edits of one draw of every variation, in order: variations as declared,
+    /// each over its nodes in file order.
     fn edits(
         &self,
         file: &regatta_parser::syntax::SourceFile,
         rng: &mut Xoshiro256StarStar,
-        only: Option<usize>,
     ) -> Result<(Vec<Edit>, Vec<Drawn>), VaryError> {
         let mut edits = Vec::new();
         let mut drawn = Vec::new();
-        for (i, v) in self.variations.iter().enumerate() {
-            if only.is_some_and(|o| o != i) {
-                continue;
-            }
+        for v in &self.variations {
             let nodes = targets(file, &v.node);
             if nodes.is_empty() {
                 return Err(VaryError::NoSuchNode {
@@ -318,6 +331,10 @@ impl Plan {
                 n[h0] = x;
                 n[h1] = if self.z_up { -z } else { z };
                 numbers(&n)
+            }
+            How::Choice(ref values) => {
+                let k = (uniform(rng) * values.len() as f64) as usize;
+                values[k.min(values.len() - 1)].clone()
             }
             How::AnyHeading => {
                 let angle = std::f64::consts::PI * (2.0 * uniform(rng) - 1.0);

@@ -15,6 +15,9 @@ pub enum How {
     Arena,
     /// A heading drawn uniformly about the world's up axis (`any`).
     AnyHeading,
+    /// One of these values (world-language text), each as likely (`A|B|…`): a film or none
+    /// (`0.5|1`), a lamp lit or not (`TRUE|FALSE`).
+    Choice(Vec<String>),
 }
 
 /// Where a variation was written: the flag's text, or a file's line and column.
@@ -80,7 +83,8 @@ pub enum VaryError {
 }
 
 /// The grammar of a SPEC, for messages.
-const SPECS: &str = "a range LO..HI, a jitter ±D (or +-D), arena (positions) or any (rotations)";
+const SPECS: &str =
+    "a range LO..HI, a jitter ±D (or +-D), a choice A|B|…, arena (positions) or any (rotations)";
 
 impl Variation {
     /// Reads a `--vary` flag: `NODE.FIELD=SPEC`.
@@ -148,6 +152,13 @@ fn parse_how(spec: &str) -> Result<How, String> {
         "any" => return Ok(How::AnyHeading),
         "" => return Err(format!("nothing after '=': expected {SPECS}")),
         _ => {}
+    }
+    if spec.contains('|') {
+        let values: Vec<String> = spec.split('|').map(|v| v.trim().to_owned()).collect();
+        if values.iter().any(String::is_empty) {
+            return Err(format!("the choice {spec} has an empty value"));
+        }
+        return Ok(How::Choice(values));
     }
     if let Some(rest) = spec.strip_prefix('±').or_else(|| spec.strip_prefix("+-")) {
         let d = number(rest)?;
@@ -230,7 +241,12 @@ pub fn parse_file(path: &str, text: &str) -> Result<Vec<Variation>, VaryError> {
 
 /// Line and column (from 1, the column in characters) of byte `offset`.
 fn line_col(text: &str, offset: usize) -> (usize, usize) {
-    let before = &text[..offset.min(text.len())];
+    // An offset inside a character (never expected from the TOML reader) counts as its start.
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let before = &text[..offset];
     let line = before.matches('\n').count() + 1;
     let start = before.rfind('\n').map_or(0, |i| i + 1);
     (line, before[start..].chars().count() + 1)
@@ -299,6 +315,12 @@ mod tests {
             Variation::parse_flag("Khepera.rotation=any").unwrap().how,
             How::AnyHeading
         );
+        assert_eq!(
+            Variation::parse_flag("Buoy.irReflectance=0.5 | 1")
+                .unwrap()
+                .how,
+            How::Choice(vec!["0.5".into(), "1".into()])
+        );
         for bad in [
             "Buoy",
             "Buoy.x",
@@ -306,6 +328,7 @@ mod tests {
             "Buoy.x=nan..1",
             "Buoy.x=±-1",
             "Buoy.x=wide",
+            "Buoy.x=1||2",
             ".x=1..2",
         ] {
             let error = Variation::parse_flag(bad).unwrap_err().to_string();
