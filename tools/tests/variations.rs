@@ -198,7 +198,10 @@ fn refused_variations_name_their_flag_or_file_line() {
         ("Buoy.radius=±0.01", "does not write 'radius'"),
         ("Khepera.rotation=arena", "'rotation' is not a position"),
         // Every value of a choice is checked, not only those a trial happens to draw.
-        ("Buoy.lampLight=TRUE|maybe", "Expected boolean value, found 'maybe'"),
+        (
+            "Buoy.lampLight=TRUE|maybe",
+            "Expected boolean value, found 'maybe'",
+        ),
         // A buoy thrown out of the arena on every draw: refused after the draws, not kept.
         (
             "Buoy.translation=±5",
