@@ -379,6 +379,22 @@ fn evolution_with_variations_is_the_same_at_any_jobs_and_logs_its_trial_as_drawn
         out
     };
     let (one, two) = (evolve("1"), evolve("2"));
+    // The variations reach the candidates' trials: without them the evolution differs.
+    let plain = dir.join("plain");
+    ok(&regatta()
+        .args([
+            "evolve",
+            &world("regatta_neural.wbt"),
+            "--fitness",
+            "regatta",
+        ])
+        .args(["--generations", "2", "--population", "4", "--trials", "2"])
+        .args(["--duration", "3", "--seed", "2", "-j", "2"])
+        .args(["--out", &plain.display().to_string()])
+        .output()
+        .unwrap());
+    let history = |dir: &Path| std::fs::read_to_string(dir.join("fitness.csv")).unwrap();
+    assert_ne!(history(&one), history(&plain));
     // best.mcap names its folder, so it differs by that; its messages replay below.
     for file in ["fitness.csv", "best.wbt"] {
         let same = std::fs::read(one.join(file)).unwrap() == std::fs::read(two.join(file)).unwrap();
