@@ -334,7 +334,10 @@ impl Plan {
             }
             How::Choice(ref values) => {
                 let k = (uniform(rng) * values.len() as f64) as usize;
-                values[k.min(values.len() - 1)].clone()
+                match values.get(k.min(values.len().saturating_sub(1))) {
+                    Some(value) => value.clone(),
+                    None => return Err(unfit("a choice of no values".to_owned())),
+                }
             }
             How::AnyHeading => {
                 let angle = std::f64::consts::PI * (2.0 * uniform(rng) - 1.0);
