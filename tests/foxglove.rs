@@ -233,6 +233,7 @@ fn record(world: &str, steps: u64, channels: Channels) -> Vec<u8> {
         steps_requested: steps,
         channels,
         controllers: Vec::new(),
+        variations: None,
     };
     let mut sink = std::io::Cursor::new(Vec::new());
     let mut recorder = Recorder::new(&mut sink, &mut simulation, &run).unwrap();

@@ -42,6 +42,7 @@ fn log_of(world: &str, steps: u64) -> Vec<u8> {
         steps_requested: steps,
         channels: regatta_runtime::log::Channels::ALL,
         controllers: Vec::new(),
+        variations: None,
     };
     let mut sink = std::io::Cursor::new(Vec::new());
     let mut recorder = Recorder::new(&mut sink, &mut simulation, &run).unwrap();

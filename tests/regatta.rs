@@ -246,6 +246,7 @@ fn logs_do_not_depend_on_how_many_threads_run_worlds() {
             steps_requested: 200,
             channels: regatta_runtime::log::Channels::ALL,
             controllers: Vec::new(),
+            variations: None,
         };
         let mut sink = std::io::Cursor::new(Vec::new());
         let mut recorder = Recorder::new(&mut sink, &mut simulation, &run).unwrap();

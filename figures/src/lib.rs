@@ -8,6 +8,7 @@
 //! - [`Chart`]: lines, markers and bands on linear or log axes (benchmarks, fitness curves).
 //! - [`TopView`]: the arena from above in metres with obstacles, buoys, trajectories, contacts.
 //! - [`Kymograph`]: a retina's values over azimuth and time, with a colour bar.
+//! - [`HeatMap`]: a table as coloured cells with their values (the transfer table).
 //! - [`TimeSeries`]: stacked panels sharing one time window, long traces summarised per
 //!   interval.
 //!
@@ -17,6 +18,7 @@
 
 mod chart;
 mod figure;
+mod heatmap;
 mod kymograph;
 mod series;
 pub mod style;
@@ -29,6 +31,7 @@ use plotters::prelude::*;
 
 pub use chart::{Axis, Chart, Corner, Series, SeriesStyle};
 pub use figure::{DrawResult, Figure, Rasters};
+pub use heatmap::HeatMap;
 pub use kymograph::{average_rows, ColorScale, Kymograph, Mark};
 pub use series::{summarise, Panel, Summary, TimeSeries, Trace};
 pub use style::number;

@@ -68,7 +68,12 @@ class World:
         control: Optional[Sequence[str]] = None,
         fitness: str = "regatta",
         text: Optional[str] = None,
+        vary: Sequence[str] = (),
     ) -> None: ...
+    @property
+    def variations(self) -> list[tuple[str, str]]:
+        """The values this episode's variations drew: (``Node[i].field``, value) pairs."""
+        ...
     def reset(self, seed: Optional[int] = None) -> npt.NDArray[np.float32]:
         """Restarts the world; returns the first observation (driven robots, length)."""
     def step(self, actions: Optional[npt.ArrayLike] = None) -> npt.NDArray[np.float32]:
@@ -126,6 +131,7 @@ class VectorWorld:
         threads: int = 0,
         autoreset: str = "next_step",
         text: Optional[str] = None,
+        vary: Sequence[str] = (),
     ) -> None: ...
     def reset(
         self,
@@ -177,6 +183,7 @@ def evaluate(
     lenient: bool = False,
     overrides: Sequence[str] = (),
     text: Optional[str] = None,
+    vary: Sequence[str] = (),
 ) -> npt.NDArray[np.float64]:
     """Fitness of each candidate (row of `weights`) under each seed: (candidates, seeds)."""
 
@@ -191,6 +198,7 @@ def batch(
     lenient: bool = False,
     overrides: Sequence[str] = (),
     text: Optional[str] = None,
+    vary: Sequence[str] = (),
 ) -> list[str]:
     """The JSON lines `regatta batch --json` writes for the same runs."""
 

@@ -22,7 +22,7 @@ Rust on a thread pool in one call, with Gymnasium 1.x autoreset (``autoreset_mod
 from __future__ import annotations
 
 import os
-from typing import Any, Optional, Union
+from typing import Any, Optional, Sequence, Union
 
 import gymnasium
 import numpy as np
@@ -75,6 +75,8 @@ class RegattaEnv(gymnasium.Env):
         lenient: read a foreign world file leniently.
         default_world: the world of the project's ``worlds/`` used when ``world`` is None
             (each registered environment names its own).
+        vary: variations drawn anew from each ``reset(seed)``, as ``regatta run --vary``
+            takes them (``"DirectionalLight.intensity=0.02..0.8"``).
 
     ``step``'s info holds the driven robot's step: ``time`` (s), ``visits`` (buoy visits so
     far) and ``new_visits`` (the buoys entered this step, numbered from 1), ``contacts``
@@ -94,15 +96,21 @@ class RegattaEnv(gymnasium.Env):
         render_size: int = 256,
         lenient: bool = False,
         default_world: str = "regatta.wbt",
+        vary: Sequence[str] = (),
     ):
         _check_arguments(render_mode, duration)
         path, text = _world_source(world, default_world)
         control = None if robot is None else [robot]
-        self._world = World(path, text=text, lenient=lenient, control=control, fitness=fitness)
+        vary = list(vary)
+        self._world = World(
+            path, text=text, lenient=lenient, control=control, fitness=fitness, vary=vary
+        )
         if robot is None and len(self._world.controlled) != 1:
             # Several robots: the first is driven, the others run their own controllers.
             robot = self._world.robots[0].name
-            self._world = World(path, text=text, lenient=lenient, control=[robot], fitness=fitness)
+            self._world = World(
+                path, text=text, lenient=lenient, control=[robot], fitness=fitness, vary=vary
+            )
         self._episode_steps = int(np.ceil(duration / self._world.time_step - 1e-9))
         self.observation_space, self.action_space = _spaces(self._world.observation_bounds)
         self.observation_names = self._world.observation_names
@@ -178,6 +186,7 @@ class RegattaVectorEnv(VectorEnv):
         render_size: int = 256,
         lenient: bool = False,
         default_world: str = "regatta.wbt",
+        vary: Sequence[str] = (),
     ):
         _check_arguments(render_mode, duration)
         self.autoreset_mode = (
@@ -201,6 +210,7 @@ class RegattaVectorEnv(VectorEnv):
             duration=duration,
             threads=threads,
             autoreset=mode,
+            vary=list(vary),
         )
         self.num_envs = num_envs
         self.single_observation_space, self.single_action_space = _spaces(

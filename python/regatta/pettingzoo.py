@@ -37,13 +37,17 @@ class RegattaParallelEnv(ParallelEnv):
         render_mode: Optional[str] = None,
         render_size: int = 256,
         lenient: bool = False,
+        vary: Sequence[str] = (),
     ):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or 'rgb_array', found {render_mode!r}")
         if not (duration > 0):
             raise ValueError(f"duration must be a positive number of seconds, found {duration}")
         control = None if agents is None else list(agents)
-        self._world = World(os.fspath(world), lenient=lenient, control=control, fitness=fitness)
+        # Variations are drawn anew from each reset's seed (as `regatta run --vary`).
+        self._world = World(
+            os.fspath(world), lenient=lenient, control=control, fitness=fitness, vary=list(vary)
+        )
         self._episode_steps = int(np.ceil(duration / self._world.time_step - 1e-9))
         self.possible_agents = list(self._world.controlled)
         self.agents: list[str] = []

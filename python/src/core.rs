@@ -225,7 +225,14 @@ impl Drive {
         seed: u64,
         log: Option<&LogRequest>,
     ) -> Result<(Running, Option<Log>), CoreError> {
-        let mut running = Running::try_new(experiment.clone(), |e| e.simulation(seed, None))?;
+        // A world with variations is drawn anew for each seed; the trial's world owns its
+        // simulation (and its log embeds the drawn text).
+        let world = match experiment.for_seed(seed)? {
+            Some(varied) => Arc::new(varied),
+            None => experiment.clone(),
+        };
+        let experiment = &world;
+        let mut running = Running::try_new(world.clone(), |e| e.simulation(seed, None))?;
         let opened = running.with_dependent_mut(|_, simulation| {
             for ((&robot, observation), command) in self
                 .controlled
@@ -349,6 +356,11 @@ impl Core {
 
     pub fn experiment(&self) -> &Arc<Experiment> {
         &self.experiment
+    }
+
+    /// The values the current episode's variations drew (empty when nothing varies).
+    pub fn drawn(&self) -> &[regatta_evolve::variations::Drawn] {
+        &self.running.borrow_owner().drawn
     }
 
     pub fn simulation(&self) -> &Simulation<'_> {
@@ -496,9 +508,10 @@ impl Core {
 
     /// The run so far as `regatta run --json` prints it (without wall time).
     pub fn summary_json(&self) -> String {
-        let summary = self
+        let mut summary = self
             .observer
             .summary(self.simulation(), &self.experiment.name, None);
+        summary.variations = self.drawn().to_vec();
         serde_json::to_string_pretty(&summary).unwrap_or_default()
     }
 
@@ -562,6 +575,8 @@ fn open_log(
                 )
             })
             .collect(),
+        variations: (!experiment.drawn.is_empty())
+            .then(|| serde_json::to_string(&experiment.drawn).unwrap_or_default()),
     };
     let recorder =
         Recorder::new(BufWriter::new(file), simulation, &run).map_err(|e| failed(e.to_string()))?;

@@ -29,6 +29,7 @@ fn load_experiment(
     text: Option<&str>,
     lenient: bool,
     overrides: &[String],
+    variations: &[String],
 ) -> PyResult<Experiment> {
     let overrides: Vec<Override> = overrides
         .iter()
@@ -50,7 +51,7 @@ fn load_experiment(
         }
         None => Experiment::load(world, lenient, &overrides),
     };
-    loaded.map_err(|e| to_py(e.into()))
+    world::vary(loaded.map_err(|e| to_py(e.into()))?, variations)
 }
 
 fn parse_fitness(fitness: &str) -> PyResult<Fitness> {
@@ -79,9 +80,10 @@ fn summaries(
     lenient: bool,
     overrides: &[String],
     text: Option<&str>,
+    variations: &[String],
 ) -> PyResult<(Fitness, Vec<RunSummary>, usize)> {
     let fitness = parse_fitness(fitness)?;
-    let experiment = load_experiment(world, text, lenient, overrides)?;
+    let experiment = load_experiment(world, text, lenient, overrides, variations)?;
     let steps = steps_for(&experiment, duration)?;
     let rows: Option<Vec<Vec<f64>>> = match weights {
         None => None,
@@ -138,9 +140,11 @@ fn summaries(
 /// released while the runs go.
 ///
 /// `fitness` is `avoidance`, `regatta` or `phototaxis`, optionally with parameters
-/// (`regatta:penalty=1`); `overrides` are `regatta batch --set` edits (`Buoy.irReflectance=0.5`).
+/// (`regatta:penalty=1`); `overrides` are `regatta batch --set` edits (`Buoy.irReflectance=0.5`);
+/// `vary` are `regatta batch --vary` variations (`DirectionalLight.intensity=0.02..0.8`),
+/// drawn from each seed.
 #[pyfunction]
-#[pyo3(signature = (world, weights=None, seeds=vec![1], *, fitness="regatta", duration=60.0, threads=0, lenient=false, overrides=vec![], text=None))]
+#[pyo3(signature = (world, weights=None, seeds=vec![1], *, fitness="regatta", duration=60.0, threads=0, lenient=false, overrides=vec![], text=None, vary=vec![]))]
 #[allow(clippy::too_many_arguments)]
 fn evaluate<'py>(
     py: Python<'py>,
@@ -153,6 +157,7 @@ fn evaluate<'py>(
     lenient: bool,
     overrides: Vec<String>,
     text: Option<String>,
+    vary: Vec<String>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let (fitness, rows, candidates) = summaries(
         py,
@@ -165,6 +170,7 @@ fn evaluate<'py>(
         lenient,
         &overrides,
         text.as_deref(),
+        &vary,
     )?;
     let values: Vec<f64> = rows.iter().map(|r| r.fitness.value).collect();
     let _ = fitness;
@@ -175,7 +181,7 @@ fn evaluate<'py>(
 /// (a string each, the same bytes as the command's lines), candidates by candidate, seeds in
 /// order.
 #[pyfunction]
-#[pyo3(signature = (world, seeds, *, weights=None, fitness="regatta", duration=60.0, threads=0, lenient=false, overrides=vec![], text=None))]
+#[pyo3(signature = (world, seeds, *, weights=None, fitness="regatta", duration=60.0, threads=0, lenient=false, overrides=vec![], text=None, vary=vec![]))]
 #[allow(clippy::too_many_arguments)]
 fn batch(
     py: Python<'_>,
@@ -188,6 +194,7 @@ fn batch(
     lenient: bool,
     overrides: Vec<String>,
     text: Option<String>,
+    vary: Vec<String>,
 ) -> PyResult<Vec<String>> {
     let (_, rows, _) = summaries(
         py,
@@ -200,6 +207,7 @@ fn batch(
         lenient,
         &overrides,
         text.as_deref(),
+        &vary,
     )?;
     rows.iter()
         .map(|row| serde_json::to_string(row).map_err(|e| errors::runtime_error(e.to_string())))
@@ -211,7 +219,7 @@ fn batch(
 #[pyfunction]
 #[pyo3(signature = (world, *, lenient=false, overrides=vec![]))]
 fn parameter_count(world: PathBuf, lenient: bool, overrides: Vec<String>) -> PyResult<usize> {
-    let experiment = load_experiment(&world, None, lenient, &overrides)?;
+    let experiment = load_experiment(&world, None, lenient, &overrides, &[])?;
     experiment.parameter_count().ok_or_else(|| {
         value_error(format!(
             "{} has no robot with controller \"neural\" and a NeuralNetwork",
@@ -230,7 +238,7 @@ fn network_weights<'py>(
     lenient: bool,
     overrides: Vec<String>,
 ) -> PyResult<Bound<'py, numpy::PyArray1<f64>>> {
-    let experiment = load_experiment(&world, None, lenient, &overrides)?;
+    let experiment = load_experiment(&world, None, lenient, &overrides, &[])?;
     let network = experiment.network.as_ref().ok_or_else(|| {
         value_error(format!(
             "{} has no robot with controller \"neural\" and a NeuralNetwork",

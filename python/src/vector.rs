@@ -187,7 +187,7 @@ impl VectorWorld {
 #[pymethods]
 impl VectorWorld {
     #[new]
-    #[pyo3(signature = (path, num_envs, *, seed=None, lenient=false, robot=None, fitness="regatta", duration=60.0, threads=0, autoreset="next_step", text=None))]
+    #[pyo3(signature = (path, num_envs, *, seed=None, lenient=false, robot=None, fitness="regatta", duration=60.0, threads=0, autoreset="next_step", text=None, vary=vec![]))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -201,6 +201,7 @@ impl VectorWorld {
         threads: usize,
         autoreset: &str,
         text: Option<&str>,
+        vary: Vec<String>,
     ) -> PyResult<VectorWorld> {
         if num_envs == 0 {
             return Err(value_error("num_envs must be at least 1"));
@@ -217,7 +218,7 @@ impl VectorWorld {
             Some(names) => regatta_evolve::Driven::Named(names),
             None => regatta_evolve::Driven::First,
         };
-        let experiment = load(&path, text, lenient, driven)?;
+        let experiment = load(&path, text, lenient, driven, &vary)?;
         let robot = match robot {
             Some(name) => name,
             None => experiment

@@ -45,6 +45,7 @@ pub fn load(
     text: Option<&str>,
     lenient: bool,
     driven: Driven<'_>,
+    vary: &[String],
 ) -> PyResult<Arc<Experiment>> {
     let experiment = match text {
         Some(text) => Experiment::from_text_driven(
@@ -57,9 +58,22 @@ pub fn load(
         ),
         None => Experiment::load_driven(path, lenient, &[], driven),
     };
+    let experiment = experiment.map_err(|e| to_py(CoreError::Load(e)))?;
+    self::vary(experiment, vary).map(Arc::new)
+}
+
+/// `experiment` with `vary` (`regatta batch --vary` texts) drawn anew for each seed.
+pub fn vary(experiment: Experiment, vary: &[String]) -> PyResult<Experiment> {
+    let variations = vary
+        .iter()
+        .map(|v| {
+            regatta_evolve::variations::Variation::parse_flag(v)
+                .map_err(|e| value_error(e.to_string()))
+        })
+        .collect::<PyResult<Vec<_>>>()?;
     experiment
-        .map(Arc::new)
-        .map_err(|e| to_py(CoreError::Load(e)))
+        .with_variations(variations)
+        .map_err(|e| value_error(e.to_string()))
 }
 
 /// Reads actions (any array-like of numbers) into `out`, which must match its size.
@@ -141,7 +155,7 @@ impl World {
 #[pymethods]
 impl World {
     #[new]
-    #[pyo3(signature = (path, *, seed=None, lenient=false, control=None, fitness="regatta", text=None))]
+    #[pyo3(signature = (path, *, seed=None, lenient=false, control=None, fitness="regatta", text=None, vary=vec![]))]
     fn new(
         path: PathBuf,
         seed: Option<u64>,
@@ -149,13 +163,14 @@ impl World {
         control: Option<Vec<String>>,
         fitness: &str,
         text: Option<&str>,
+        vary: Vec<String>,
     ) -> PyResult<World> {
         let fitness = Fitness::parse(fitness).map_err(|e| value_error(e.to_string()))?;
         let driven = match &control {
             Some(names) => Driven::Named(names),
             None => Driven::Every,
         };
-        let experiment = load(&path, text, lenient, driven)?;
+        let experiment = load(&path, text, lenient, driven, &vary)?;
         let core = Core::new(experiment, control.as_deref(), fitness, seed, 0).map_err(to_py)?;
         let lengths: Vec<usize> = core.observations().iter().map(|o| o.len()).collect();
         if lengths.windows(2).any(|w| w[0] != w[1]) {
@@ -251,6 +266,17 @@ impl World {
     }
 
     /// The names of the observation's columns (`ir0`, …, `ambient7`, `retina0`, …).
+    /// The values this episode's variations drew (`vary=`), as (`Node[i].field`, value
+    /// text) pairs; empty when nothing varies.
+    #[getter]
+    fn variations(&self) -> Vec<(String, String)> {
+        self.core()
+            .drawn()
+            .iter()
+            .map(|d| (d.key(), d.value.clone()))
+            .collect()
+    }
+
     #[getter]
     fn observation_names(&self) -> Vec<String> {
         self.core().observation_names()

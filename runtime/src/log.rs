@@ -56,6 +56,9 @@ pub struct RunInfo {
     /// a Webots name mapped to a built-in, lenient mode's fallback): (robot, controller,
     /// controllerArgs). Written only when there is one, so other logs do not change.
     pub controllers: Vec<(String, String, Vec<String>)>,
+    /// The values `--vary` drew for the run, as JSON, when it drew any (the world text
+    /// already holds them: this says which they were). Written only when there are some.
+    pub variations: Option<String>,
 }
 
 impl RunInfo {
@@ -90,6 +93,9 @@ impl RunInfo {
                 })
                 .collect();
             metadata.insert("controllers".to_owned(), lines.join("\n"));
+        }
+        if let Some(variations) = &self.variations {
+            metadata.insert("variations".to_owned(), variations.clone());
         }
         metadata
     }
@@ -134,6 +140,7 @@ impl RunInfo {
                         .collect()
                 })
                 .unwrap_or_default(),
+            variations: metadata.get("variations").cloned(),
         })
     }
 }

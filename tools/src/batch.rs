@@ -44,6 +44,8 @@ pub struct Args {
     #[arg(long)]
     csv: bool,
     #[command(flatten)]
+    vary: crate::vary::VaryOptions,
+    #[command(flatten)]
     reading: crate::world::WorldOptions,
 }
 
@@ -112,7 +114,9 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         &overrides,
         regatta_evolve::Driven::Nobody,
     )
-    .with_context(|| format!("cannot load {}", args.world.display()))?;
+    .with_context(|| format!("cannot load {}", args.world.display()))?
+    .with_variations(args.vary.all()?)
+    .with_context(|| format!("cannot vary {}", args.world.display()))?;
     eprint!("{}", experiment.warnings);
     if !(args.duration >= 0.0 && args.duration.is_finite()) {
         bail!("--duration must be a non-negative number of seconds");

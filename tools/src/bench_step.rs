@@ -261,6 +261,7 @@ fn world_configurations(args: Args) -> anyhow::Result<Outcome> {
             steps_requested: 0,
             channels: regatta_runtime::log::Channels::ALL,
             controllers: Vec::new(),
+            variations: None,
         };
         let mut sink = std::io::Cursor::new(Vec::new());
         let mut recorder = regatta_runtime::log::Recorder::new(&mut sink, &mut simulation, &run)?;

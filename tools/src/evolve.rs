@@ -69,6 +69,8 @@ pub struct Args {
     #[arg(long = "set", value_name = "NODE.FIELD=VALUE", value_parser = crate::batch::parse_override)]
     overrides: Vec<Override>,
     #[command(flatten)]
+    vary: crate::vary::VaryOptions,
+    #[command(flatten)]
     reading: crate::world::WorldOptions,
 }
 
@@ -122,6 +124,17 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             experiments[0].name
         );
     }
+    // Every world's trials draw the same variations, each from its trial's seed.
+    let variations = args.vary.all()?;
+    let experiments: Vec<Experiment> = experiments
+        .into_iter()
+        .map(|experiment| {
+            let name = experiment.name.clone();
+            experiment
+                .with_variations(variations.clone())
+                .with_context(|| format!("cannot vary {name}"))
+        })
+        .collect::<anyhow::Result<_>>()?;
     let dimension = experiments[0].parameter_count().with_context(|| {
         format!(
             "{} has no robot with controller \"neural\" and a NeuralNetwork to evolve",
@@ -250,6 +263,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         &reading,
         &evolution,
         &experiments[0],
+        &variations,
         &fitness,
         &args.out,
         args.format,
@@ -267,6 +281,7 @@ fn write_outputs(
     reading: &regatta_schema::Options,
     evolution: &Evolution,
     experiment: &Experiment,
+    variations: &[regatta_evolve::variations::Variation],
     fitness: &Fitness,
     out: &Path,
     format: crate::plot::FigureFormat,
@@ -297,7 +312,8 @@ fn write_outputs(
         .with_context(|| format!("cannot write {}", world_path.display()))?;
     println!("{}", world_path.display());
     // The best candidate's run, logged: the world just written, under its generation's
-    // first trial seed (what `regatta run best.wbt --seed S --log` records too).
+    // first trial seed, with what that trial's variations drew (what `regatta run best.wbt
+    // --seed S --vary … --log` records too).
     let best_world = Experiment::from_text_with(
         &world_path.display().to_string(),
         &text,
@@ -305,19 +321,24 @@ fn write_outputs(
         reading,
         &[],
         regatta_evolve::Driven::Nobody,
-    )?;
+    )?
+    .with_variations(variations.to_vec())?;
+    let best_world = best_world.for_seed(best.seed)?.unwrap_or(best_world);
     let mut simulation = best_world.simulation(best.seed, None)?;
     let log_path = out.join("best.mcap");
     let file = std::fs::File::create(&log_path)
         .with_context(|| format!("cannot create {}", log_path.display()))?;
     let run = regatta_runtime::log::RunInfo {
         world_name: world_path.display().to_string(),
-        world_text: text,
+        world_text: best_world.text.clone(),
         seed: best.seed,
         lenient: experiment.lenient,
         steps_requested: evolution.settings.steps,
         channels: regatta_runtime::log::Channels::ALL,
         controllers: Vec::new(),
+        variations: (!best_world.drawn.is_empty())
+            .then(|| serde_json::to_string(&best_world.drawn))
+            .transpose()?,
     };
     let mut recorder =
         regatta_runtime::log::Recorder::new(std::io::BufWriter::new(file), &mut simulation, &run)?;

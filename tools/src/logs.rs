@@ -557,6 +557,19 @@ fn info(path: &Path) -> anyhow::Result<Outcome> {
         meta("world_sha256")
     );
     println!("seed:         {}", run.seed);
+    // The values `--vary` drew (the embedded world holds them; this names them).
+    if let Some(drawn) = &run.variations {
+        let drawn: Vec<serde_json::Value> = serde_json::from_str(drawn).unwrap_or_default();
+        for d in drawn {
+            println!(
+                "varied:       {}[{}].{} = {}",
+                d["node"].as_str().unwrap_or("?"),
+                d["index"],
+                d["field"].as_str().unwrap_or("?"),
+                d["value"].as_str().unwrap_or("?")
+            );
+        }
+    }
     println!("regatta:      {}", meta("regatta_version"));
     println!(
         "time step:    {} s{}",

@@ -24,6 +24,8 @@ mod run;
 mod schema;
 mod serial;
 mod signals;
+mod transfer;
+mod vary;
 mod vision;
 mod webots;
 mod world;
@@ -83,6 +85,9 @@ enum Command {
     Batch(batch::Args),
     /// Evolve the weights of a world's NeuralNetwork (CMA-ES or a genetic algorithm).
     Evolve(evolve::Args),
+    /// Evaluate controllers (worlds) on a grid of named conditions: a table, CSV and a heat
+    /// map of controller × condition → fitness.
+    Transfer(transfer::Args),
     /// Re-run a log's world and seed and check that every message is the same.
     Replay(logs::ReplayArgs),
     /// Work with sensor logs (export to CSV, print what a log holds).
@@ -150,6 +155,7 @@ fn run() -> ExitCode {
         Command::Run(args) => run::run(args, color),
         Command::Batch(args) => batch::run(args),
         Command::Evolve(args) => evolve::run(args),
+        Command::Transfer(args) => transfer::run(args),
         Command::Serve(args) => serial::serve(args, color),
         Command::Drive(args) => serial::drive(args),
         Command::Replay(args) => logs::replay(args),

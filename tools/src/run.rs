@@ -23,6 +23,8 @@ pub struct Args {
     seed: Option<u64>,
     #[command(flatten)]
     options: crate::world::WorldOptions,
+    #[command(flatten)]
+    vary: crate::vary::VaryOptions,
     /// Run a world that has no robot (otherwise a mistake: nothing would move).
     #[arg(long)]
     allow_empty: bool,
@@ -65,7 +67,12 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
 }
 
 fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
-    let mut loaded = crate::world::load(&args.world, &args.options, color)?;
+    let variations = args.vary.all()?;
+    let mut loaded = if variations.is_empty() {
+        crate::world::load(&args.world, &args.options, color)?
+    } else {
+        crate::vary::load_varied(&args.world, &args.options, args.seed, variations, color)?
+    };
     crate::webots::refuse_unbuilt_robots(&loaded)?;
     crate::webots::resolve_controllers(
         &mut loaded.compiled,
@@ -188,7 +195,8 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
         );
     }
     if let Some(observer) = &observer {
-        let summary = observer.summary(&simulation, &name, Some(wall));
+        let mut summary = observer.summary(&simulation, &name, Some(wall));
+        summary.variations = loaded.drawn.clone();
         println!("{}", serde_json::to_string_pretty(&summary)?);
         // Standard output is the JSON object alone.
         if let Some(line) = &log_line {
@@ -197,6 +205,9 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
         return Ok(finish(failure, &simulation, &name, &args, &stop));
     }
     println!("world {name}: seed {}", simulation.seed);
+    for drawn in &loaded.drawn {
+        println!("varied {} = {}", drawn.key(), drawn.value);
+    }
     if let Some(vision) = vision {
         println!("vision rendered by {vision}");
     }

@@ -157,6 +157,8 @@ pub struct Loaded {
     pub compiled: Compiled,
     /// What a log needs of the typed scene, kept when the scene is released.
     changed: Option<Vec<(String, String, Vec<String>)>>,
+    /// The values variations drew for this run (`--vary`), which its log records.
+    pub drawn: Vec<regatta_evolve::variations::Drawn>,
 }
 
 impl Loaded {
@@ -173,7 +175,39 @@ impl Loaded {
 /// Checks `path` (printing errors, and warnings too in lenient mode, to stderr) and compiles
 /// it; fails on errors.
 pub fn load(path: &Path, world: &WorldOptions, color: bool) -> anyhow::Result<Loaded> {
-    let mut checked = check_world(path, world)?;
+    finish_load(check_world(path, world)?, path, world, color)
+}
+
+/// [`load`] with the world's text given (a variation of the file at `path`): it reads files
+/// as the file at `path` would.
+pub fn load_text(
+    path: &Path,
+    text: &str,
+    world: &WorldOptions,
+    color: bool,
+) -> anyhow::Result<Loaded> {
+    let mut options = world.options()?;
+    if !is_stdin(path) {
+        let canonical = path
+            .canonicalize()
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        if let Some(folder) = canonical.parent() {
+            options
+                .access
+                .allow(&regatta_schema::access::project_root(folder))?;
+            options.base_dir = Some(folder.to_owned());
+        }
+    }
+    let source = SourceText::from_bytes(world_name(path), text.as_bytes().to_vec());
+    finish_load(check(source, &options), path, world, color)
+}
+
+fn finish_load(
+    mut checked: Checked,
+    path: &Path,
+    world: &WorldOptions,
+    color: bool,
+) -> anyhow::Result<Loaded> {
     print_substitutions(&checked);
     regatta_runtime::check::check_scene(&mut checked);
     eprint!(
@@ -199,6 +233,7 @@ pub fn load(path: &Path, world: &WorldOptions, color: bool) -> anyhow::Result<Lo
         checked,
         compiled,
         changed: None,
+        drawn: Vec::new(),
     })
 }
 
@@ -316,6 +351,9 @@ pub fn create_recorder(
         steps_requested,
         channels,
         controllers: changed_controllers(loaded),
+        variations: (!loaded.drawn.is_empty())
+            .then(|| serde_json::to_string(&loaded.drawn))
+            .transpose()?,
     };
     Ok(Recorder::new(
         std::io::BufWriter::new(file),

@@ -211,17 +211,30 @@ impl Evolution {
         };
         let seeds = self.trial_seeds(generation);
         let steps = self.settings.steps;
-        let jobs: Vec<(usize, usize, u64)> = (0..candidates.len())
+        // A world with variations is drawn once per trial seed, and every candidate sails
+        // that draw (so candidates are compared on the same conditions).
+        let varied: Vec<Vec<Option<Experiment>>> = pool.install(|| {
+            experiments
+                .par_iter()
+                .map(|experiment| {
+                    seeds
+                        .par_iter()
+                        .map(|&seed| experiment.for_seed(seed))
+                        .collect::<Result<Vec<_>, EvalError>>()
+                })
+                .collect::<Result<Vec<_>, EvalError>>()
+        })?;
+        let jobs: Vec<(usize, usize, usize)> = (0..candidates.len())
             .flat_map(|c| {
                 let seeds = &seeds;
-                (0..experiments.len()).flat_map(move |w| seeds.iter().map(move |&s| (c, w, s)))
+                (0..experiments.len()).flat_map(move |w| (0..seeds.len()).map(move |s| (c, w, s)))
             })
             .collect();
         let values: Vec<f64> = pool.install(|| {
             jobs.par_iter()
-                .map(|&(c, w, seed)| {
-                    let summary =
-                        experiments[w].evaluate(seed, steps, Some(&candidates[c]), fitness)?;
+                .map(|&(c, w, s)| {
+                    let world = varied[w][s].as_ref().unwrap_or(&experiments[w]);
+                    let summary = world.evaluate(seeds[s], steps, Some(&candidates[c]), fitness)?;
                     done();
                     Ok(summary.fitness.value)
                 })

@@ -15,6 +15,7 @@ use serde::Serialize;
 
 use crate::fitness::{Fitness, FitnessTerms, Meters};
 use crate::record::LiveRecords;
+use crate::variations::{Drawn, Plan, Variation, VaryError};
 use crate::world::{apply_overrides, EditError, Override};
 
 /// Why a world cannot be loaded for evaluation.
@@ -76,6 +77,12 @@ pub enum EvalError {
         step: u64,
         message: String,
     },
+    #[error("{world}: {source}")]
+    Vary {
+        world: String,
+        #[source]
+        source: VaryError,
+    },
 }
 
 /// The robots a world's network drives, and its topology.
@@ -102,6 +109,51 @@ pub struct Experiment {
     /// Warnings of the check, rendered, and notes on controllers mapped from Webots' names
     /// (empty when none).
     pub warnings: String,
+    /// The values drawn for this world when it is one trial's variation (empty otherwise).
+    pub drawn: Vec<Drawn>,
+    /// How to read the world again with other text: what variations need.
+    reading: Arc<Reading>,
+    /// The variations each trial draws, if any.
+    plan: Option<Arc<Plan>>,
+}
+
+/// Everything but the text that reading a world took.
+#[derive(Debug)]
+struct Reading {
+    base_dir: Option<PathBuf>,
+    options: regatta_schema::Options,
+    driven: DrivenBy,
+    /// The file is ENU (z up): variations write positions and headings in its axes.
+    z_up: bool,
+}
+
+/// [`Driven`], owned.
+#[derive(Clone, Debug)]
+enum DrivenBy {
+    Nobody,
+    Every,
+    First,
+    Named(Vec<String>),
+}
+
+impl DrivenBy {
+    fn of(driven: Driven<'_>) -> DrivenBy {
+        match driven {
+            Driven::Nobody => DrivenBy::Nobody,
+            Driven::Every => DrivenBy::Every,
+            Driven::First => DrivenBy::First,
+            Driven::Named(names) => DrivenBy::Named(names.to_vec()),
+        }
+    }
+
+    fn borrow(&self) -> Driven<'_> {
+        match self {
+            DrivenBy::Nobody => Driven::Nobody,
+            DrivenBy::Every => Driven::Every,
+            DrivenBy::First => Driven::First,
+            DrivenBy::Named(names) => Driven::Named(names),
+        }
+    }
 }
 
 /// The robots driven from outside the simulator (by Python's actions): a world written for
@@ -240,12 +292,27 @@ impl Experiment {
         overrides: &[Override],
         driven: Driven<'_>,
     ) -> Result<Experiment, LoadError> {
-        let lenient = !options.strict;
         let text = apply_overrides(text, overrides)?;
+        Experiment::read(name, text, base_dir, options, DrivenBy::of(driven))
+    }
+
+    /// Checks and compiles `text`, overrides already applied.
+    fn read(
+        name: &str,
+        text: String,
+        base_dir: Option<PathBuf>,
+        options: &regatta_schema::Options,
+        driven: DrivenBy,
+    ) -> Result<Experiment, LoadError> {
+        let lenient = !options.strict;
         // The world reads files under its project (its folder, or the folder above a
         // `worlds` folder), and the folders the options allow, only (see
         // regatta_schema::access).
         let base_dir = base_dir.and_then(|dir| dir.canonicalize().ok());
+        let options = &regatta_schema::Options {
+            base_dir: base_dir.clone(),
+            ..options.clone()
+        };
         let mut access = options.access.clone();
         if let Some(dir) = &base_dir {
             let _ = access.allow(&regatta_schema::access::project_root(dir));
@@ -315,7 +382,7 @@ impl Experiment {
             use regatta_runtime::controllers::webots::{
                 resolve, resolve_robot, Resolution, Resolved,
             };
-            if driven.drives(index, &robot.name)
+            if driven.borrow().drives(index, &robot.name)
                 && matches!(resolve(&robot.controller), Resolution::External(_))
             {
                 // Waiting for a controller from outside, and it gets one: its own never runs.
@@ -360,6 +427,7 @@ impl Experiment {
                 }),
                 _ => None,
             });
+        let z_up = checked.scene.up_axis == regatta_schema::scene::UpAxis::Z;
         Ok(Experiment {
             name: name.to_owned(),
             text,
@@ -367,7 +435,73 @@ impl Experiment {
             compiled,
             network,
             warnings,
+            drawn: Vec::new(),
+            reading: Arc::new(Reading {
+                base_dir: options.base_dir.clone(),
+                options: options.clone(),
+                driven,
+                z_up,
+            }),
+            plan: None,
         })
+    }
+
+    /// The same world read again with other text (a trial's variation).
+    fn reread(&self, text: String) -> Result<Experiment, LoadError> {
+        let reading = &self.reading;
+        let mut experiment = Experiment::read(
+            &self.name,
+            text,
+            reading.base_dir.clone(),
+            &reading.options,
+            reading.driven.clone(),
+        )?;
+        experiment.reading = reading.clone();
+        Ok(experiment)
+    }
+
+    /// This world with `variations` drawn anew for each trial ([`Experiment::for_seed`]).
+    /// Each variation is tried once, so one that names no node, a field the nodes do not
+    /// have or a value they do not take is refused here, naming the variation.
+    pub fn with_variations(mut self, variations: Vec<Variation>) -> Result<Experiment, VaryError> {
+        if variations.is_empty() {
+            return Ok(self);
+        }
+        let plan = Plan::new(
+            variations,
+            &self.text,
+            &self.compiled,
+            self.reading.z_up,
+            &mut |text| self.reread(text.to_owned()).map_err(refusal),
+        )?;
+        self.plan = Some(Arc::new(plan));
+        Ok(self)
+    }
+
+    /// Whether trials draw variations.
+    pub fn varies(&self) -> bool {
+        self.plan.is_some()
+    }
+
+    /// The world of the trial under `seed` when something varies (`None` otherwise: the
+    /// trial is this world): its text with the values drawn from `seed`
+    /// ([`Experiment::drawn`] lists them).
+    pub fn for_seed(&self, seed: u64) -> Result<Option<Experiment>, EvalError> {
+        let Some(plan) = &self.plan else {
+            return Ok(None);
+        };
+        let (_, mut experiment, drawn) = plan
+            .draw(
+                seed,
+                &mut |text| self.reread(text.to_owned()).map_err(refusal),
+                |e: &Experiment| &e.compiled,
+            )
+            .map_err(|source| EvalError::Vary {
+                world: self.name.clone(),
+                source,
+            })?;
+        experiment.drawn = drawn;
+        Ok(Some(experiment))
     }
 
     /// How many weights a candidate has: the world's network's parameter count.
@@ -435,7 +569,24 @@ impl Experiment {
                 message: error.to_string(),
             });
         }
-        Ok(observer.summary(&simulation, &self.name, None))
+        let mut summary = observer.summary(&simulation, &self.name, None);
+        summary.variations = self.drawn.clone();
+        Ok(summary)
+    }
+}
+
+/// Why a varied world was refused, in a line: its first error (the edited text's lines are
+/// the variation's, not the user's, so the error's message says more than its place).
+fn refusal(error: LoadError) -> String {
+    match error {
+        LoadError::Check {
+            errors, located, ..
+        } => match located.first() {
+            Some(first) if errors > 1 => format!("{} ({errors} errors)", first.message),
+            Some(first) => first.message.clone(),
+            None => format!("{errors} error(s)"),
+        },
+        other => other.to_string(),
     }
 }
 
@@ -480,14 +631,35 @@ pub fn evaluate(
         Some(rows) => rows.iter().map(|r| Some(r.as_slice())).collect(),
         None => vec![None],
     };
-    let jobs: Vec<(usize, u64)> = (0..candidates.len())
-        .flat_map(|c| seeds.iter().map(move |&s| (c, s)))
+    let jobs: Vec<(usize, usize)> = (0..candidates.len())
+        .flat_map(|c| (0..seeds.len()).map(move |s| (c, s)))
         .collect();
+    // A varied trial's world depends on its seed only: drawn once per seed and shared by
+    // every candidate when there are several (evolution), drawn in the job otherwise (a
+    // batch, where holding every seed's world at once would cost memory for nothing).
+    let per_seed = if experiment.varies() && candidates.len() > 1 {
+        Some(pool.install(|| {
+            seeds
+                .par_iter()
+                .map(|&seed| experiment.for_seed(seed))
+                .collect::<Result<Vec<Option<Experiment>>, _>>()
+        })?)
+    } else {
+        None
+    };
     pool.install(|| {
         jobs.par_iter()
-            .map(|&(candidate, seed)| {
-                let mut summary =
-                    experiment.evaluate(seed, steps, candidates[candidate], fitness)?;
+            .map(|&(candidate, index)| {
+                let seed = seeds[index];
+                let here;
+                let world: &Experiment = match &per_seed {
+                    Some(worlds) => worlds[index].as_ref().unwrap_or(experiment),
+                    None => {
+                        here = experiment.for_seed(seed)?;
+                        here.as_ref().unwrap_or(experiment)
+                    }
+                };
+                let mut summary = world.evaluate(seed, steps, candidates[candidate], fitness)?;
                 if weights.is_some() {
                     summary.candidate = Some(candidate);
                 }
@@ -627,6 +799,7 @@ impl Observer {
                 name: self.fitness.name().to_owned(),
                 value,
             },
+            variations: Vec::new(),
             robots,
         }
     }
@@ -651,6 +824,9 @@ pub struct RunSummary {
     pub wall_s: Option<f64>,
     /// The chosen fitness: the mean of the robots' values.
     pub fitness: FitnessValue,
+    /// The values this trial's variations drew (absent when nothing varies).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub variations: Vec<Drawn>,
     pub robots: Vec<RobotSummary>,
 }
 
@@ -744,6 +920,10 @@ impl RunSummary {
                 columns.push(format!("{}.{column}", robot.name));
             }
         }
+        // Every trial of a world draws the same keys, so the first row's name the columns.
+        for drawn in &self.variations {
+            columns.push(format!("vary:{}", drawn.key()));
+        }
         columns.join(",")
     }
 
@@ -778,6 +958,7 @@ impl RunSummary {
                 format!("{:?}", f.phototaxis.value),
             ]);
         }
+        cells.extend(self.variations.iter().map(|d| quote(&d.value)));
         cells.join(",")
     }
 }

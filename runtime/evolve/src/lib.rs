@@ -18,6 +18,7 @@ pub mod experiment;
 pub mod fitness;
 pub mod ga;
 pub mod record;
+pub mod variations;
 pub mod world;
 
 pub use experiment::{evaluate, thread_pool, Driven, Experiment, Observer, RunSummary};

@@ -18,6 +18,8 @@ pub enum EditError {
     Syntax(String),
     #[error("the world has no robot with a NeuralNetwork in its 'network' field to take")]
     NoNeuralRobot,
+    #[error("the world has no robot with a 'controller' field to take")]
+    NoController,
 }
 
 /// One `--set NODE.FIELD=VALUE`: every node of type (or DEF name) `node` in the world file
@@ -64,7 +66,7 @@ impl Override {
 }
 
 /// The world file's nodes (PROTO definitions excluded), depth first.
-fn world_nodes(file: &regatta_parser::syntax::SourceFile) -> Vec<&Node> {
+pub(crate) fn world_nodes(file: &regatta_parser::syntax::SourceFile) -> Vec<&Node> {
     let mut nodes = Vec::new();
     for item in &file.items {
         if let Item::Node(node) = item {
@@ -75,7 +77,12 @@ fn world_nodes(file: &regatta_parser::syntax::SourceFile) -> Vec<&Node> {
 }
 
 /// `(start, end, replacement)` edits to set `field` of `node` to `value`.
-fn set_field(node: &Node, field: &str, value: &str, edits: &mut Vec<(usize, usize, String)>) {
+pub(crate) fn set_field(
+    node: &Node,
+    field: &str,
+    value: &str,
+    edits: &mut Vec<(usize, usize, String)>,
+) {
     let NodeKind::Instance {
         body: Some(body), ..
     } = &node.kind
@@ -108,7 +115,7 @@ fn set_field(node: &Node, field: &str, value: &str, edits: &mut Vec<(usize, usiz
     }
 }
 
-fn apply(text: &str, mut edits: Vec<(usize, usize, String)>) -> String {
+pub(crate) fn apply(text: &str, mut edits: Vec<(usize, usize, String)>) -> String {
     edits.sort_by_key(|e| std::cmp::Reverse(e.0));
     let mut out = text.to_owned();
     for (start, end, replacement) in edits {
@@ -202,6 +209,58 @@ pub fn network_overrides(source: &str) -> Result<Vec<Override>, EditError> {
         return Ok(overrides);
     }
     Err(EditError::NoNeuralRobot)
+}
+
+/// The overrides that put the controller of `source`'s first robot into another world: its
+/// network's when it has one ([`network_overrides`]), else its `controller`,
+/// `controllerArgs` and `turret` as written (a built-in controller such as the hand-tuned
+/// regatta, with its parameters and the retina it reads).
+pub fn controller_overrides(source: &str) -> Result<Vec<Override>, EditError> {
+    match network_overrides(source) {
+        Err(EditError::NoNeuralRobot) => {}
+        other => return other,
+    }
+    let parsed = regatta_parser::parse(source);
+    for node in world_nodes(&parsed.file) {
+        let NodeKind::Instance {
+            type_name,
+            body: Some(body),
+        } = &node.kind
+        else {
+            continue;
+        };
+        let written = |name: &str| {
+            body.items.iter().rev().find_map(|item| match item {
+                BodyItem::Field(f) if f.name.text == name => match &f.value {
+                    FieldValue::Value(v) => {
+                        Some(source[v.span.start as usize..v.span.end as usize].to_owned())
+                    }
+                    _ => None,
+                },
+                _ => None,
+            })
+        };
+        let Some(controller) = written("controller") else {
+            continue;
+        };
+        let set = |field: &str, value: String| Override {
+            node: type_name.text.clone(),
+            field: field.to_owned(),
+            value,
+        };
+        let mut overrides = vec![
+            set("controller", controller),
+            set(
+                "controllerArgs",
+                written("controllerArgs").unwrap_or_else(|| "[ ]".to_owned()),
+            ),
+        ];
+        if let Some((_, turret)) = node_field(node, "turret", source) {
+            overrides.push(set("turret", turret.to_owned()));
+        }
+        return Ok(overrides);
+    }
+    Err(EditError::NoController)
 }
 
 /// The weights as world-language numbers: Rust's shortest text that reads back to the same
