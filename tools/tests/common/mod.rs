@@ -20,7 +20,12 @@ pub fn root() -> PathBuf {
 
 /// A fresh folder for one test: `regatta-{name}-{process id}` in the temporary directory.
 pub fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("regatta-{name}-{}", std::process::id()));
+    // Unique within the process too (tests run side by side), and emptied first: a folder
+    // left by an earlier process with the same id would hold its files.
+    static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("regatta-{name}-{}-{n}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
