@@ -296,6 +296,12 @@ function drawStatus() {
   $("status").textContent = text;
   $("note").textContent = s.note || "";
   $("play").textContent = (s.replay ? !view.playing : s.paused) ? "play" : "pause";
+  // The selector follows the run's speed (another client, or --speed, may have set it).
+  if (!s.replay && document.activeElement !== $("speed")) {
+    const value = s.speed == null ? "fast" : String(s.speed);
+    if ([...$("speed").options].some((o) => o.value === value)) $("speed").value = value;
+  }
+  if (document.activeElement !== $("seed") && s.seed !== undefined) $("seed").placeholder = s.seed;
   if (s.replay) {
     $("scrub").max = String(Math.max(0, view.hist.length - 1));
     $("scrub").value = String(view.cur);
