@@ -68,6 +68,8 @@ class World:
         control: Optional[Sequence[str]] = None,
         fitness: str = "regatta",
         text: Optional[str] = None,
+        view: bool = False,
+        view_port: int = 0,
     ) -> None: ...
     def reset(self, seed: Optional[int] = None) -> npt.NDArray[np.float32]:
         """Restarts the world; returns the first observation (driven robots, length)."""
@@ -95,6 +97,9 @@ class World:
     def time(self) -> float: ...
     @property
     def steps(self) -> int: ...
+    @property
+    def view_url(self) -> Optional[str]:
+        """The live viewer's address when made with ``view=True`` (127.0.0.1), else None."""
     @property
     def time_step(self) -> float: ...
     @property

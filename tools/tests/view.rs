@@ -50,8 +50,14 @@ impl Drop for Running {
 /// One HTTP request; the whole response as text.
 fn request(address: &str, method: &str, target: &str) -> String {
     let mut stream = TcpStream::connect(address).unwrap();
-    stream.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
-    write!(stream, "{method} {target} HTTP/1.1\r\nHost: {address}\r\n\r\n").unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
+    write!(
+        stream,
+        "{method} {target} HTTP/1.1\r\nHost: {address}\r\n\r\n"
+    )
+    .unwrap();
     let mut response = String::new();
     stream.read_to_string(&mut response).unwrap();
     response
@@ -60,7 +66,11 @@ fn request(address: &str, method: &str, target: &str) -> String {
 /// A stream client: connected to /events, its header read.
 fn follow(address: &str) -> TcpStream {
     let mut stream = TcpStream::connect(address).unwrap();
-    write!(stream, "GET /events?robot=0 HTTP/1.1\r\nHost: {address}\r\n\r\n").unwrap();
+    write!(
+        stream,
+        "GET /events?robot=0 HTTP/1.1\r\nHost: {address}\r\n\r\n"
+    )
+    .unwrap();
     stream
 }
 
@@ -90,10 +100,21 @@ fn clients_that_vanish_read_slowly_or_crowd_change_no_byte_of_the_log() {
         .arg(&plain)
         .output()
         .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
 
     let (mut child, address, _out) = view(&[
-        world, "--paused", "--speed", "fast", "--steps", steps, "--exit", "--log",
+        world,
+        "--paused",
+        "--speed",
+        "fast",
+        "--steps",
+        steps,
+        "--exit",
+        "--log",
         viewed.to_str().unwrap(),
     ]);
     // Garbage first: none of it may stop the server.
@@ -141,7 +162,10 @@ fn clients_that_vanish_read_slowly_or_crowd_change_no_byte_of_the_log() {
     for reader in crowd {
         assert!(reader.join().unwrap() > 0, "a client received nothing");
     }
-    let (a, b) = (std::fs::read(&plain).unwrap(), std::fs::read(&viewed).unwrap());
+    let (a, b) = (
+        std::fs::read(&plain).unwrap(),
+        std::fs::read(&viewed).unwrap(),
+    );
     assert!(a == b, "the viewed run's log differs from the plain run's");
 }
 
@@ -155,25 +179,40 @@ fn a_log_replays_with_every_sample_at_once() {
         .arg(&log)
         .output()
         .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let (child, address, _out) = view(&[log.to_str().unwrap()]);
     let _running = Running(child);
     let state = request(&address, "GET", "/state.json");
     assert!(state.contains("\"replay\":true"), "{state}");
     // The first message of the stream holds the whole run, up to its last pose.
     let mut stream = follow(&address);
-    stream.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
     let mut text = String::new();
     let mut buffer = [0u8; 65536];
     let started = Instant::now();
     while !text.contains("]}\n\n") {
-        assert!(started.elapsed() < Duration::from_secs(20), "no whole message: {text}");
+        assert!(
+            started.elapsed() < Duration::from_secs(20),
+            "no whole message: {text}"
+        );
         let n = stream.read(&mut buffer).unwrap();
         assert!(n > 0, "the stream ended early");
         text.push_str(&String::from_utf8_lossy(&buffer[..n]));
     }
-    assert!(text.contains("\"t\":20,"), "the replay stops before the run's end");
-    assert!(text.contains("\"kind\":\"visit\""), "no buoy visit replayed");
+    assert!(
+        text.contains("\"t\":20,"),
+        "the replay stops before the run's end"
+    );
+    assert!(
+        text.contains("\"kind\":\"visit\""),
+        "no buoy visit replayed"
+    );
 }
 
 /// Whether the browser test can run here; in CI (REGATTA_REQUIRE_BROWSER=1) it must.
@@ -206,7 +245,7 @@ fn the_page_draws_the_lamps_and_the_robot_where_the_run_says_and_the_robot_moves
         return;
     }
     let dir = temp_dir("view-browser");
-    let (child, address, _out) = view(&["worlds/single_buoy.wbt", "--speed", "4"]);
+    let (child, address, _out) = view(&["worlds/regatta.wbt", "--speed", "8"]);
     let running = Running(child);
     let script = root().join("tools/tests/browser/view.js");
     let output = std::process::Command::new("node")
@@ -240,7 +279,10 @@ fn the_page_draws_the_lamps_and_the_robot_where_the_run_says_and_the_robot_moves
     let at = |shot: &serde_json::Value| point(&shot["probes"]["robots"][0]["at"]);
     let (first, second) = (at(&shots[0]), at(&shots[1]));
     let distance = ((first.0 - second.0).powi(2) + (first.1 - second.1).powi(2)).sqrt();
-    assert!(distance > 6.0, "the robot moved {distance:.1} px on the page");
+    assert!(
+        distance > 6.0,
+        "the robot moved {distance:.1} px on the page"
+    );
     assert_ne!(
         images[0].get_pixel(first.0 as u32, first.1 as u32),
         images[1].get_pixel(first.0 as u32, first.1 as u32),
@@ -267,9 +309,7 @@ fn assert_near_colour(
     what: &str,
 ) {
     let (x, y) = point(at);
-    let want: Vec<i32> = (0..3)
-        .map(|k| colour[k].as_i64().unwrap() as i32)
-        .collect();
+    let want: Vec<i32> = (0..3).map(|k| colour[k].as_i64().unwrap() as i32).collect();
     let found = (-3..=3).any(|dy| {
         (-3..=3).any(|dx| {
             let (px, py) = (x as i64 + dx, y as i64 + dy);
@@ -286,4 +326,3 @@ fn assert_near_colour(
         "{what} is not drawn at ({x:.0}, {y:.0}): wanted {want:?}, the pixel there is {seen:?}"
     );
 }
-

@@ -260,21 +260,30 @@ function drawRetina() {
   }
 }
 
+// The last WINDOW seconds of one robot's readings, newest at the right.
+const WINDOW = 10;
+
 function series(id, pick, count, fixedMax) {
   const c = $(id), g = c.getContext("2d");
   g.fillStyle = "#111"; g.fillRect(0, 0, c.width, c.height);
-  const from = Math.max(0, view.cur - 299);
-  const rows = view.hist.slice(from, view.cur + 1).map((s) => s.robots[view.robot]).filter(Boolean);
+  const now = view.hist[view.cur] ? view.hist[view.cur].t : 0;
+  let from = view.cur;
+  while (from > 0 && view.hist[from - 1].t >= now - WINDOW) from--;
+  const rows = view.hist.slice(from, view.cur + 1).filter((s) => s.robots[view.robot]);
   if (rows.length === 0) return;
-  let lo = fixedMax ? 0 : -1, hi = fixedMax || 1;
-  if (!fixedMax) for (const r of rows) for (let k = 0; k < count; k++) { hi = Math.max(hi, Math.abs(pick(r, k))); lo = -hi; }
-  g.strokeStyle = "#333"; g.beginPath(); const y0 = c.height * hi / (hi - lo); g.moveTo(0, y0); g.lineTo(c.width, y0); g.stroke();
+  let lo = 0, hi = fixedMax || 1;
+  if (!fixedMax) {
+    for (const s of rows) for (let k = 0; k < count; k++) hi = Math.max(hi, Math.abs(pick(s.robots[view.robot], k)));
+    lo = -hi;
+  }
+  const y = (v) => c.height - 2 - (v - lo) / (hi - lo) * (c.height - 4);
+  g.strokeStyle = "#444"; g.beginPath(); g.moveTo(0, y(0)); g.lineTo(c.width, y(0)); g.stroke();
   for (let k = 0; k < count; k++) {
     g.beginPath();
-    rows.forEach((r, x) => {
-      const y = c.height - 2 - (pick(r, k) - lo) / (hi - lo) * (c.height - 4);
-      const px = x * c.width / 300;
-      if (x) g.lineTo(px, y); else g.moveTo(px, y);
+    rows.forEach((s, i) => {
+      const px = c.width * (1 - (now - s.t) / WINDOW);
+      const py = y(pick(s.robots[view.robot], k));
+      if (i) g.lineTo(px, py); else g.moveTo(px, py);
     });
     g.strokeStyle = count === 2 ? ["#56b4e9", "#e69f00"][k] : PALETTE_IR[k];
     g.lineWidth = 1.3;

@@ -49,7 +49,10 @@ impl Control {
             "speed" => match value("x")? {
                 "fast" => Some(Control::Speed(None)),
                 x => {
-                    let x = x.parse::<f64>().ok().filter(|x| x.is_finite() && *x > 0.0)?;
+                    let x = x
+                        .parse::<f64>()
+                        .ok()
+                        .filter(|x| x.is_finite() && *x > 0.0)?;
                     Some(Control::Speed(Some(x.clamp(0.01, 1000.0))))
                 }
             },

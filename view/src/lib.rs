@@ -8,8 +8,8 @@
 //! 4 ms of wall time; clients serialise and send it on their own threads, and one that
 //! cannot keep up loses samples, never steps. The stepping loop never waits on a client.
 
-pub mod hub;
 mod http;
+pub mod hub;
 pub mod sample;
 pub mod scene;
 
@@ -57,6 +57,9 @@ pub struct Viewer {
     contacts_seen: Vec<u64>,
     /// Steps and time at the last rate measurement.
     rate_mark: (Instant, u64),
+    /// Whether someone watched at the last step: samples stop while nobody does, so the
+    /// first watcher after a gap starts from a clean ring (no trail jumps across the gap).
+    was_watched: bool,
 }
 
 impl Viewer {
@@ -129,6 +132,7 @@ impl Viewer {
             visits_seen: vec![0; robots],
             contacts_seen: vec![0; robots],
             rate_mark: (Instant::now(), 0),
+            was_watched: false,
         })
     }
 
@@ -153,6 +157,15 @@ impl Viewer {
     #[inline]
     pub fn after_step(&mut self, simulation: &Simulation) {
         if !self.shared.hub.watched() {
+            self.was_watched = false;
+            return;
+        }
+        if !self.was_watched {
+            self.was_watched = true;
+            self.shared.hub.clear();
+            // Every visit so far again (they carry their times); contacts only from now.
+            self.visits_seen.iter_mut().for_each(|v| *v = 0);
+            self.publish(simulation);
             return;
         }
         if simulation.time - self.last_t < SAMPLE_PERIOD
@@ -174,7 +187,12 @@ impl Viewer {
             };
             for k in *seen..robot.visits.sequence.len() {
                 events.push(Event {
-                    t: robot.visits.times.get(k).copied().unwrap_or(simulation.time),
+                    t: robot
+                        .visits
+                        .times
+                        .get(k)
+                        .copied()
+                        .unwrap_or(simulation.time),
                     robot: index,
                     kind: "visit",
                     buoy: Some(robot.visits.sequence[k]),

@@ -89,7 +89,12 @@ impl Sample {
     /// The sample as JSON for a client that watches `selected` closely (its retina); the
     /// others' poses, wheels and IR are always sent, being small.
     pub fn write_json(&self, selected: usize, out: &mut String) {
-        let _ = write!(out, "{{\"t\":{},\"steps\":{},\"robots\":[", num(self.t), self.steps);
+        let _ = write!(
+            out,
+            "{{\"t\":{},\"steps\":{},\"robots\":[",
+            num(self.t),
+            self.steps
+        );
         for (index, robot) in self.robots.iter().enumerate() {
             if index > 0 {
                 out.push(',');

@@ -72,7 +72,7 @@ async function main() {
   await page("Page.navigate", { url });
   // The world runs: wait for frames showing it past half a simulated second.
   await until("frames of the running world",
-    "window.regatta && window.regatta.frames > 2 && regatta.hist.length > 0 && regatta.hist[regatta.cur].t > 0.5");
+    "window.regatta && window.regatta.frames > 2 && regatta.hist.length > 0 && regatta.hist[regatta.cur].t > 20");
   await evaluate("fetch('control?cmd=pause', {method: 'POST'}).then(r => r.status)");
   const shots = [];
   for (const [index, advance] of [[1, 0], [2, steps]]) {
