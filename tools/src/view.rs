@@ -191,10 +191,19 @@ fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
         s.finished = finished;
     });
     viewer.publish(&simulation);
-    let started = Instant::now();
+    // Wall time while stepping only (not paused or ended), for the steps/s figure.
+    let mut stepping = Duration::ZERO;
+    let mut running_since: Option<Instant> = None;
     let mut failure = None;
     while !stop.requested() {
         let idle = pace.paused || finished;
+        if idle {
+            if let Some(since) = running_since.take() {
+                stepping += since.elapsed();
+            }
+        } else if running_since.is_none() {
+            running_since = Some(Instant::now());
+        }
         if idle && finished && args.exit {
             break;
         }
@@ -266,7 +275,10 @@ fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
         }
         pace.keep(simulation.time);
     }
-    let wall = started.elapsed().as_secs_f64();
+    if let Some(since) = running_since {
+        stepping += since.elapsed();
+    }
+    let wall = stepping.as_secs_f64();
     let log_line = match (recorder, args.log.as_deref()) {
         (Some(recorder), Some(path)) => {
             let stats = recorder
@@ -278,7 +290,7 @@ fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
     };
     drop(viewer);
     println!(
-        "simulated {:.3} s in {} steps; {:.0} steps/s over {:.3} s of wall time",
+        "simulated {:.3} s in {} steps; {:.0} steps/s over {:.3} s of wall time stepping",
         simulation.time,
         simulation.steps,
         simulation.steps as f64 / wall.max(1e-9),

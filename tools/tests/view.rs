@@ -110,7 +110,7 @@ fn clients_that_vanish_read_slowly_or_crowd_change_no_byte_of_the_log() {
         world,
         "--paused",
         "--speed",
-        "fast",
+        "25",
         "--steps",
         steps,
         "--exit",
@@ -132,7 +132,9 @@ fn clients_that_vanish_read_slowly_or_crowd_change_no_byte_of_the_log() {
     }
     assert!(request(&address, "GET", "/state.json").contains("\"paused\":true"));
     assert!(request(&address, "POST", "/control?cmd=launch").starts_with("HTTP/1.1 400"));
-    // One that vanishes after its first message, one that never reads, twenty that read.
+    // One that vanishes after its first message, one that never reads (at 25× real time
+    // for 2 s its socket's buffers fill, and the server's writes to it block), twenty that
+    // read.
     let mut vanishing = follow(&address);
     let mut first = [0u8; 64];
     let _ = vanishing.read(&mut first);
