@@ -171,10 +171,6 @@ fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
         .transpose()?;
     let mut viewer = Viewer::serve(compiled, bind, args.port)
         .with_context(|| format!("cannot serve the viewer on {bind}:{}", args.port))?;
-    // The first line is the URL alone, for a person to open and a script to read.
-    println!("{}", viewer.url());
-    let _ = std::io::stdout().flush();
-    eprintln!("viewing {name} (Ctrl-C ends it)");
     let stop = crate::signals::Stop::install();
     let mut pace = Pace {
         paused: args.paused,
@@ -191,6 +187,11 @@ fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
         s.finished = finished;
     });
     viewer.publish(&simulation);
+    // The first line is the URL alone, for a person to open and a script to read; by then
+    // the page finds the run's status and first state.
+    println!("{}", viewer.url());
+    let _ = std::io::stdout().flush();
+    eprintln!("viewing {name} (Ctrl-C ends it)");
     // Wall time while stepping only (not paused or ended), for the steps/s figure.
     let mut stepping = Duration::ZERO;
     let mut running_since: Option<Instant> = None;

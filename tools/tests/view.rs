@@ -130,7 +130,8 @@ fn clients_that_vanish_read_slowly_or_crowd_change_no_byte_of_the_log() {
             let _ = stream.write_all(garbage);
         }
     }
-    assert!(request(&address, "GET", "/state.json").contains("\"paused\":true"));
+    let state = request(&address, "GET", "/state.json");
+    assert!(state.contains("\"paused\":true"), "{state}");
     assert!(request(&address, "POST", "/control?cmd=launch").starts_with("HTTP/1.1 400"));
     // One that vanishes after its first message, one that never reads (at 25× real time
     // for 2 s its socket's buffers fill, and the server's writes to it block), twenty that
@@ -270,9 +271,26 @@ fn the_page_draws_the_lamps_and_the_robot_where_the_run_says_and_the_robot_moves
         .map(|s| image::open(s["file"].as_str().unwrap()).unwrap().to_rgba8())
         .collect();
     for (shot, image) in shots.iter().zip(&images) {
+        // A heading arrow is drawn over everything: a lamp right behind one is not looked at.
+        let robots: Vec<(f64, f64)> = shot["probes"]["robots"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| point(&r["at"]))
+            .collect();
+        let mut checked = 0;
         for lamp in shot["probes"]["lamps"].as_array().unwrap() {
+            let (x, y) = point(&lamp["at"]);
+            if robots
+                .iter()
+                .any(|r| (r.0 - x).powi(2) + (r.1 - y).powi(2) < 30.0f64.powi(2))
+            {
+                continue;
+            }
             assert_near_colour(image, &lamp["at"], &lamp["colour"], "a buoy's lamp");
+            checked += 1;
         }
+        assert!(checked > 0, "no lamp in view to check");
         for robot in shot["probes"]["robots"].as_array().unwrap() {
             assert_near_colour(image, &robot["at"], &robot["colour"], "the robot");
         }

@@ -213,3 +213,47 @@ impl Hub {
         self.watchers.load(Ordering::Relaxed) > 0
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Control;
+
+    #[test]
+    fn controls_parse_and_anything_else_is_refused() {
+        assert_eq!(Control::parse("cmd=play"), Some(Control::Play));
+        assert_eq!(Control::parse("cmd=step"), Some(Control::Step(1)));
+        assert_eq!(Control::parse("cmd=step&n=0"), Some(Control::Step(1)));
+        assert_eq!(
+            Control::parse("cmd=speed&x=fast"),
+            Some(Control::Speed(None))
+        );
+        assert_eq!(
+            Control::parse("x=4&cmd=speed"),
+            Some(Control::Speed(Some(4.0)))
+        );
+        assert_eq!(
+            Control::parse("cmd=reset&seed="),
+            Some(Control::Reset(None))
+        );
+        assert_eq!(
+            Control::parse("cmd=reset&seed=7"),
+            Some(Control::Reset(Some(7)))
+        );
+        for bad in [
+            "",
+            "cmd",
+            "cmd=",
+            "cmd=step&n=-1",
+            "cmd=step&n=1e3",
+            "cmd=speed&x=NaN",
+            "cmd=speed&x=inf",
+            "cmd=speed&x=-2",
+            "cmd=speed",
+            "cmd=reset&seed=99999999999999999999999",
+            "cmd=launch",
+            "&&&===",
+        ] {
+            assert_eq!(Control::parse(bad), None, "{bad:?}");
+        }
+    }
+}
