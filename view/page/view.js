@@ -308,7 +308,12 @@ function drawStatus() {
   // The selector follows the run's speed (another client, or --speed, may have set it).
   if (!s.replay && document.activeElement !== $("speed")) {
     const value = s.speed == null ? "fast" : String(s.speed);
-    if ([...$("speed").options].some((o) => o.value === value)) $("speed").value = value;
+    if (![...$("speed").options].some((o) => o.value === value)) {
+      const o = document.createElement("option");
+      o.value = value; o.textContent = `${value}×`;
+      $("speed").append(o);
+    }
+    $("speed").value = value;
   }
   if (document.activeElement !== $("seed") && s.seed !== undefined) $("seed").placeholder = s.seed;
   if (s.replay) {
