@@ -106,7 +106,7 @@ fn clients_that_vanish_read_slowly_or_crowd_change_no_byte_of_the_log() {
         String::from_utf8_lossy(&run.stderr)
     );
 
-    let (mut child, address, _out) = view(&[
+    let (child, address, _out) = view(&[
         world,
         "--paused",
         "--speed",
@@ -117,6 +117,7 @@ fn clients_that_vanish_read_slowly_or_crowd_change_no_byte_of_the_log() {
         "--log",
         viewed.to_str().unwrap(),
     ]);
+    let mut running = Running(child);
     // Garbage first: none of it may stop the server.
     for garbage in [
         &b"\x00\xff\xfe garbage\r\n\r\n"[..],
@@ -159,7 +160,7 @@ fn clients_that_vanish_read_slowly_or_crowd_change_no_byte_of_the_log() {
         .collect();
     std::thread::sleep(Duration::from_millis(300));
     assert!(request(&address, "POST", "/control?cmd=play").starts_with("HTTP/1.1 200"));
-    let status = wait(&mut child, 120);
+    let status = wait(&mut running.0, 120);
     assert!(status.success(), "regatta view failed: {status}");
     drop(slow);
     for reader in crowd {
