@@ -69,6 +69,8 @@ class World:
         fitness: str = "regatta",
         text: Optional[str] = None,
         vary: Sequence[str] = (),
+        view: bool = False,
+        view_port: int = 0,
     ) -> None: ...
     @property
     def variations(self) -> list[tuple[str, str]]:
@@ -100,6 +102,9 @@ class World:
     def time(self) -> float: ...
     @property
     def steps(self) -> int: ...
+    @property
+    def view_url(self) -> Optional[str]:
+        """The live viewer's address when made with ``view=True`` (127.0.0.1), else None."""
     @property
     def time_step(self) -> float: ...
     @property

@@ -136,9 +136,32 @@ pub struct World {
     controlled_names: Vec<String>,
     observation_len: usize,
     actions: Vec<f64>,
+    /// The live viewer (`view=True`), shown what Python steps; its page's controls are off.
+    viewer: Mutex<Option<regatta_view::Viewer>>,
 }
 
 impl World {
+    /// After Python moved the world: a sample for the page if someone watches (after a reset,
+    /// always, so that trails start again).
+    fn show(&mut self, reset: bool) {
+        let viewer = self.viewer.get_mut().unwrap_or_else(|p| p.into_inner());
+        let Some(viewer) = viewer.as_mut() else {
+            return;
+        };
+        let core = self.core.get_mut().unwrap_or_else(|p| p.into_inner());
+        if reset {
+            viewer.restart(core.simulation());
+        } else {
+            viewer.after_step(core.simulation());
+        }
+        if viewer.control().is_some() {
+            while viewer.control().is_some() {}
+            viewer.update_status(|s| {
+                s.note = "stepped from Python: the page's controls are off".to_owned()
+            });
+        }
+    }
+
     fn core(&self) -> MutexGuard<'_, Core> {
         self.core
             .lock()
@@ -155,7 +178,8 @@ impl World {
 #[pymethods]
 impl World {
     #[new]
-    #[pyo3(signature = (path, *, seed=None, lenient=false, control=None, fitness="regatta", text=None, vary=vec![]))]
+    #[pyo3(signature = (path, *, seed=None, lenient=false, control=None, fitness="regatta", text=None, vary=vec![], view=false, view_port=0))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         path: PathBuf,
         seed: Option<u64>,
@@ -164,6 +188,8 @@ impl World {
         fitness: &str,
         text: Option<&str>,
         vary: Vec<String>,
+        view: bool,
+        view_port: u16,
     ) -> PyResult<World> {
         let fitness = Fitness::parse(fitness).map_err(|e| value_error(e.to_string()))?;
         let driven = match &control {
@@ -187,11 +213,28 @@ impl World {
             .collect();
         let observation_len = lengths.first().copied().unwrap_or(0);
         let actions = vec![0.0; 2 * core.controlled().len()];
+        let viewer = if view {
+            let loopback = std::net::IpAddr::from([127, 0, 0, 1]);
+            let mut viewer =
+                regatta_view::Viewer::serve(&core.experiment().compiled, loopback, view_port)
+                    .map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
+            let seed = core.simulation().seed;
+            viewer.update_status(|s| {
+                s.seed = seed;
+                s.speed = None;
+            });
+            viewer.publish(core.simulation());
+            eprintln!("regatta: viewing at {}", viewer.url());
+            Some(viewer)
+        } else {
+            None
+        };
         Ok(World {
             core: Mutex::new(core),
             controlled_names,
             observation_len,
             actions,
+            viewer: Mutex::new(viewer),
         })
     }
 
@@ -205,6 +248,7 @@ impl World {
     ) -> PyResult<Bound<'py, PyArray2<f32>>> {
         let seed = seed.unwrap_or(self.core_mut().simulation().seed);
         self.core_mut().reset(seed).map_err(to_py)?;
+        self.show(true);
         Ok(self.observation(py))
     }
 
@@ -222,19 +266,24 @@ impl World {
         }
         let core = self.core.get_mut().unwrap_or_else(|p| p.into_inner());
         core.step(&self.actions).map_err(to_py)?;
+        self.show(false);
         Ok(self.observation(py))
     }
 
     /// Runs `steps` steps with the current actions (and the world's own controllers), without
     /// coming back to Python in between; returns the last observation.
     fn run<'py>(&mut self, py: Python<'py>, steps: u64) -> PyResult<Bound<'py, PyArray2<f32>>> {
-        let (core, actions) = (
+        let (core, actions, viewer) = (
             self.core.get_mut().unwrap_or_else(|p| p.into_inner()),
             &self.actions,
+            self.viewer.get_mut().unwrap_or_else(|p| p.into_inner()),
         );
         py.detach(|| {
             for _ in 0..steps {
                 core.step(actions)?;
+                if let Some(viewer) = viewer.as_mut() {
+                    viewer.after_step(core.simulation());
+                }
             }
             Ok::<_, CoreError>(())
         })
@@ -355,6 +404,13 @@ impl World {
     #[getter]
     fn time(&self) -> f64 {
         self.core().simulation().time
+    }
+
+    /// The live viewer's address (`view=True`), or None.
+    #[getter]
+    fn view_url(&self) -> Option<String> {
+        let viewer = self.viewer.lock().unwrap_or_else(|p| p.into_inner());
+        viewer.as_ref().map(regatta_view::Viewer::url)
     }
 
     /// Steps done since the start.

@@ -26,6 +26,8 @@ mod serial;
 mod signals;
 mod transfer;
 mod vary;
+mod view;
+mod view_replay;
 mod vision;
 mod webots;
 mod world;
@@ -94,6 +96,8 @@ enum Command {
     Log(logs::LogArgs),
     /// Figures of a log: the arena from above, retina kymographs, and (--series) sensor time series.
     Plot(plot::PlotArgs),
+    /// Step a world and watch it live in the browser (or replay a .mcap log with a timeline).
+    View(view::Args),
 }
 
 /// Piping into `head` closes our standard output early: like other Unix tools, end quietly
@@ -161,6 +165,7 @@ fn run() -> ExitCode {
         Command::Replay(args) => logs::replay(args),
         Command::Log(args) => logs::log(args),
         Command::Plot(args) => plot::plot(args),
+        Command::View(args) => view::run(args, color),
     };
     match result {
         Ok(Outcome::Clean) => ExitCode::SUCCESS,
