@@ -366,6 +366,59 @@ fn bench_step_measures_swarms_and_plots_them() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// `bench crowd` compares each crowd distance with every robot drawn: the exact row has no
+/// error, a distance that leaves robots out some, and the CSV and chart are written.
+#[test]
+fn bench_crowd_measures_error_against_every_robot_drawn() {
+    let dir = temp_dir("bench-crowd");
+    let output = regatta()
+        .args(["bench", "crowd", "--robots", "40", "--distances", "0.001,9"])
+        .args([
+            "--viewers",
+            "6",
+            "--frames",
+            "2",
+            "--spacing",
+            "1",
+            "--repeats",
+            "1",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{text}{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("crowd.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 3, "{csv}");
+    // Columns: robots, distance, µs, outputs, LSB mean, share > 1, LSB max, analog mean, max.
+    let analog = |row: &[&str]| row[7].parse::<f64>().unwrap();
+    assert_eq!((rows[0][1], analog(&rows[0])), ("exact", 0.0), "{csv}");
+    assert!(
+        analog(&rows[1]) > 0.0,
+        "leaving every robot out changed nothing: {csv}"
+    );
+    assert_eq!(
+        analog(&rows[2]),
+        0.0,
+        "9 m reaches every robot of a 2 m arena: {csv}"
+    );
+    assert!(std::fs::read(dir.join("crowd.png"))
+        .unwrap()
+        .starts_with(b"\x89PNG"));
+    std::fs::remove_dir_all(dir).ok();
+}
+
 #[test]
 fn exported_csv_has_a_header_and_a_row_per_pose() {
     let dir = temp_dir("export");
