@@ -2,13 +2,13 @@
 //! within their reach), ambient light sensors, 2-D cameras and vision device, from what the
 //! step shares with every robot.
 
-use crate::compile::rig::CameraRenderer;
 use glam::DVec2;
 
 use super::broad_phase::{self, BroadPhase};
 use super::sensors;
 use super::state::RobotState;
 use super::world2d::Slab;
+use crate::compile::rig::CameraRenderer;
 use crate::compile::Compiled;
 use crate::optics::{Renderer, ViewOf};
 use crate::render::Poses;

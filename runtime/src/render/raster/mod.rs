@@ -13,6 +13,7 @@ mod triangle;
 
 use glam::DVec3;
 
+use super::raycast::{Prepared, RayCaster};
 use super::{shade, world_lights, Poses};
 use crate::compile::graph::{Owner, RenderGraph};
 use crate::compile::plan::Plan;
@@ -36,6 +37,9 @@ pub struct Rasterizer<'g> {
     graph: &'g RenderGraph,
     parts: Vec<Part>,
     visible: Vec<bool>,
+    /// Shadow rays, when a light casts shadows: tested at each vertex, and per pixel in the
+    /// triangles whose corners disagree.
+    shadows: Option<RayCaster<'g>>,
 }
 
 /// A camera for one frame: where it is and how it projects.
@@ -67,6 +71,8 @@ pub struct Target {
     camera: Vec<DVec3>,
     world: Vec<(DVec3, DVec3)>,
     shaded: Vec<[f64; 3]>,
+    /// Per vertex, which shadow tests it made and their answers (a bit each, in order).
+    shadowed: Vec<(u32, u64)>,
     stamp: Vec<u32>,
     generation: u32,
 }
@@ -125,10 +131,16 @@ impl<'g> Rasterizer<'g> {
                 radius,
             });
         }
+        let shadows = plan
+            .lights
+            .iter()
+            .any(|&l| graph.lights[l].shadows)
+            .then(|| RayCaster::new(graph, plan));
         Rasterizer {
             graph,
             parts,
             visible,
+            shadows,
         }
     }
 
@@ -144,6 +156,10 @@ impl<'g> Rasterizer<'g> {
     ) {
         let pixels = view.width * view.height;
         let lights = world_lights(self.graph, plan, poses);
+        let occluders = self
+            .shadows
+            .as_ref()
+            .map(|caster| (caster, caster.prepare(plan, poses, viewer)));
         target.clear(self, view, quantise, pixels);
         // The nearest depth worth drawing: the near sphere's closest approach to the frustum.
         let longest = view.lengths.iter().fold(1.0f64, |m, &l| m.max(l));
@@ -207,31 +223,26 @@ impl<'g> Rasterizer<'g> {
             {
                 continue;
             }
-            self.draw_part(
-                part,
-                placement.as_ref(),
+            let frame = Frame3 {
                 view,
-                &screen,
+                screen: &screen,
                 eye,
-                &lights,
-                quantise,
-                target,
-            );
+                lights: &lights,
+                occluders: occluders.as_ref().map(|(c, p)| (*c, p)),
+            };
+            self.draw_part(part, placement.as_ref(), &frame, quantise, target);
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn draw_part(
         &self,
         part: &Part,
         placement: Option<&Frame>,
-        view: &View,
-        screen: &Screen,
-        eye: DVec3,
-        lights: &[super::WorldLight],
+        frame: &Frame3,
         quantise: bool,
         target: &mut Target,
     ) {
+        let (view, screen, eye, lights) = (frame.view, frame.screen, frame.eye, frame.lights);
         let n = part.set.vertices.len();
         target.camera.clear();
         target.world.clear();
@@ -252,6 +263,7 @@ impl<'g> Rasterizer<'g> {
         if target.stamp.len() < n {
             target.stamp.resize(n, 0);
             target.shaded.resize(n, [0.0; 3]);
+            target.shadowed.resize(n, (0, 0));
         }
         let material = &self.graph.materials[part.material];
         let (tan_h, tan_v) = (view.tan_h, view.tan_v);
@@ -272,6 +284,7 @@ impl<'g> Rasterizer<'g> {
                 if target.stamp[i] != target.generation {
                     target.stamp[i] = target.generation;
                     let (point, normal) = target.world[i];
+                    let mut record = (0u32, 0u64);
                     target.shaded[i] = shade(
                         material,
                         part.set.vertices[i].color,
@@ -279,15 +292,45 @@ impl<'g> Rasterizer<'g> {
                         normal,
                         eye,
                         lights,
-                        // Shadows are the ray caster's alone.
-                        &mut |_, _| false,
+                        &mut |point, kind| {
+                            let hidden = frame
+                                .occluders
+                                .is_some_and(|(caster, view)| caster.occluded(view, point, kind));
+                            record = (record.0 + 1, (record.1 << 1) | u64::from(hidden));
+                            hidden
+                        },
                     );
+                    target.shadowed[i] = record;
                 }
                 *corner = Corner {
                     position: target.camera[i],
                     color: target.shaded[i],
+                    normal: target.world[i].1,
                 };
             }
+            let [a, b, c] = t.map(|i| target.shadowed[i as usize]);
+            // A shadow's edge crosses the triangle: its pixels are shaded one by one.
+            let mixed = frame.occluders.is_some() && (a != b || b != c);
+            let color = part.set.vertices[t[0] as usize].color;
+            let mut exact = |pixel: usize, depth: f64, normal: DVec3| {
+                let (column, row) = (pixel % view.width, pixel / view.width);
+                let up = (1.0 - 2.0 * (row as f64 + 0.5) / view.height as f64) * view.tan_v;
+                let right = (2.0 * (column as f64 + 0.5) / view.width as f64 - 1.0) * view.tan_h;
+                let point = view.to_world.apply(DVec3::new(1.0, up, right) * depth);
+                shade(
+                    material,
+                    color,
+                    point,
+                    normal,
+                    eye,
+                    lights,
+                    &mut |point, kind| {
+                        frame
+                            .occluders
+                            .is_some_and(|(caster, view)| caster.occluded(view, point, kind))
+                    },
+                )
+            };
             triangle::draw(
                 screen,
                 corners,
@@ -295,9 +338,19 @@ impl<'g> Rasterizer<'g> {
                 &mut target.depth,
                 &mut target.linear,
                 &mut target.bytes,
+                if mixed { Some(&mut exact) } else { None },
             );
         }
     }
+}
+
+/// What every part of a frame is drawn with.
+struct Frame3<'a> {
+    view: &'a View<'a>,
+    screen: &'a Screen<'a>,
+    eye: DVec3,
+    lights: &'a [super::WorldLight],
+    occluders: Option<(&'a RayCaster<'a>, &'a Prepared)>,
 }
 
 impl Target {

@@ -9,7 +9,13 @@ use glam::{DVec2, DVec3};
 pub(super) struct Corner {
     pub position: DVec3,
     pub color: [f64; 3],
+    /// The world normal, for triangles shaded per pixel.
+    pub normal: DVec3,
 }
+
+/// Shades one pixel from its index, its camera depth and its interpolated world normal: for
+/// triangles whose corners disagree about a shadow.
+pub(super) type PerPixel<'a, 'b> = Option<&'a mut (dyn FnMut(usize, f64, DVec3) -> [f64; 3] + 'b)>;
 
 /// The image the triangles land on.
 pub(super) struct Screen<'a> {
@@ -38,6 +44,7 @@ pub(super) fn draw(
     depth: &mut [f32],
     linear: &mut [[f32; 3]],
     bytes: &mut [u8],
+    mut per_pixel: PerPixel<'_, '_>,
 ) {
     if corners
         .iter()
@@ -68,7 +75,12 @@ pub(super) fn draw(
                 }
                 let mut position = a.position + (b.position - a.position) * t;
                 position.x = screen.near_x;
-                polygon[count] = Corner { position, color };
+                let normal = a.normal + (b.normal - a.normal) * t;
+                polygon[count] = Corner {
+                    position,
+                    color,
+                    normal,
+                };
                 count += 1;
             }
         }
@@ -81,6 +93,7 @@ pub(super) fn draw(
             depth,
             linear,
             bytes,
+            per_pixel.as_deref_mut(),
         );
     }
 }
@@ -148,6 +161,7 @@ fn fill(
     depth: &mut [f32],
     linear: &mut [[f32; 3]],
     bytes: &mut [u8],
+    mut per_pixel: PerPixel<'_, '_>,
 ) {
     let (w, h) = (screen.width as f64, screen.height as f64);
     let project = |q: DVec3| {
@@ -170,7 +184,14 @@ fn fill(
     }
     let inverse_depth = c.map(|c| 1.0 / c.position.x);
     let w_plane = Plane::through(p, inverse_depth, area);
-    let flat = c[0].color == c[1].color && c[1].color == c[2].color;
+    let flat = per_pixel.is_none() && c[0].color == c[1].color && c[1].color == c[2].color;
+    let normal_planes: [Plane; 3] = std::array::from_fn(|k| {
+        Plane::through(
+            p,
+            [0, 1, 2].map(|i| c[i].normal[k] * inverse_depth[i]),
+            area,
+        )
+    });
     let color_planes: [Plane; 3] = std::array::from_fn(|k| {
         Plane::through(p, [0, 1, 2].map(|i| c[i].color[k] * inverse_depth[i]), area)
     });
@@ -249,7 +270,13 @@ fn fill(
                 }
                 continue;
             }
-            let color = color_planes.map(|plane| plane.at(x, y) / wv);
+            let color = match per_pixel.as_deref_mut() {
+                Some(shade) => {
+                    let normal = normal_planes.map(|plane| plane.at(x, y) / wv);
+                    shade(i, 1.0 / wv, DVec3::from_array(normal).normalize_or_zero())
+                }
+                None => color_planes.map(|plane| plane.at(x, y) / wv),
+            };
             if quantise {
                 bytes[3 * i..3 * i + 3].copy_from_slice(&color.map(to_byte));
             } else {
