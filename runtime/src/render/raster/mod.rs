@@ -155,6 +155,11 @@ impl<'g> Rasterizer<'g> {
         target: &mut Target,
     ) {
         let pixels = view.width * view.height;
+        if pixels == 0 || view.lengths.len() < pixels {
+            target.bytes.clear();
+            target.linear.clear();
+            return;
+        }
         let lights = world_lights(self.graph, plan, poses);
         let occluders = self
             .shadows
@@ -374,12 +379,41 @@ impl Target {
             self.linear.clear();
             self.linear.reserve(pixels);
         }
+        let rights: Vec<f64> = (0..view.width)
+            .map(|c| (2.0 * (c as f64 + 0.5) / view.width as f64 - 1.0) * view.tan_h)
+            .collect();
         for r in 0..view.height {
             let up = (1.0 - 2.0 * (r as f64 + 0.5) / view.height as f64) * view.tan_v;
-            for c in 0..view.width {
-                let right = (2.0 * (c as f64 + 0.5) / view.width as f64 - 1.0) * view.tan_h;
-                // The ray caster's rule: the ground where the pixel's ray points down.
-                let below = background.ground.is_some() && row.x + row.y * up + row.z * right < 0.0;
+            // The ray caster's rule: the ground where the pixel's ray points down. A row
+            // wholly above or below the horizon is filled at once.
+            let below = |right: f64| {
+                background.ground.is_some() && row.x + row.y * up + row.z * right < 0.0
+            };
+            let (first, last) = (below(rights[0]), below(rights[view.width - 1]));
+            // (the test is linear along a row: equal at both ends, equal throughout).
+            if first == last {
+                let pick = first;
+                if quantise {
+                    let b = if pick {
+                        ground_bytes.unwrap_or(sky_bytes)
+                    } else {
+                        sky_bytes
+                    };
+                    for _ in 0..view.width {
+                        self.bytes.extend_from_slice(&b);
+                    }
+                } else {
+                    let l = if pick {
+                        ground_linear.unwrap_or(sky_linear)
+                    } else {
+                        sky_linear
+                    };
+                    self.linear.extend(std::iter::repeat_n(l, view.width));
+                }
+                continue;
+            }
+            for &right in &rights {
+                let below = below(right);
                 if quantise {
                     let b = if below {
                         ground_bytes.unwrap_or(sky_bytes)
