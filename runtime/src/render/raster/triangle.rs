@@ -229,7 +229,8 @@ fn fill(
                 empty = true;
             }
         }
-        if empty || !(lo <= hi + 1.0) {
+        // A NaN bound (a degenerate edge) leaves the row empty too.
+        if empty || lo.is_nan() || hi.is_nan() || lo > hi + 1.0 {
             continue;
         }
         let mut start = ((lo - 1.5).floor().max(0.0)) as usize;
