@@ -103,14 +103,20 @@ impl<'g> Rasterizer<'g> {
                 v.position = primitive.frame.apply(v.position);
                 v.normal = primitive.frame.apply_normal(&primitive.inverse, v.normal);
             }
-            set.vertices
-                .retain(|v| v.position.is_finite() && v.normal.is_finite());
-            if set.triangles.is_empty() || set.vertices.is_empty() {
+            // A vertex that overflowed its frame takes its triangles with it (indices stay).
+            let finite: Vec<bool> = set
+                .vertices
+                .iter()
+                .map(|v| v.position.is_finite() && v.normal.is_finite())
+                .collect();
+            set.triangles.retain(|t| {
+                t.iter()
+                    .all(|&i| finite.get(i as usize).copied().unwrap_or(false))
+            });
+            if set.triangles.is_empty() {
                 continue;
             }
-            let count = set.vertices.len() as u32;
-            set.triangles.retain(|t| t.iter().all(|&i| i < count));
-            let (min, max) = set.vertices.iter().fold(
+            let (min, max) = set.vertices.iter().filter(|v| v.position.is_finite()).fold(
                 (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
                 |(lo, hi), v| (lo.min(v.position), hi.max(v.position)),
             );
