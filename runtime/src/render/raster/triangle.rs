@@ -249,6 +249,28 @@ fn fill(
             continue;
         }
         let base = row * screen.width;
+        if flat && quantise {
+            // The common case, without per-pixel bounds checks: the same tests and values.
+            let (first, past) = (base + start, base + end as usize + 1);
+            let pixels = depth[first..past]
+                .iter_mut()
+                .zip(&screen.lengths[first..past])
+                .zip(bytes[3 * first..3 * past].chunks_exact_mut(3));
+            for (k, ((stored_depth, &length), pixel)) in pixels.enumerate() {
+                let wv = w_plane.at((start + k) as f64 + 0.5, y);
+                let stored = wv as f32;
+                if stored <= *stored_depth
+                    || wv <= 0.0
+                    || length < screen.near * wv
+                    || (screen.far > 0.0 && length > screen.far * wv)
+                {
+                    continue;
+                }
+                *stored_depth = stored;
+                pixel.copy_from_slice(&flat_bytes);
+            }
+            continue;
+        }
         for column in start..=end as usize {
             let x = column as f64 + 0.5;
             let i = base + column;
