@@ -1,6 +1,7 @@
 //! 2-D colour cameras (Webots' `Camera`, the e-puck's 52×39): a planar projection from the
-//! camera's field of view, one ray per pixel through the ray caster, VRML97 shading, then 8-bit
-//! RGB with the camera's Gaussian noise.
+//! camera's field of view, rasterised (`render/raster`, the default) or one ray per pixel
+//! through the ray caster (the reference), VRML97 shading, then 8-bit RGB with the camera's
+//! Gaussian noise.
 //!
 //! Webots' model, as its Camera documentation gives it: `fieldOfView` is horizontal, pixels are
 //! square (so the vertical field follows from width and height), `near` clips what is too
@@ -10,8 +11,11 @@
 
 use glam::DVec3;
 
+use crate::compile::plan::Plan;
 use crate::compile::rig::{CameraRig, Pose2};
+use crate::render::raster::{Rasterizer, Target, View};
 use crate::render::raycast::{Prepared, RayCaster};
+use crate::render::Poses;
 use crate::sim::noise::Stream;
 
 /// A camera's last image.
@@ -27,19 +31,75 @@ pub struct CameraImage {
 pub struct Camera {
     pub rig: CameraRig,
     directions: Vec<DVec3>,
+    /// Per pixel, the length of its unnormalised direction `(1, up, right)` in the robot's
+    /// frame: world distance per unit of the camera's depth (the rasteriser's near/far test).
+    lengths: Vec<f64>,
+    target: Target,
 }
 
 impl Camera {
     pub fn new(rig: &CameraRig) -> Camera {
-        let directions = (0..rig.height)
-            .flat_map(|row| (0..rig.width).map(move |column| (column, row)))
-            .map(|(column, row)| {
-                (rig.frame.linear * rig.pixel_direction(column, row)).normalize_or(DVec3::X)
-            })
-            .collect();
+        let pixels = || {
+            (0..rig.height)
+                .flat_map(|row| (0..rig.width).map(move |column| (column, row)))
+                .map(|(column, row)| rig.frame.linear * rig.pixel_direction(column, row))
+        };
         Camera {
             rig: rig.clone(),
-            directions,
+            directions: pixels().map(|d| d.normalize_or(DVec3::X)).collect(),
+            lengths: pixels().map(|d| d.length()).collect(),
+            target: Target::default(),
+        }
+    }
+
+    /// Renders robot `viewer`'s camera by rasterisation (see [`Camera::update`] for the
+    /// rest): the same pixels, noise drawn in the same order.
+    #[allow(clippy::too_many_arguments)]
+    pub fn update_raster(
+        &mut self,
+        raster: &Rasterizer,
+        plan: &Plan,
+        poses: &Poses,
+        viewer: usize,
+        noise: &mut Stream,
+        out: &mut CameraImage,
+    ) {
+        let (width, height) = (self.rig.width, self.rig.height);
+        out.width = width;
+        out.height = height;
+        out.rgb.clear();
+        let Some(robot_frame) = poses.poses.get(viewer).map(|_| poses.frame(viewer)) else {
+            return;
+        };
+        let to_world = robot_frame.then(&self.rig.frame);
+        let to_camera = to_world.inverse().unwrap_or(crate::geometry::Frame {
+            linear: glam::DMat3::ZERO,
+            translation: DVec3::ZERO,
+        });
+        let tan_h = libm::tan(self.rig.field_of_view / 2.0);
+        let view = View {
+            to_camera,
+            to_world,
+            width,
+            height,
+            tan_h,
+            tan_v: self.rig.tan_half_vertical(),
+            near: self.rig.near.max(0.0),
+            far: self.rig.far.max(0.0),
+            lengths: &self.lengths,
+        };
+        let quantise = self.rig.noise <= 0.0;
+        raster.draw(plan, poses, Some(viewer), &view, quantise, &mut self.target);
+        if quantise {
+            std::mem::swap(&mut out.rgb, &mut self.target.bytes);
+            return;
+        }
+        out.rgb.reserve(width * height * 3);
+        for pixel in &self.target.linear {
+            for &channel in pixel {
+                out.rgb
+                    .push(to_byte(channel as f64 + self.rig.noise * noise.gaussian()));
+            }
         }
     }
 

@@ -357,11 +357,17 @@ fn robot_description(robot: &regatta_runtime::compile::rig::RobotRig) -> String 
     for c in &robot.cameras {
         let _ = writeln!(
             out,
-            "    Camera \"{}\": {}×{} pixels over {:.1}°, planar, ray cast{}, {}",
+            "    Camera \"{}\": {}×{} pixels over {:.1}°, planar, {}{}, {}",
             c.name,
             c.width,
             c.height,
             c.field_of_view.to_degrees(),
+            match c.renderer {
+                regatta_runtime::compile::rig::CameraRenderer::Raster => {
+                    "rasterised (the default for 2-D cameras: per-vertex lighting, shadows by ray; ray casting is the reference, docs/camera-raster.md)"
+                }
+                regatta_runtime::compile::rig::CameraRenderer::Rays => "ray cast (the reference)",
+            },
             if c.noise > 0.0 {
                 format!(", noise {}", c.noise)
             } else {

@@ -25,8 +25,8 @@ use graph::{
 };
 pub use plan::Plan;
 use rig::{
-    filter_set, CameraRig, DistanceSensorRig, LightSensorRig, LinearCameraRig, Optics,
-    PanoramicRig, Pose2, RobotRig, SensorRig, TurretRig,
+    filter_set, CameraRenderer, CameraRig, DistanceSensorRig, LightSensorRig, LinearCameraRig,
+    Optics, PanoramicRig, Pose2, RobotRig, SensorRig, TurretRig,
 };
 use shapes::{background_of, material_of, shape_of};
 
@@ -651,6 +651,7 @@ impl Compiler<'_> {
             far: scene.float(node, "far"),
             noise: scene.float(node, "noise"),
             period: scene.float(node, "samplingPeriod"),
+            renderer: CameraRenderer::default(),
         });
     }
 

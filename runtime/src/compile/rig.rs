@@ -203,6 +203,28 @@ pub struct CameraRig {
     /// Gaussian noise of each colour channel, as a fraction of full scale.
     pub noise: f64,
     pub period: f64,
+    /// Which renderer draws it.
+    pub renderer: CameraRenderer,
+}
+
+/// How a 2-D camera is drawn.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CameraRenderer {
+    /// The CPU rasteriser (`render/raster`): the default since per-pixel ray casting made a
+    /// 640×480 camera cost ~250 ms a frame. No shadows; lighting per vertex.
+    #[default]
+    Raster,
+    /// Per-pixel ray casting: the reference the rasteriser is measured against.
+    Rays,
+}
+
+impl CameraRenderer {
+    pub fn name(self) -> &'static str {
+        match self {
+            CameraRenderer::Raster => "rasterised",
+            CameraRenderer::Rays => "ray cast",
+        }
+    }
 }
 
 impl CameraRig {

@@ -7,6 +7,7 @@
 //! radius give nothing; shadows only for lights with `castShadows TRUE`.
 
 pub mod column;
+pub mod raster;
 pub mod raycast;
 
 use glam::DVec3;

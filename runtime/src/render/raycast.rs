@@ -256,7 +256,7 @@ impl<'g> RayCaster<'g> {
         }
     }
 
-    fn occluded(&self, frame: &Prepared, point: DVec3, kind: &LightKind) -> bool {
+    pub(crate) fn occluded(&self, frame: &Prepared, point: DVec3, kind: &LightKind) -> bool {
         let (direction, distance) = match kind {
             LightKind::Directional { direction } => (-*direction, f64::INFINITY),
             LightKind::Point { location, .. } | LightKind::Spot { location, .. } => {

@@ -8,6 +8,7 @@ use super::broad_phase::{self, BroadPhase};
 use super::sensors;
 use super::state::RobotState;
 use super::world2d::Slab;
+use crate::compile::rig::CameraRenderer;
 use crate::compile::Compiled;
 use crate::optics::{Renderer, ViewOf};
 use crate::render::Poses;
@@ -27,6 +28,8 @@ pub(super) struct SenseShared<'s, 'c> {
     pub(super) frame: Option<&'s crate::render::column::ColumnFrame>,
     /// The ray caster of the 2-D cameras, when a robot has one.
     pub(super) camera_caster: Option<&'s crate::render::raycast::RayCaster<'c>>,
+    /// The rasteriser of the 2-D cameras, when a robot has one that uses it.
+    pub(super) camera_raster: Option<&'s crate::render::raster::Rasterizer<'c>>,
     pub(super) batched: bool,
     pub(super) t: f64,
 }
@@ -127,23 +130,41 @@ impl SenseShared<'_, '_> {
                 );
             }
         }
-        // 2-D cameras always render on the CPU, with the ray caster.
-        if let (true, Some(caster)) = (senses.camera, self.camera_caster) {
+        // 2-D cameras render on the CPU: rasterised, or ray cast where the rig asks for it.
+        if senses.camera {
             let mut view = None;
             for (c, camera) in robot.cameras.iter_mut().enumerate() {
-                if due(&mut camera.due, t, camera.model.rig.period) {
-                    robot.updated.cameras |= 1 << c.min(63);
-                    let view = view.get_or_insert_with(|| {
-                        caster.prepare(&compiled.plan, self.poses, Some(index))
-                    });
-                    camera.model.update(
-                        caster,
-                        view,
-                        robot.pose,
-                        rig.floor_y,
+                if !due(&mut camera.due, t, camera.model.rig.period) {
+                    continue;
+                }
+                robot.updated.cameras |= 1 << c.min(63);
+                match (
+                    camera.model.rig.renderer,
+                    self.camera_raster,
+                    self.camera_caster,
+                ) {
+                    (CameraRenderer::Raster, Some(raster), _) => camera.model.update_raster(
+                        raster,
+                        &compiled.plan,
+                        self.poses,
+                        index,
                         &mut camera.noise,
                         &mut camera.image,
-                    );
+                    ),
+                    (CameraRenderer::Rays, _, Some(caster)) => {
+                        let view = view.get_or_insert_with(|| {
+                            caster.prepare(&compiled.plan, self.poses, Some(index))
+                        });
+                        camera.model.update(
+                            caster,
+                            view,
+                            robot.pose,
+                            rig.floor_y,
+                            &mut camera.noise,
+                            &mut camera.image,
+                        );
+                    }
+                    _ => {}
                 }
             }
         }

@@ -46,8 +46,10 @@ pub enum SimError {
 pub struct Simulation<'c> {
     pub compiled: &'c Compiled,
     renderer: Option<Renderer<'c>>,
-    /// The ray caster 2-D cameras render with, when a robot has one.
+    /// The ray caster of the 2-D cameras that ask for it (the reference).
     camera_caster: Option<crate::render::raycast::RayCaster<'c>>,
+    /// The rasteriser of the other 2-D cameras (the default).
+    camera_raster: Option<crate::render::raster::Rasterizer<'c>>,
     /// A batched backend that renders every due vision device of a step in one call,
     /// replacing the CPU renderer.
     vision: Option<Box<dyn VisionBackend + 'c>>,
@@ -185,14 +187,23 @@ impl<'c> Simulation<'c> {
                 last_panoramic = Some(index);
             }
         }
-        let camera_caster = compiled
-            .rig
-            .has_cameras()
+        let uses = |renderer: crate::compile::rig::CameraRenderer| {
+            compiled
+                .rig
+                .robots
+                .iter()
+                .flat_map(|r| &r.cameras)
+                .any(|c| c.renderer == renderer)
+        };
+        let camera_caster = uses(crate::compile::rig::CameraRenderer::Rays)
             .then(|| crate::render::raycast::RayCaster::new(&compiled.graph, &compiled.plan));
+        let camera_raster = uses(crate::compile::rig::CameraRenderer::Raster)
+            .then(|| crate::render::raster::Rasterizer::new(&compiled.graph, &compiled.plan));
         let mut simulation = Simulation {
             compiled,
             renderer,
             camera_caster,
+            camera_raster,
             vision: None,
             vision_error: None,
             vision_buffers: Vec::new(),
@@ -450,6 +461,7 @@ impl<'c> Simulation<'c> {
             renderer,
             frame: frame.as_ref(),
             camera_caster: self.camera_caster.as_ref(),
+            camera_raster: self.camera_raster.as_ref(),
             batched: self.vision.is_some(),
             t,
         };

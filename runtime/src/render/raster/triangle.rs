@@ -1,0 +1,310 @@
+//! One triangle into the buffers: clipped at the near plane, projected, filled span by span
+//! with a consistent tie rule (a pixel centre on an edge shared by two triangles is drawn
+//! once), its depth and colour interpolated perspective-correctly.
+
+use glam::{DVec2, DVec3};
+
+/// A triangle corner in camera coordinates with its shaded linear colour.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Corner {
+    pub position: DVec3,
+    pub color: [f64; 3],
+    /// The world normal, for triangles shaded per pixel.
+    pub normal: DVec3,
+}
+
+/// Shades one pixel from its index, its camera depth and its interpolated world normal: for
+/// triangles whose corners disagree about a shadow.
+pub(super) type PerPixel<'a, 'b> = Option<&'a mut (dyn FnMut(usize, f64, DVec3) -> [f64; 3] + 'b)>;
+
+/// The image the triangles land on.
+pub(super) struct Screen<'a> {
+    pub width: usize,
+    pub height: usize,
+    /// The clipping plane's depth (camera x).
+    pub near_x: f64,
+    pub near: f64,
+    pub far: f64,
+    pub tan_h: f64,
+    pub tan_v: f64,
+    pub lengths: &'a [f64],
+}
+
+/// A linear channel value to 0…255, rounded half up, clamped (NaN: 0), as the ray-cast
+/// camera converts it; `as` truncates, which is the floor for the non-negative values here.
+pub(super) fn to_byte(value: f64) -> u8 {
+    (value.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+}
+
+/// Clips against the near plane and fills what is left.
+pub(super) fn draw(
+    screen: &Screen,
+    corners: [Corner; 3],
+    quantise: bool,
+    depth: &mut [f32],
+    linear: &mut [[f32; 3]],
+    bytes: &mut [u8],
+    mut per_pixel: PerPixel<'_, '_>,
+) {
+    if corners
+        .iter()
+        .any(|c| !c.position.is_finite() || c.color.iter().any(|v| !v.is_finite()))
+    {
+        return;
+    }
+    let inside = corners.map(|c| c.position.x >= screen.near_x);
+    let mut polygon = [Corner::default(); 4];
+    let mut count = 0;
+    if inside.iter().all(|&i| i) {
+        polygon[..3].copy_from_slice(&corners);
+        count = 3;
+    } else {
+        // Sutherland–Hodgman against x = near_x: at most four corners remain.
+        for k in 0..3 {
+            let (a, b) = (corners[k], corners[(k + 1) % 3]);
+            let (ia, ib) = (inside[k], inside[(k + 1) % 3]);
+            if ia {
+                polygon[count] = a;
+                count += 1;
+            }
+            if ia != ib {
+                let t = (screen.near_x - a.position.x) / (b.position.x - a.position.x);
+                let mut color = [0.0; 3];
+                for (k, c) in color.iter_mut().enumerate() {
+                    *c = a.color[k] + (b.color[k] - a.color[k]) * t;
+                }
+                let mut position = a.position + (b.position - a.position) * t;
+                position.x = screen.near_x;
+                let normal = a.normal + (b.normal - a.normal) * t;
+                polygon[count] = Corner {
+                    position,
+                    color,
+                    normal,
+                };
+                count += 1;
+            }
+        }
+    }
+    for k in 1..count.saturating_sub(1) {
+        fill(
+            screen,
+            [polygon[0], polygon[k], polygon[k + 1]],
+            quantise,
+            depth,
+            linear,
+            bytes,
+            per_pixel.as_deref_mut(),
+        );
+    }
+}
+
+/// A plane over the screen: `value(p) = a·x + b·y + c`.
+#[derive(Clone, Copy)]
+struct Plane {
+    a: f64,
+    b: f64,
+    c: f64,
+}
+
+impl Plane {
+    fn through(p: [DVec2; 3], v: [f64; 3], area: f64) -> Plane {
+        let (d1, d2) = (p[1] - p[0], p[2] - p[0]);
+        let (v1, v2) = (v[1] - v[0], v[2] - v[0]);
+        let a = (v1 * d2.y - v2 * d1.y) / area;
+        let b = (v2 * d1.x - v1 * d2.x) / area;
+        Plane {
+            a,
+            b,
+            c: v[0] - a * p[0].x - b * p[0].y,
+        }
+    }
+
+    fn at(&self, x: f64, y: f64) -> f64 {
+        self.a * x + self.b * y + self.c
+    }
+}
+
+/// An edge's inside test `dx·(py − ay) − dy·(px − ax) ≥ 0`, with the tie rule.
+#[derive(Clone, Copy)]
+struct Edge {
+    origin: DVec2,
+    d: DVec2,
+    /// Whether a pixel centre exactly on it is inside: one of the two orientations of an
+    /// edge, so that two triangles sharing it never both draw (nor both skip) the pixel.
+    ties: bool,
+}
+
+impl Edge {
+    fn new(a: DVec2, b: DVec2) -> Edge {
+        let d = b - a;
+        Edge {
+            origin: a,
+            d,
+            ties: d.y > 0.0 || (d.y == 0.0 && d.x > 0.0),
+        }
+    }
+
+    fn value(&self, x: f64, y: f64) -> f64 {
+        self.d.x * (y - self.origin.y) - self.d.y * (x - self.origin.x)
+    }
+
+    fn inside(&self, x: f64, y: f64) -> bool {
+        let e = self.value(x, y);
+        e > 0.0 || (e == 0.0 && self.ties)
+    }
+}
+
+fn fill(
+    screen: &Screen,
+    corners: [Corner; 3],
+    quantise: bool,
+    depth: &mut [f32],
+    linear: &mut [[f32; 3]],
+    bytes: &mut [u8],
+    mut per_pixel: PerPixel<'_, '_>,
+) {
+    let (w, h) = (screen.width as f64, screen.height as f64);
+    let project = |q: DVec3| {
+        DVec2::new(
+            (q.z / q.x / screen.tan_h + 1.0) * w / 2.0,
+            (1.0 - q.y / q.x / screen.tan_v) * h / 2.0,
+        )
+    };
+    let mut p = corners.map(|c| project(c.position));
+    let mut c = corners;
+    let mut area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
+    if !(area.is_finite() && area.abs() > 1e-12) {
+        return;
+    }
+    // One orientation for every triangle: the edges' inside is then always the left.
+    if area < 0.0 {
+        p.swap(1, 2);
+        c.swap(1, 2);
+        area = -area;
+    }
+    let inverse_depth = c.map(|c| 1.0 / c.position.x);
+    let w_plane = Plane::through(p, inverse_depth, area);
+    let flat = per_pixel.is_none() && c[0].color == c[1].color && c[1].color == c[2].color;
+    let normal_planes: [Plane; 3] = std::array::from_fn(|k| {
+        Plane::through(
+            p,
+            [0, 1, 2].map(|i| c[i].normal[k] * inverse_depth[i]),
+            area,
+        )
+    });
+    let color_planes: [Plane; 3] = std::array::from_fn(|k| {
+        Plane::through(p, [0, 1, 2].map(|i| c[i].color[k] * inverse_depth[i]), area)
+    });
+    let flat_color = c[0].color;
+    let flat_bytes = flat_color.map(to_byte);
+    let flat_linear = flat_color.map(|v| v as f32);
+    // With the area positive, each edge's value is positive on the triangle's side.
+    let edges = [
+        Edge::new(p[0], p[1]),
+        Edge::new(p[1], p[2]),
+        Edge::new(p[2], p[0]),
+    ];
+    let min_y = p.iter().fold(f64::INFINITY, |m, q| m.min(q.y));
+    let max_y = p.iter().fold(f64::NEG_INFINITY, |m, q| m.max(q.y));
+    let first_row = (min_y - 0.5).ceil().clamp(0.0, h) as usize;
+    let last_row = (max_y - 0.5).floor().clamp(-1.0, h - 1.0);
+    if last_row < 0.0 {
+        return;
+    }
+    let last_row = last_row as usize;
+    for row in first_row..=last_row.min(screen.height - 1) {
+        let y = row as f64 + 0.5;
+        // Each edge bounds x on one side; the span is their intersection, widened by a pixel
+        // and then trimmed with the exact test, so rounding never adds or drops a pixel.
+        let (mut lo, mut hi) = (0.0f64, w);
+        let mut empty = false;
+        for e in &edges {
+            let slope = -e.d.y;
+            let offset = e.d.x * (y - e.origin.y) + e.d.y * e.origin.x;
+            if slope > 0.0 {
+                lo = lo.max(-offset / slope);
+            } else if slope < 0.0 {
+                hi = hi.min(-offset / slope);
+            } else if offset < 0.0 || (offset == 0.0 && !e.ties) {
+                empty = true;
+            }
+        }
+        // A NaN bound (a degenerate edge) leaves the row empty too.
+        if empty || lo.is_nan() || hi.is_nan() || lo > hi + 1.0 {
+            continue;
+        }
+        let mut start = ((lo - 1.5).floor().max(0.0)) as usize;
+        let mut end = ((hi + 0.5).ceil().min(w - 1.0)).max(-1.0) as isize;
+        let inside = |column: usize| {
+            let x = column as f64 + 0.5;
+            edges.iter().all(|e| e.inside(x, y))
+        };
+        while (start as isize) <= end && !inside(start) {
+            start += 1;
+        }
+        while end >= start as isize && !inside(end as usize) {
+            end -= 1;
+        }
+        if end < start as isize {
+            continue;
+        }
+        let base = row * screen.width;
+        if flat && quantise {
+            // The common case, without per-pixel bounds checks: the same tests and values.
+            let (first, past) = (base + start, base + end as usize + 1);
+            let pixels = depth[first..past]
+                .iter_mut()
+                .zip(&screen.lengths[first..past])
+                .zip(bytes[3 * first..3 * past].chunks_exact_mut(3));
+            for (k, ((stored_depth, &length), pixel)) in pixels.enumerate() {
+                let wv = w_plane.at((start + k) as f64 + 0.5, y);
+                let stored = wv as f32;
+                if stored <= *stored_depth
+                    || wv <= 0.0
+                    || length < screen.near * wv
+                    || (screen.far > 0.0 && length > screen.far * wv)
+                {
+                    continue;
+                }
+                *stored_depth = stored;
+                pixel.copy_from_slice(&flat_bytes);
+            }
+            continue;
+        }
+        for column in start..=end as usize {
+            let x = column as f64 + 0.5;
+            let i = base + column;
+            let wv = w_plane.at(x, y);
+            let stored = wv as f32;
+            if stored <= depth[i] || wv <= 0.0 {
+                continue;
+            }
+            // The ray caster's clipping: distance along the ray within near…far.
+            let length = screen.lengths[i];
+            if length < screen.near * wv || (screen.far > 0.0 && length > screen.far * wv) {
+                continue;
+            }
+            depth[i] = stored;
+            if flat {
+                if quantise {
+                    bytes[3 * i..3 * i + 3].copy_from_slice(&flat_bytes);
+                } else {
+                    linear[i] = flat_linear;
+                }
+                continue;
+            }
+            let color = match per_pixel.as_deref_mut() {
+                Some(shade) => {
+                    let normal = normal_planes.map(|plane| plane.at(x, y) / wv);
+                    shade(i, 1.0 / wv, DVec3::from_array(normal).normalize_or_zero())
+                }
+                None => color_planes.map(|plane| plane.at(x, y) / wv),
+            };
+            if quantise {
+                bytes[3 * i..3 * i + 3].copy_from_slice(&color.map(to_byte));
+            } else {
+                linear[i] = color.map(|v| v as f32);
+            }
+        }
+    }
+}
