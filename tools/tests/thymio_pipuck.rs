@@ -30,7 +30,7 @@ fn summary(output: &Output) -> (f64, f64, f64) {
         .unwrap_or_else(|| panic!("no robot line: {}", text(output)));
     let number = |after: &str| -> f64 {
         let rest = line.split_once(after).expect("summary field").1;
-        rest.split(|c: char| c == ' ' || c == ';')
+        rest.split([' ', ';'])
             .next()
             .and_then(|w| w.parse().ok())
             .expect("a number")
@@ -73,7 +73,10 @@ fn thymio_and_epuck2_worlds_are_canonical_and_avoid_walls() {
             }
             last = Some((x, z));
         }
-        assert!(path > 0.5, "{name}: the robot went only {path:.3} m in 30 s");
+        assert!(
+            path > 0.5,
+            "{name}: the robot went only {path:.3} m in 30 s"
+        );
         // A minute among walls and boxes without pushing against any for a second.
         let output = run_for(&world, 60, false);
         assert!(output.status.success(), "{name}: {}", text(&output));
