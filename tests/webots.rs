@@ -1,6 +1,7 @@
 //! Webots worlds at the library level: each stand-in's test world compiles to what its
 //! expected summary says (`tests/data/webots/*.expected`, `REGATTA_BLESS=1` rewrites them), and
-//! the corpus's R2020a and R2023b khepera.wbt are the same world up to the axis change.
+//! the corpus's R2020a and R2023b khepera.wbt are the same world up to the axis change, and
+//! `braitenberg` weighs the Thymio's seven sensors by heading.
 
 use regatta_runtime::compile::rig::TurretRig;
 use regatta_runtime::compile::Compiled;
@@ -269,4 +270,29 @@ fn epuck_camera_sees_what_is_ahead_only_when_read() {
     assert_eq!(cameras.len(), 1);
     assert_eq!(cameras[0].size(), (52, 39));
     assert_eq!(cameras[0].image().unwrap().len(), 52 * 39 * 3);
+}
+
+#[test]
+fn braitenberg_weighs_the_thymios_sensors_by_heading_and_the_epucks_as_k_team() {
+    use regatta_runtime::controllers::braitenberg::Weights;
+    let weights = |name: &str| {
+        let world = root().join("tests/data/webots").join(name);
+        let checked = regatta_schema::check_file(&world, true).expect("readable");
+        let compiled = regatta_runtime::compile(&checked.scene);
+        Weights::for_robot(Some(&compiled.rig.robots[0]))
+    };
+    // The e-puck lists its eight sensors in the Khepera's order: K-Team's weights unchanged.
+    assert_eq!(weights("pi-puck.wbt"), Weights::KTEAM);
+    let thymio = weights("thymio2.wbt");
+    // Something seen on the left (prox.horizontal.0, 1) speeds the left wheel and slows the
+    // right one, turning the robot away; the right side (3, 4) mirrors it.
+    for slot in [0, 1] {
+        assert!(thymio.left[slot] > thymio.right[slot], "{thymio:?}");
+    }
+    for slot in [3, 4] {
+        assert!(thymio.left[slot] < thymio.right[slot], "{thymio:?}");
+    }
+    assert_eq!(thymio.left[4], thymio.right[0]);
+    // Seven sensors: the eighth slot weighs nothing, and the ground sensors have no slot.
+    assert_eq!((thymio.left[7], thymio.right[7]), (0.0, 0.0));
 }

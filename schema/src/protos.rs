@@ -64,6 +64,11 @@ pub const WEBOTS_STANDINS: &[(&str, &str, crate::webots::Authoring)] = {
             WebotsRobot,
         ),
         (
+            "Pi-puck",
+            include_str!("../../worlds/protos/webots/Pi-puck.proto"),
+            WebotsRobot,
+        ),
+        (
             "RectangleArena",
             include_str!("../../worlds/protos/webots/RectangleArena.proto"),
             Webots,
@@ -77,6 +82,11 @@ pub const WEBOTS_STANDINS: &[(&str, &str, crate::webots::Authoring)] = {
             "TexturedBackgroundLight",
             include_str!("../../worlds/protos/webots/TexturedBackgroundLight.proto"),
             Webots,
+        ),
+        (
+            "Thymio2",
+            include_str!("../../worlds/protos/webots/Thymio2.proto"),
+            WebotsRobot,
         ),
         (
             "WoodenBox",

@@ -88,7 +88,13 @@ fn khepera_and_epuck_worlds_run_with_every_robot_moving() {
     for folder in ["webots", "webots-ext"] {
         for world in webots_worlds(folder) {
             let source = std::fs::read_to_string(&world).expect("readable");
-            let robots = ["Khepera1 {", "Khepera2 {", "E-puck {", "E-puck_enu {"];
+            let robots = [
+                "Khepera1 {",
+                "Khepera2 {",
+                "E-puck {",
+                "E-puck_enu {",
+                "Thymio2 {",
+            ];
             if !robots.iter().any(|r| source.contains(r)) {
                 continue;
             }

@@ -552,6 +552,13 @@ impl Compiler<'_> {
         match scene.type_name(node) {
             "DistanceSensor" => {
                 let (position, direction) = device_pose(scene, node, frame);
+                // A sensor looking down (the Thymio's and e-puck's ground sensors) would read
+                // the floor, which regatta's 2.5-D world makes uniform: it is not simulated,
+                // and kept out of the proximity slots, where it would look ahead at wheel
+                // height.
+                if direction.y < -std::f64::consts::FRAC_1_SQRT_2 {
+                    return;
+                }
                 let rig = DistanceSensorRig {
                     name: scene.string(node, "name").to_owned(),
                     position,

@@ -100,9 +100,10 @@ pub static CONTROLLERS: &[ControllerSpec] = &[
         aliases: &[],
         doc: "Mondada's obstacle avoider: the Khepera BIOS's feed-forward IR network.",
         parameters: BRAITENBERG_PARAMETERS,
-        build: |args, _, _| {
+        build: |args, robot, _| {
             Ok(Box::new(Braitenberg {
                 parameters: Parameters::from_arguments(args),
+                weights: braitenberg::Weights::for_robot(robot),
             }))
         },
     },

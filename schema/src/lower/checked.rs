@@ -140,7 +140,7 @@ impl Checked {
             })
             .collect();
         Some(format!(
-            "the world has {} robot(s) regatta could not build, so it is not simulated:\n{}\nregatta has stand-ins for Khepera1, Khepera2 and E-puck (and its own Khepera); --proto-path DIR can point at a folder with the others' PROTOs",
+            "the world has {} robot(s) regatta could not build, so it is not simulated:\n{}\nregatta has stand-ins for Khepera1 to Khepera4, E-puck (and its e-puck2 version, with Pi-puck), E-puck_enu and Thymio2 (and its own Khepera); --proto-path DIR can point at a folder with the others' PROTOs",
             unbuilt.len(),
             lines.join("\n")
         ))
