@@ -681,6 +681,36 @@ impl Bvh {
         self.order.is_empty()
     }
 
+    /// Whether `hit(item, t_max)` holds for some item whose box the ray meets before `t_max`,
+    /// stopping at the first: a shadow ray needs to know that something is in the way, not
+    /// what is nearest.
+    pub fn any(&self, ray: &Ray, t_max: f64, mut hit: impl FnMut(u32, f64) -> bool) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let inverse = ray.direction.recip();
+        let mut stack = [0u32; 64];
+        let mut top = 1usize;
+        while top > 0 {
+            top -= 1;
+            let node = self.nodes[stack[top] as usize];
+            if node.bounds.ray_interval(ray, inverse, t_max).is_none() {
+                continue;
+            }
+            if node.count > 0 {
+                let items = &self.order[node.start as usize..(node.start + node.count) as usize];
+                if items.iter().any(|&item| hit(item, t_max)) {
+                    return true;
+                }
+            } else if top + 2 <= stack.len() {
+                stack[top] = node.start + 1;
+                stack[top + 1] = node.start;
+                top += 2;
+            }
+        }
+        false
+    }
+
     /// Calls `hit(item, t_max) -> Option<t>` for items whose boxes the ray may hit before the
     /// current nearest; returns the nearest item and its `t`.
     pub fn nearest(
@@ -730,6 +760,53 @@ mod tests {
             origin: DVec3::from_array(o),
             direction: DVec3::from_array(d),
         }
+    }
+
+    /// `any` answers whether `nearest` finds something, for every ray and limit.
+    #[test]
+    fn any_hit_is_whether_there_is_a_nearest() {
+        let mut state = 11u64;
+        let mut unit = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let boxes: Vec<Aabb> = (0..200)
+            .map(|_| {
+                let c = DVec3::new(unit() * 10.0 - 5.0, unit() * 2.0, unit() * 10.0 - 5.0);
+                let h = DVec3::new(unit(), unit(), unit()) * 0.3;
+                Aabb {
+                    min: c - h,
+                    max: c + h,
+                }
+            })
+            .collect();
+        let bvh = Bvh::build(&boxes);
+        let mut hits = 0;
+        for _ in 0..500 {
+            let r = ray(
+                [unit() * 12.0 - 6.0, unit() * 2.0, unit() * 12.0 - 6.0],
+                [unit() * 2.0 - 1.0, unit() * 0.2 - 0.1, unit() * 2.0 - 1.0],
+            );
+            let t_max = unit() * 8.0;
+            let inverse = r.direction.recip();
+            let item_hit = |item: u32, limit: f64| {
+                boxes[item as usize]
+                    .ray_interval(&r, inverse, limit)
+                    .map(|(entry, _)| entry)
+            };
+            let nearest = bvh.nearest(&r, t_max, item_hit).is_some();
+            hits += nearest as usize;
+            assert_eq!(
+                bvh.any(&r, t_max, |item, limit| item_hit(item, limit).is_some()),
+                nearest
+            );
+        }
+        assert!(
+            hits > 20 && hits < 480,
+            "{hits} of 500 rays hit: a poor test"
+        );
     }
 
     #[test]

@@ -265,7 +265,35 @@ impl<'g> RayCaster<'g> {
             }
         };
         let origin = point + direction.normalize_or_zero() * 1e-9;
-        self.trace(frame, &Ray { origin, direction }, distance * (1.0 - 1e-9))
-            .is_some()
+        self.blocked(frame, &Ray { origin, direction }, distance * (1.0 - 1e-9))
+    }
+
+    /// Whether the ray hits anything before `t_max`: [`RayCaster::trace`]`.is_some()`, but
+    /// stopping at the first hit (there is one exactly when there is a nearest).
+    fn blocked(&self, frame: &Prepared, ray: &Ray, t_max: f64) -> bool {
+        let graph = self.graph;
+        let statics = graph.static_index.any(ray, t_max, |item, t_limit| {
+            let index = graph.static_primitives[item as usize];
+            let primitive = &graph.primitives[index];
+            self.visible[index]
+                && self
+                    .hit_primitive(
+                        primitive,
+                        &primitive.frame,
+                        &primitive.inverse,
+                        ray,
+                        t_limit,
+                    )
+                    .is_some()
+        });
+        statics
+            || frame.dynamic.iter().any(|(index, world, inverse, bounds)| {
+                bounds
+                    .ray_interval(ray, ray.direction.recip(), t_max)
+                    .is_some()
+                    && self
+                        .hit_primitive(&graph.primitives[*index], world, inverse, ray, t_max)
+                        .is_some()
+            })
     }
 }

@@ -4,8 +4,9 @@
 //! same `shade` as the ray caster, interpolated perspective-correctly (Gouraud).
 //!
 //! One thread, primitives in graph order, f64 set-up: the same inputs give the same bytes.
-//! What it does not do that the ray caster does: shadows (a light's `castShadows` is ignored),
-//! and lighting between vertices is interpolated, not evaluated (exact for flat faces under
+//! Shadows (lights with `castShadows`) are the ray caster's shadow rays, cast at each vertex,
+//! and at each pixel of a triangle whose corners disagree (a shadow's edge crosses it).
+//! Lighting between vertices is interpolated, not evaluated (exact for flat faces under
 //! directional lights). `docs/camera-raster.md` gives the measured agreement.
 
 pub mod tessellate;
