@@ -5,8 +5,9 @@
 //! Tolerance (docs/camera-raster.md): at least 97 % of pixels with every channel within 8
 //! levels of 255, and a mean channel error under 3 levels. The differences are the
 //! rasteriser's by design: polygonal silhouettes of curved shapes, Gouraud-interpolated
-//! point-light attenuation and specular highlights, no shadows, and pixel centres exactly on
-//! an edge.
+//! point-light attenuation and specular highlights, shadow edges decided per vertex where a
+//! triangle's corners agree, and pixel centres exactly on an edge. A world chooses the
+//! reference with the camera's `rendering "rays"`.
 
 use regatta_runtime::camera::{Camera, CameraImage};
 use regatta_runtime::compile::rig::CameraRig;
@@ -208,4 +209,23 @@ fn degenerate_geometry_renders_cleanly() {
     for (name, _, raster) in both(&compiled) {
         assert_eq!(raster.rgb.len(), raster.width * raster.height * 3, "{name}");
     }
+}
+
+/// A camera's `rendering` field chooses its renderer; the rasteriser is the default.
+#[test]
+fn a_world_chooses_its_cameras_renderer() {
+    use regatta_runtime::compile::rig::CameraRenderer;
+    let world = |rendering: &str| {
+        regatta_tests::compile_text(&format!(
+            "#VRML_SIM R2023b utf8\nWorldInfo {{ coordinateSystem \"NUE\" }}\nArena {{ size 1 1 }}\n\
+             DifferentialWheels {{ controller \"none\" children [ Camera {{ width 16 height 12 {rendering} }} ] }}\n"
+        ))
+    };
+    let renderer = |compiled: &Compiled| compiled.rig.robots[0].cameras[0].renderer;
+    assert_eq!(renderer(&world("")), CameraRenderer::Raster);
+    assert_eq!(renderer(&world("rendering \"rays\"")), CameraRenderer::Rays);
+    assert_eq!(
+        renderer(&world("rendering \"raster\"")),
+        CameraRenderer::Raster
+    );
 }

@@ -366,7 +366,9 @@ fn robot_description(robot: &regatta_runtime::compile::rig::RobotRig) -> String 
                 regatta_runtime::compile::rig::CameraRenderer::Raster => {
                     "rasterised (the default for 2-D cameras: per-vertex lighting, shadows by ray; ray casting is the reference, docs/camera-raster.md)"
                 }
-                regatta_runtime::compile::rig::CameraRenderer::Rays => "ray cast (the reference)",
+                regatta_runtime::compile::rig::CameraRenderer::Rays => {
+                    "ray cast (the reference: the world asks for it with rendering \"rays\")"
+                }
             },
             if c.noise > 0.0 {
                 format!(", noise {}", c.noise)

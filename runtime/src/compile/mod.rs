@@ -658,7 +658,11 @@ impl Compiler<'_> {
             far: scene.float(node, "far"),
             noise: scene.float(node, "noise"),
             period: scene.float(node, "samplingPeriod"),
-            renderer: CameraRenderer::default(),
+            renderer: if scene.string(node, "rendering") == "rays" {
+                CameraRenderer::Rays
+            } else {
+                CameraRenderer::Raster
+            },
         });
     }
 

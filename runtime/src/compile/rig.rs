@@ -211,10 +211,11 @@ pub struct CameraRig {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum CameraRenderer {
     /// The CPU rasteriser (`render/raster`): the default since per-pixel ray casting made a
-    /// 640×480 camera cost ~250 ms a frame. No shadows; lighting per vertex.
+    /// 640×480 camera cost ~250 ms a frame. Lighting per vertex, shadows by ray.
     #[default]
     Raster,
-    /// Per-pixel ray casting: the reference the rasteriser is measured against.
+    /// Per-pixel ray casting: the reference the rasteriser is measured against
+    /// (`rendering "rays"`).
     Rays,
 }
 
