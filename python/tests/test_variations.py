@@ -1,6 +1,7 @@
 """Variations from Python: `evaluate`/`batch(vary=…)` draw what `regatta batch --vary` draws,
-for any thread count; a World's and a Gymnasium environment's `reset(seed)` draw from the
-seed; a varied World's log replays; a bad variation is a ValueError naming it."""
+for any thread count; a World's, a Gymnasium environment's and a PettingZoo environment's
+`reset(seed)` draw from the seed, and each copy of a VectorWorld is the World of its seed; a
+varied World's log replays; a bad variation is a ValueError naming it."""
 
 from __future__ import annotations
 
@@ -71,3 +72,27 @@ def test_a_bad_variation_is_a_value_error_naming_it():
         regatta.evaluate(REGATTA, None, [1], vary=["Buoy.translation=1..0"])
     with pytest.raises(ValueError, match="no node of type or DEF name 'Rock'"):
         regatta.World(REGATTA, vary=["Rock.translation=±0.1"])
+
+
+def test_a_vector_world_draws_each_copy_as_a_world_of_its_seed():
+    vector = regatta.VectorWorld(REGATTA, 3, vary=VARY)
+    observations = np.asarray(vector.reset(seed=20))
+    for i in range(3):
+        single = regatta.World(REGATTA, vary=VARY)
+        np.testing.assert_array_equal(observations[i], np.asarray(single.reset(20 + i)).reshape(-1))
+    again = regatta.VectorWorld(REGATTA, 3, vary=VARY, threads=2)
+    np.testing.assert_array_equal(observations, np.asarray(again.reset(seed=20)))
+
+
+def test_a_pettingzoo_reset_draws_from_its_seed():
+    pettingzoo = pytest.importorskip("regatta.pettingzoo")
+    env = pettingzoo.parallel_env(world("regatta_pair.wbt"), vary=VARY, duration=2.0)
+    first, _ = env.reset(seed=7)
+    variations = env.world.variations
+    env.step({agent: np.zeros(2, dtype=np.float32) for agent in env.agents})
+    second, _ = env.reset(seed=7)
+    assert env.world.variations == variations
+    for agent in first:
+        np.testing.assert_array_equal(first[agent], second[agent])
+    env.reset(seed=8)
+    assert env.world.variations != variations
