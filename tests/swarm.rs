@@ -223,27 +223,12 @@ fn a_crowd_with_its_level_of_detail_runs_the_same_on_any_number_of_threads() {
         "PanoramicTurret { lambda 5 crowdDistance 0.4 }",
     );
     let compiled = compile_text(&text);
-    let run = |threads: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| {
-                let mut simulation = Simulation::new(&compiled, None).unwrap();
-                simulation.sense_everything();
-                simulation.run(40);
-                fingerprint(&simulation)
-            })
-    };
-    let one = run(1);
-    assert_eq!(one, run(2));
-    assert_eq!(one, run(3));
+    let one = run_on_threads(&compiled, 1, 40);
+    assert_eq!(one, run_on_threads(&compiled, 2, 40));
+    assert_eq!(one, run_on_threads(&compiled, 3, 40));
     // And it is a crowd setting: some robot's retina differs from the exact run's.
     let exact = compile_text(&swarm_text(40, 2.0));
-    let mut simulation = Simulation::new(&exact, None).unwrap();
-    simulation.sense_everything();
-    simulation.run(40);
-    assert_ne!(one, fingerprint(&simulation), "nothing was left out");
+    assert_ne!(one, run_on_threads(&exact, 1, 40), "nothing was left out");
 }
 
 /// A generated swarm with retinas (the bench's kind of world, small).
@@ -299,21 +284,23 @@ fn fingerprint(simulation: &Simulation) -> Vec<String> {
 #[test]
 fn a_swarm_runs_the_same_on_any_number_of_threads() {
     let compiled = compile_text(&swarm_text(24, 0.8));
-    let run = |threads: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| {
-                let mut simulation = Simulation::new(&compiled, None).unwrap();
-                simulation.sense_everything();
-                simulation.run(60);
-                fingerprint(&simulation)
-            })
-    };
-    let one = run(1);
-    assert_eq!(one, run(2));
-    assert_eq!(one, run(4));
+    let one = run_on_threads(&compiled, 1, 60);
+    assert_eq!(one, run_on_threads(&compiled, 2, 60));
+    assert_eq!(one, run_on_threads(&compiled, 4, 60));
+}
+
+/// The fingerprint of `steps` steps, every sensor refreshed, on a pool of `threads`.
+fn run_on_threads(compiled: &regatta_runtime::Compiled, threads: usize, steps: u64) -> Vec<String> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(|| {
+            let mut simulation = Simulation::new(compiled, None).unwrap();
+            simulation.sense_everything();
+            simulation.run(steps);
+            fingerprint(&simulation)
+        })
 }
 
 /// A thousand robots packed into a small arena, driving into each other for 1000 steps: no

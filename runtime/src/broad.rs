@@ -297,13 +297,7 @@ mod tests {
 
     fn boxes() -> Vec<(DVec2, DVec2)> {
         let mut out = Vec::new();
-        let mut seed = 7u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::test_random::unit_stream(7);
         for _ in 0..300 {
             let c = DVec2::new(next() * 12.0 - 1.0, next() * 12.0 - 1.0);
             let h = DVec2::new(next() * next() * 3.0, next() * 0.2);

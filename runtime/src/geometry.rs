@@ -765,13 +765,7 @@ mod tests {
     /// `any` answers whether `nearest` finds something, for every ray and limit.
     #[test]
     fn any_hit_is_whether_there_is_a_nearest() {
-        let mut state = 11u64;
-        let mut unit = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut unit = crate::test_random::unit_stream(11);
         let boxes: Vec<Aabb> = (0..200)
             .map(|_| {
                 let c = DVec3::new(unit() * 10.0 - 5.0, unit() * 2.0, unit() * 10.0 - 5.0);

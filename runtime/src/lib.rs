@@ -20,6 +20,8 @@ pub mod optics;
 pub mod render;
 pub mod retina;
 pub mod sim;
+#[cfg(test)]
+mod test_random;
 pub mod vision;
 
 pub use compile::{compile, Compiled};

@@ -113,11 +113,7 @@ pub fn serve(args: ServeArgs, color: bool) -> anyhow::Result<Outcome> {
     };
     let mut simulation =
         Simulation::new(compiled, args.seed).with_context(|| format!("cannot run {world_name}"))?;
-    let max_steps = match (args.steps, args.duration) {
-        (Some(steps), _) => Some(steps),
-        (None, Some(duration)) => Some(crate::world::steps_for(duration, simulation.time_step)?),
-        (None, None) => None,
-    };
+    let max_steps = crate::world::step_limit(args.steps, args.duration, simulation.time_step)?;
     let mut recorder = args
         .log
         .as_deref()

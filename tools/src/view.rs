@@ -149,11 +149,7 @@ fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
         Ok(simulation)
     };
     let mut simulation = start(args.seed)?;
-    let limit = match (args.steps, args.duration) {
-        (Some(steps), _) => Some(steps),
-        (None, Some(duration)) => Some(crate::world::steps_for(duration, simulation.time_step)?),
-        (None, None) => None,
-    };
+    let limit = crate::world::step_limit(args.steps, args.duration, simulation.time_step)?;
     let mut recorder = args
         .log
         .as_deref()

@@ -265,6 +265,19 @@ pub fn steps_for(duration: f64, time_step: f64) -> anyhow::Result<u64> {
     Ok((duration / time_step).ceil().max(0.0) as u64)
 }
 
+/// The steps `--steps` or `--duration` ask for (`--steps` first); `None`: no end asked for.
+pub fn step_limit(
+    steps: Option<u64>,
+    duration: Option<f64>,
+    time_step: f64,
+) -> anyhow::Result<Option<u64>> {
+    match (steps, duration) {
+        (Some(steps), _) => Ok(Some(steps)),
+        (None, Some(duration)) => steps_for(duration, time_step).map(Some),
+        (None, None) => Ok(None),
+    }
+}
+
 /// Creates the log file at `path`. A missing folder is created and said (a typo in a folder
 /// name should not scatter logs unnoticed); a part of the path that is a file, or a path
 /// that is a folder, is named as the problem.

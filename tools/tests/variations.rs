@@ -19,6 +19,17 @@ fn ok(output: &Output) -> String {
     String::from_utf8(output.stdout.clone()).unwrap()
 }
 
+/// The log at `log` replays to the same bytes, and `log info` shows the `varied` line.
+fn assert_replays_and_names(log: &str, varied: &str) {
+    let replay = ok(&regatta()
+        .args(["replay", "--verify", log])
+        .output()
+        .unwrap());
+    assert!(replay.starts_with("OK: "), "{replay}");
+    let info = ok(&regatta().args(["log", "info", log]).output().unwrap());
+    assert!(info.contains(varied), "{info}");
+}
+
 /// Every kind of draw at once: a range, a jitter, a position in the arena, a heading.
 const VARY: [&str; 10] = [
     "--vary",
@@ -148,16 +159,7 @@ fn a_varied_runs_log_replays_and_names_its_values() {
         output.contains("varied Khepera[1].rotation = 0 1 0 "),
         "{output}"
     );
-    let replay = ok(&regatta()
-        .args(["replay", "--verify", &log_arg])
-        .output()
-        .unwrap());
-    assert!(replay.starts_with("OK: "), "{replay}");
-    let info = ok(&regatta().args(["log", "info", &log_arg]).output().unwrap());
-    assert!(
-        info.contains("varied:       Buoy[3].irReflectance = "),
-        "{info}"
-    );
+    assert_replays_and_names(&log_arg, "varied:       Buoy[3].irReflectance = ");
     std::fs::remove_dir_all(dir).ok();
 }
 
@@ -401,15 +403,6 @@ fn evolution_with_variations_is_the_same_at_any_jobs_and_logs_its_trial_as_drawn
         assert!(same, "{file} differs between -j 1 and -j 2");
     }
     let log = one.join("best.mcap").display().to_string();
-    let replay = ok(&regatta()
-        .args(["replay", "--verify", &log])
-        .output()
-        .unwrap());
-    assert!(replay.starts_with("OK: "), "{replay}");
-    let info = ok(&regatta().args(["log", "info", &log]).output().unwrap());
-    assert!(
-        info.contains("varied:       Khepera[1].rotation = 0 1 0 "),
-        "{info}"
-    );
+    assert_replays_and_names(&log, "varied:       Khepera[1].rotation = 0 1 0 ");
     std::fs::remove_dir_all(dir).ok();
 }

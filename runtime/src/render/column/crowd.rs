@@ -128,13 +128,7 @@ mod tests {
 
     #[test]
     fn the_answer_is_the_brute_force_set_for_any_cell_size() {
-        let mut state = 7u64;
-        let mut unit = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut unit = crate::test_random::unit_stream(7);
         let positions: Vec<DVec2> = (0..500)
             .map(|_| DVec2::new(unit() * 3.0 - 1.5, unit() * 2.0))
             .collect();

@@ -559,10 +559,13 @@ impl ColumnScene<'_> {
                 }
             }
             _ => {
+                // Exact (the usual case) tests no distance.
+                let crowd = reach.crowd_distance.is_finite();
                 let distance2 = reach.crowd_distance * reach.crowd_distance;
                 for entry in 0..frame.part_robot.len() {
                     let robot = frame.part_robot[entry];
-                    let far = Some(robot) != viewer
+                    let far = crowd
+                        && Some(robot) != viewer
                         && frame
                             .robot_at
                             .get(robot)
