@@ -2,8 +2,11 @@
 //! Khepera BIOS: `speed = bias + irGain · Σ proximity[i]·w[i] / 400` per wheel, K-Team's
 //! weights. The `regatta` controller adds light seeking to the same network. A robot whose
 //! sensors are not the Khepera's eight (the Thymio's seven) gets weights from its sensors'
-//! headings ([`Weights::for_robot`]).
+//! headings ([`Weights::for_robot`]). Facing a corner the network deadlocks (its two sides
+//! cancel); the stall escape ([`super::escape`]) turns the robot away, as the `regatta`
+//! controller's does.
 
+use super::escape::StallEscape;
 use super::parameters::Parameters;
 use crate::compile::rig::RobotRig;
 use crate::khepera::{to_command, Controller, Khepera, KheperaError, Senses};
@@ -94,13 +97,30 @@ pub fn weighted_speeds(
 pub struct Braitenberg {
     pub parameters: Parameters,
     pub weights: Weights,
+    escape: StallEscape,
+}
+
+impl Braitenberg {
+    /// The controller with its weights, to be called every `period` seconds.
+    pub fn new(parameters: Parameters, weights: Weights, period: f64) -> Braitenberg {
+        Braitenberg {
+            parameters,
+            weights,
+            escape: StallEscape::new(period),
+        }
+    }
 }
 
 impl Controller for Braitenberg {
     fn step(&mut self, robot: &mut dyn Khepera) -> Result<(), KheperaError> {
         let proximity = robot.proximity()?;
         let (left, right) = weighted_speeds(&proximity, &self.weights, &self.parameters);
-        robot.set_speed(to_command(left), to_command(right))
+        let command = (to_command(left), to_command(right));
+        let (left, right) = self
+            .escape
+            .check(&proximity, command, self.parameters.bias)
+            .unwrap_or(command);
+        robot.set_speed(left, right)
     }
 
     fn senses(&self) -> Senses {

@@ -19,6 +19,7 @@
 
 pub mod braitenberg;
 pub mod check;
+pub mod escape;
 pub mod idle;
 pub mod neural;
 pub mod parameters;
@@ -98,13 +99,14 @@ pub static CONTROLLERS: &[ControllerSpec] = &[
     ControllerSpec {
         name: "braitenberg",
         aliases: &[],
-        doc: "Mondada's obstacle avoider: the Khepera BIOS's feed-forward IR network.",
+        doc: "Mondada's obstacle avoider: the Khepera BIOS's feed-forward IR network, with a stall escape from corners.",
         parameters: BRAITENBERG_PARAMETERS,
-        build: |args, robot, _| {
-            Ok(Box::new(Braitenberg {
-                parameters: Parameters::from_arguments(args),
-                weights: braitenberg::Weights::for_robot(robot),
-            }))
+        build: |args, robot, period| {
+            Ok(Box::new(Braitenberg::new(
+                Parameters::from_arguments(args),
+                braitenberg::Weights::for_robot(robot),
+                period,
+            )))
         },
     },
     ControllerSpec {

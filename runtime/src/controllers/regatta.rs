@@ -2,12 +2,10 @@
 //! seeking. The odd filter's output is scanned for light-intensity maxima (a negative lobe
 //! followed by a positive one, both beyond `minContrast` LSB); the maximum nearest the centre
 //! of the retina steers the robot by `lightGain` pulses/10 ms per pixel of distance from the
-//! centre, added to the network's output. A robot that stalls facing an obstacle (both
-//! commands within ±`STALL_SPEED` while a front sensor reads more than `STALL_PROXIMITY`, for
-//! `STALL_TIME` seconds: the Braitenberg network's deadlock in a corner) turns on the spot,
-//! away from the nearer side, for `ESCAPE_TIME` seconds. Every time here is in seconds and
-//! becomes a number of controller calls through the control period the controller is built
-//! with, so the robot behaves the same at any physics step.
+//! centre, added to the network's output. A robot that stalls facing an obstacle turns away
+//! ([`super::escape`]). Every time here is in seconds and becomes a number of controller
+//! calls through the control period the controller is built with, so the robot behaves the
+//! same at any physics step.
 //!
 //! Habituation: a robot that has seen two lights at once (it knows there is more than one
 //! buoy) and has kept the light it follows abeam (more than `ABEAM_PIXELS` from the
@@ -24,6 +22,7 @@
 use std::ops::ControlFlow;
 
 use super::braitenberg::braitenberg_speeds;
+use super::escape::{calls, StallEscape};
 use super::parameters::Parameters;
 use crate::khepera::{to_command, Controller, Khepera, KheperaError, Senses};
 use crate::retina::FilterKind;
@@ -144,80 +143,6 @@ fn partition_point_u16(holds: impl Fn(u32) -> bool) -> u32 {
         }
     }
     lo
-}
-
-/// Commands this close to zero count as stopped.
-pub const STALL_SPEED: i32 = 1;
-/// A front IR reading above this counts as facing an obstacle.
-pub const STALL_PROXIMITY: u16 = 300;
-/// Time stalled before turning away (s): 32 cycles of 32 ms, about a second.
-pub const STALL_TIME: f64 = 1.024;
-/// Time turning on the spot (s): 24 cycles of 32 ms, roughly a right angle at the bias speed.
-pub const ESCAPE_TIME: f64 = 0.768;
-
-/// The number of controller calls, `period` seconds apart, that last `seconds` (at least one).
-pub fn calls(seconds: f64, period: f64) -> u32 {
-    let calls = libm::round(seconds / period);
-    if calls.is_finite() {
-        calls.clamp(1.0, u32::MAX as f64) as u32
-    } else {
-        1
-    }
-}
-
-/// Turns a stalled robot away from what it faces.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct StallEscape {
-    /// [`STALL_TIME`] and [`ESCAPE_TIME`] in calls of the controller.
-    stall_calls: u32,
-    escape_calls: u32,
-    stalled: u32,
-    /// Steps left to turn, and the direction (+1 turns right).
-    escaping: u32,
-    direction: i32,
-}
-
-impl StallEscape {
-    /// The escape of a controller called every `period` seconds.
-    pub fn new(period: f64) -> StallEscape {
-        StallEscape {
-            stall_calls: calls(STALL_TIME, period),
-            escape_calls: calls(ESCAPE_TIME, period),
-            stalled: 0,
-            escaping: 0,
-            direction: 0,
-        }
-    }
-
-    /// The commands to send instead of `(left, right)`, if the robot must turn away.
-    pub fn check(
-        &mut self,
-        proximity: &[u16; 8],
-        (left, right): (i32, i32),
-        bias: f64,
-    ) -> Option<(i32, i32)> {
-        let turn = to_command(bias).max(1);
-        if self.escaping > 0 {
-            self.escaping -= 1;
-            return Some((self.direction * turn, -self.direction * turn));
-        }
-        let front = proximity[1..5].iter().copied().max().unwrap_or(0);
-        if left.abs() <= STALL_SPEED && right.abs() <= STALL_SPEED && front > STALL_PROXIMITY {
-            self.stalled += 1;
-        } else {
-            self.stalled = 0;
-        }
-        if self.stalled < self.stall_calls {
-            return None;
-        }
-        self.stalled = 0;
-        self.escaping = self.escape_calls - 1;
-        // Away from the side that reads more (left sensors 0…2, right 3…5); right on a tie.
-        let left_side: u32 = proximity[0..3].iter().map(|&v| v as u32).sum();
-        let right_side: u32 = proximity[3..6].iter().map(|&v| v as u32).sum();
-        self.direction = if right_side > left_side { -1 } else { 1 };
-        Some((self.direction * turn, -self.direction * turn))
-    }
 }
 
 /// A light moves less than this many pixels from one controller call to the next while the
