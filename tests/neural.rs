@@ -166,3 +166,42 @@ fn a_network_with_hidden_layers_drives_the_robot_from_its_retina() {
         robot.travel
     );
 }
+
+/// The regatta arena with a one-layer network over `inputs` and `weights`.
+fn regatta_with_network(inputs: &str, extra: &str, weights: &[f64]) -> String {
+    let text = std::fs::read_to_string(regatta_tests::root().join("worlds/regatta.wbt")).unwrap();
+    let weights: Vec<String> = weights.iter().map(|w| format!("{w}")).collect();
+    text.replace(
+        "controller \"regatta\"",
+        &format!(
+            "controller \"neural\" network NeuralNetwork {{ inputs [ {inputs} ] retinaSectors 4 {extra} weights [ {} ] }}",
+            weights.join(" ")
+        ),
+    )
+}
+
+#[test]
+fn retina_inputs_name_the_turret_output_they_read() {
+    // Weights for bias + 4 sectors, per wheel.
+    let one: Vec<f64> = [[0.3, 0.5, -0.4, 0.2, -0.6], [0.3, -0.5, 0.4, -0.2, 0.6]].concat();
+    // "retina:odd" reads what "retina" reads with retinaFilter "odd".
+    let named = regatta_with_network("\"bias\" \"retina:odd\"", "", &one);
+    let chosen = regatta_with_network("\"bias\" \"retina\"", "retinaFilter \"odd\"", &one);
+    assert_eq!(log_of(&named, 400), log_of(&chosen, 400));
+    // Two outputs side by side: with the odd filter's weights at zero the network drives as
+    // the raw retina alone does, and with them it drives otherwise.
+    let with = |odd: [f64; 4]| {
+        let mut weights = Vec::new();
+        for wheel in 0..2 {
+            weights.extend_from_slice(&one[wheel * 5..wheel * 5 + 5]);
+            weights.extend_from_slice(&odd);
+        }
+        regatta_with_network("\"bias\" \"retina\" \"retina:odd\"", "", &weights)
+    };
+    let raw = regatta_with_network("\"bias\" \"retina\"", "", &one);
+    assert_eq!(log_of(&with([0.0; 4]), 400), log_of(&raw, 400));
+    assert_ne!(
+        log_of(&with([0.9, -0.9, 0.9, -0.9]), 400),
+        log_of(&raw, 400)
+    );
+}

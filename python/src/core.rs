@@ -63,7 +63,6 @@ pub const DEFAULT_SPEED_SCALE: f64 = 20.0;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Observation {
     pub inputs: Vec<Input>,
-    pub filter: FilterKind,
     pub sectors: usize,
     pub pooling: Pooling,
     /// Wheel command (pulses per 10 ms) of action 1: the network's `outputScale`.
@@ -81,7 +80,6 @@ impl Observation {
                     .copied()
                     .filter(|i| *i != Input::Bias)
                     .collect(),
-                filter: t.retina_filter,
                 sectors: t.retina_sectors,
                 pooling: t.retina_pooling,
                 speed_scale: t.output_scale,
@@ -92,15 +90,22 @@ impl Observation {
             .chain((0..8).map(Input::Ambient))
             .collect();
         if matches!(rig.turret, Some(TurretRig::Panoramic(_))) {
-            inputs.push(Input::Retina);
+            inputs.push(Input::Retina(FilterKind::Raw));
         }
         Observation {
             inputs,
-            filter: FilterKind::Raw,
             sectors: 8,
             pooling: Pooling::Max,
             speed_scale: DEFAULT_SPEED_SCALE,
         }
+    }
+
+    /// The turret output the first retina input reads.
+    fn first_retina(&self) -> Option<FilterKind> {
+        self.inputs.iter().find_map(|input| match *input {
+            Input::Retina(filter) => Some(filter),
+            _ => None,
+        })
     }
 
     /// The observation vector's length.
@@ -108,7 +113,7 @@ impl Observation {
         self.inputs
             .iter()
             .map(|i| match i {
-                Input::Retina => self.sectors,
+                Input::Retina(_) => self.sectors,
                 _ => 1,
             })
             .sum()
@@ -121,8 +126,14 @@ impl Observation {
             match *input {
                 Input::Ir(i) => out.push((format!("ir{i}"), 0.0, 1023.0 / 1024.0)),
                 Input::Ambient(i) => out.push((format!("ambient{i}"), 0.0, 1023.0 / 1024.0)),
-                Input::Retina => {
-                    out.extend((0..self.sectors).map(|s| (format!("retina{s}"), -1.0, 1.0)))
+                Input::Retina(filter) => {
+                    // The first retina input keeps the plain names; others name their output.
+                    let prefix = if Some(filter) == self.first_retina() {
+                        "retina".to_owned()
+                    } else {
+                        format!("retina:{}:", filter.name())
+                    };
+                    out.extend((0..self.sectors).map(|s| (format!("{prefix}{s}"), -1.0, 1.0)))
                 }
                 Input::Bias => {}
             }
@@ -134,7 +145,7 @@ impl Observation {
         Senses {
             proximity: self.inputs.iter().any(|i| matches!(i, Input::Ir(_))),
             ambient: self.inputs.iter().any(|i| matches!(i, Input::Ambient(_))),
-            vision: self.inputs.contains(&Input::Retina),
+            vision: self.inputs.iter().any(Input::is_retina),
             camera: false,
         }
     }
@@ -146,14 +157,14 @@ impl Observation {
             match *input {
                 Input::Ir(i) => scratch.push(robot.proximity[i] as f64 / 1024.0),
                 Input::Ambient(i) => scratch.push(robot.ambient[i] as f64 / 1024.0),
-                Input::Retina => {
+                Input::Retina(filter) => {
                     let (digital, bits): (&[u16], u32) = match &robot.panoramic {
                         Some(turret) => (
                             turret
                                 .output
                                 .digital
                                 .iter()
-                                .find(|(k, _)| *k == self.filter)
+                                .find(|(k, _)| *k == filter)
                                 .map_or(&[], |(_, d)| d.as_slice()),
                             turret.model.rig.bits,
                         ),
@@ -250,10 +261,12 @@ impl Drive {
                         senses: observation.senses(),
                     }),
                 );
-                if observation.inputs.contains(&Input::Retina) {
-                    if let Some(turret) = simulation.khepera(robot).panoramic() {
-                        // Enabling a filter of a Panoramic turret cannot fail.
-                        let _ = turret.enable_filter(observation.filter);
+                for input in &observation.inputs {
+                    if let Input::Retina(filter) = *input {
+                        if let Some(turret) = simulation.khepera(robot).panoramic() {
+                            // Enabling a filter of a Panoramic turret cannot fail.
+                            let _ = turret.enable_filter(filter);
+                        }
                     }
                 }
             }

@@ -20,8 +20,17 @@ pub enum Input {
     Ir(usize),
     /// One ambient light reading.
     Ambient(usize),
-    /// Every retina sector.
-    Retina,
+    /// Every retina sector of one Panoramic turret output: `"retina"` reads `retinaFilter`,
+    /// `"retina:odd"` (and the other outputs' names) that output, so that a network may read
+    /// several and evolution weigh them.
+    Retina(FilterKind),
+}
+
+impl Input {
+    /// Whether this input reads the retina.
+    pub fn is_retina(&self) -> bool {
+        matches!(self, Input::Retina(_))
+    }
 }
 
 /// How a layer's neurons are connected to their past.
@@ -98,7 +107,7 @@ impl Topology {
         self.inputs
             .iter()
             .map(|i| match i {
-                Input::Retina => self.retina_sectors,
+                Input::Retina(_) => self.retina_sectors,
                 _ => 1,
             })
             .sum()
@@ -161,7 +170,7 @@ impl Topology {
         Senses {
             proximity: self.inputs.iter().any(|i| matches!(i, Input::Ir(_))),
             ambient: self.inputs.iter().any(|i| matches!(i, Input::Ambient(_))),
-            vision: self.inputs.contains(&Input::Retina),
+            vision: self.inputs.iter().any(Input::is_retina),
             camera: false,
         }
     }
@@ -216,7 +225,7 @@ impl NetworkError {
     }
 }
 
-fn parse_input(name: &str) -> Option<Input> {
+fn parse_input(name: &str, retina_filter: FilterKind) -> Option<Input> {
     let indexed = |prefix: &str| {
         name.strip_prefix(prefix)
             .and_then(|n| n.parse::<usize>().ok())
@@ -224,7 +233,10 @@ fn parse_input(name: &str) -> Option<Input> {
     };
     match name {
         "bias" => Some(Input::Bias),
-        "retina" => Some(Input::Retina),
+        "retina" => Some(Input::Retina(retina_filter)),
+        _ if name.starts_with("retina:") => {
+            FilterKind::from_name(&name["retina:".len()..]).map(Input::Retina)
+        }
         _ => indexed("ir")
             .map(Input::Ir)
             .or_else(|| indexed("ambient").map(Input::Ambient)),
@@ -249,20 +261,22 @@ pub fn network_from_scene(
     panoramic: bool,
     time_step: f64,
 ) -> Result<NetworkSpec, NetworkError> {
+    let retina_filter =
+        FilterKind::from_name(scene.string(node, "retinaFilter")).unwrap_or(FilterKind::Raw);
     let mut inputs = Vec::new();
     for name in scene.strings(node, "inputs") {
         match name.as_str() {
             "ir" => inputs.extend((0..8).map(Input::Ir)),
             "ambient" => inputs.extend((0..8).map(Input::Ambient)),
             other => inputs.push(
-                parse_input(other).ok_or_else(|| NetworkError::UnknownInput(other.to_owned()))?,
+                parse_input(other, retina_filter)
+                    .ok_or_else(|| NetworkError::UnknownInput(other.to_owned()))?,
             ),
         }
     }
     let topology = Topology {
         inputs,
-        retina_filter: FilterKind::from_name(scene.string(node, "retinaFilter"))
-            .unwrap_or(FilterKind::Raw),
+        retina_filter,
         retina_sectors: scene.int(node, "retinaSectors").max(1) as usize,
         retina_pooling: match scene.string(node, "retinaPooling") {
             "mean" => Pooling::Mean,
@@ -313,7 +327,7 @@ fn checked(mut topology: Topology, panoramic: bool) -> Result<Topology, NetworkE
     if topology.inputs.is_empty() {
         return Err(NetworkError::NoInputs);
     }
-    if topology.inputs.contains(&Input::Retina) && !panoramic {
+    if topology.inputs.iter().any(Input::is_retina) && !panoramic {
         return Err(NetworkError::NoRetina);
     }
     if topology.recurrence == Recurrence::Ctrnn {
@@ -351,7 +365,12 @@ pub(crate) mod tests {
     /// A small network's topology for tests (also the neural controller's).
     pub(crate) fn topology(hidden: Vec<usize>, recurrence: Recurrence) -> Topology {
         Topology {
-            inputs: vec![Input::Bias, Input::Ir(0), Input::Ir(1), Input::Retina],
+            inputs: vec![
+                Input::Bias,
+                Input::Ir(0),
+                Input::Ir(1),
+                Input::Retina(FilterKind::Raw),
+            ],
             retina_filter: FilterKind::Raw,
             retina_sectors: 4,
             retina_pooling: Pooling::Max,

@@ -6,7 +6,9 @@
 //!   every product with a small integer weight exact, which is why a network with K-Team's
 //!   weights gives the `braitenberg` controller's commands bit for bit.
 //! - A retina sector is its pixels' digital values, each centred and scaled to
-//!   `(d − (2^b − 1)/2) / 2^(b−1)` (−1 … 1), pooled by mean, max or min.
+//!   `(d − (2^b − 1)/2) / 2^(b−1)` (−1 … 1), pooled by mean, max or min. Each retina input
+//!   names the turret output it reads (`retina` the `retinaFilter`, `retina:odd` the odd
+//!   filter…); the outputs read are enabled on the first call.
 //! - The bias input is 1. When the inputs list it, every later layer reads it too, first.
 //! - Outputs: tanh (−1 … 1), sigmoid mapped by `2y − 1`, or linear; a wheel command is
 //!   `round(outputScale · output)` clamped to the real robot's −127 … 127 pulses per 10 ms.
@@ -20,6 +22,20 @@ use crate::compile::network::{
     sigmoid, Activation, Input, NetworkError, NetworkSpec, Pooling, Recurrence, Topology,
 };
 use crate::khepera::{to_command, Controller, Khepera, KheperaError, Senses};
+use crate::retina::FilterKind;
+
+/// The turret outputs a network's inputs read, each once, in order of first mention.
+fn retina_outputs(topology: &Topology) -> Vec<(FilterKind, Vec<u16>)> {
+    let mut outputs: Vec<(FilterKind, Vec<u16>)> = Vec::new();
+    for input in &topology.inputs {
+        if let Input::Retina(filter) = *input {
+            if outputs.iter().all(|(f, _)| *f != filter) {
+                outputs.push((filter, Vec::new()));
+            }
+        }
+    }
+    outputs
+}
 
 /// The network running on a robot.
 pub struct Neural {
@@ -31,8 +47,10 @@ pub struct Neural {
     input: Vec<f64>,
     scratch: Vec<f64>,
     next: Vec<f64>,
-    retina: Vec<u16>,
-    filter_enabled: bool,
+    /// The turret outputs the inputs read, in their first-mention order, each with its last
+    /// reading.
+    retina: Vec<(FilterKind, Vec<u16>)>,
+    filters_enabled: bool,
 }
 
 impl Neural {
@@ -46,6 +64,7 @@ impl Neural {
             });
         }
         let state = topology.layers().iter().map(|&n| vec![0.0; n]).collect();
+        let retina = retina_outputs(&topology);
         Ok(Neural {
             topology,
             weights,
@@ -53,8 +72,8 @@ impl Neural {
             input: Vec::new(),
             scratch: Vec::new(),
             next: Vec::new(),
-            retina: Vec::new(),
-            filter_enabled: false,
+            retina,
+            filters_enabled: false,
         })
     }
 
@@ -82,11 +101,15 @@ impl Neural {
             let turret = robot.panoramic().ok_or(KheperaError::NoDevice(
                 "Panoramic turret (the network reads the retina)",
             ))?;
-            if !self.filter_enabled {
-                turret.enable_filter(topology.retina_filter)?;
-                self.filter_enabled = true;
+            if !self.filters_enabled {
+                for (filter, _) in &self.retina {
+                    turret.enable_filter(*filter)?;
+                }
+                self.filters_enabled = true;
             }
-            turret.read_into(topology.retina_filter, &mut self.retina)?;
+            for (filter, reading) in &mut self.retina {
+                turret.read_into(*filter, reading)?;
+            }
             bits = turret.bits()?;
         }
         self.input.clear();
@@ -95,8 +118,11 @@ impl Neural {
                 Input::Bias => self.input.push(1.0),
                 Input::Ir(i) => self.input.push(proximity[i] as f64 / 1024.0),
                 Input::Ambient(i) => self.input.push(ambient[i] as f64 / 1024.0),
-                Input::Retina => pool_sectors(
-                    &self.retina,
+                Input::Retina(filter) => pool_sectors(
+                    self.retina
+                        .iter()
+                        .find(|(f, _)| *f == filter)
+                        .map_or(&[][..], |(_, reading)| reading.as_slice()),
                     bits,
                     topology.retina_sectors,
                     topology.retina_pooling,
