@@ -724,6 +724,11 @@ impl Observer {
         });
     }
 
+    /// Every fitness's terms so far for `robot` (file order), as the summary gives them.
+    pub fn terms(&self, robot: usize) -> crate::fitness::FitnessTerms {
+        self.meters[robot].terms()
+    }
+
     /// Each robot's reward in the last step (the chosen fitness's step contribution, see
     /// [`crate::fitness::Meters::add_rewarded`]), robots in file order.
     pub fn rewards(&self) -> &[f64] {
