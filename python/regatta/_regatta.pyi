@@ -54,6 +54,9 @@ class Robot:
         """Buoys entered, in order, numbered from 1."""
     @property
     def reward(self) -> float: ...
+    @property
+    def fitness(self) -> dict[str, Any]:
+        """The chosen fitness so far: ``value`` and its terms (``cyclic_visits``…)."""
     def state(self) -> dict[str, Any]: ...
 
 class World:
@@ -174,6 +177,8 @@ class VectorWorld:
     def threads(self) -> int: ...
     def episodes(self) -> list[tuple[int, int, int]]:
         """Per copy: (seed, steps into the episode, episodes started)."""
+    def info(self) -> dict[str, npt.NDArray[Any]]:
+        """Each copy's driven robot: ``time``, ``visits``, ``contacts``, ``touching``, ``fitness``."""
     def summary_json(self, index: int) -> str: ...
     def render(self, index: int = 0, size: int = 256) -> npt.NDArray[np.uint8]: ...
 

@@ -80,7 +80,10 @@ class RegattaEnv(gymnasium.Env):
 
     ``step``'s info holds the driven robot's step: ``time`` (s), ``visits`` (buoy visits so
     far) and ``new_visits`` (the buoys entered this step, numbered from 1), ``contacts``
-    (contacts begun so far), ``touching``, and ``reward`` (the step's fitness term).
+    (contacts begun so far), ``touching``, ``reward`` (the step's fitness term) and
+    ``fitness`` (the chosen fitness so far, its ``value`` and terms, as
+    :attr:`regatta.Robot.fitness` gives them: ``cyclic_visits``, ``other_visits`` and
+    ``contact_s`` for ``regatta``).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
@@ -151,6 +154,7 @@ class RegattaEnv(gymnasium.Env):
             "contacts": robot.contacts,
             "touching": robot.touching,
             "reward": reward,
+            "fitness": robot.fitness,
         }
 
     def render(self):
@@ -168,6 +172,12 @@ class RegattaVectorEnv(VectorEnv):
     and ``final_info`` with their ``_final_obs``/``_final_info`` masks, as Gymnasium's
     ``SyncVectorEnv`` gives them. ``reset(options={"reset_mask": mask})`` restarts some
     copies (``Disabled`` autoreset).
+
+    ``step``'s info holds, as arrays of ``num_envs`` with Gymnasium's ``_name`` masks, each
+    copy's driven robot: ``time`` (s into its episode), ``visits`` (buoy visits so far),
+    ``contacts`` (contacts begun so far), ``touching``, ``reward`` (the step's fitness term)
+    and ``fitness`` (the chosen fitness's value so far); a copy that has just restarted
+    gives its new episode's.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
@@ -243,6 +253,12 @@ class RegattaVectorEnv(VectorEnv):
     def step(self, actions):
         observation, rewards, terminated, truncated, _, finals = self._vector.step(actions)
         infos: dict[str, Any] = {}
+        every = np.ones(self.num_envs, dtype=bool)
+        step_info = self._vector.info()
+        step_info["reward"] = rewards.copy()
+        for key in ("time", "visits", "contacts", "touching", "reward", "fitness"):
+            infos[key] = step_info[key]
+            infos["_" + key] = every.copy()
         if finals is not None:
             ended = terminated | truncated
             if ended.any():

@@ -6,7 +6,8 @@ ambient and pooled retina observation, two wheel speeds in ``[-1, 1]`` (units of
 scale), the step's contribution to ``fitness``. All robots share one simulation (they see and
 bump into each other); the world moves once per ``step``, after every agent's action is in.
 Episodes are truncated after ``duration`` simulated seconds; nothing terminates an agent
-earlier.
+earlier. Each agent's info is its step, as :class:`regatta.gym.RegattaEnv` gives it:
+``time``, ``visits``, ``new_visits``, ``contacts``, ``touching``, ``reward`` and ``fitness``.
 """
 
 from __future__ import annotations
@@ -64,6 +65,7 @@ class RegattaParallelEnv(ParallelEnv):
         self.render_size = render_size
         self._np_random, _ = seeding.np_random(None)
         self._actions = np.zeros((len(self.possible_agents), 2))
+        self._visits_seen: dict[str, int] = {}
 
     @property
     def world(self) -> World:
@@ -85,6 +87,7 @@ class RegattaParallelEnv(ParallelEnv):
         observation = self._world.reset(seed)
         self.agents = list(self.possible_agents)
         self._actions[:] = 0.0
+        self._visits_seen = {}
         observations = {a: observation[i] for i, a in enumerate(self.possible_agents)}
         return observations, {a: {"seed": seed} for a in self.agents}
 
@@ -104,10 +107,26 @@ class RegattaParallelEnv(ParallelEnv):
         reward = {a: float(rewards[index[a]]) for a in live}
         terminations = {a: False for a in live}
         truncations = {a: truncated for a in live}
-        infos = {a: {} for a in live}
+        infos = {a: self._step_info(a, reward[a]) for a in live}
         if truncated:
             self.agents = []
         return observations, reward, terminations, truncations, infos
+
+    def _step_info(self, agent: str, reward: float) -> dict:
+        """An agent's step, as :class:`regatta.gym.RegattaEnv` gives it."""
+        robot = self._world[agent]
+        visits = robot.visits
+        new = visits[self._visits_seen.get(agent, 0) :]
+        self._visits_seen[agent] = len(visits)
+        return {
+            "time": self._world.time,
+            "visits": len(visits),
+            "new_visits": new,
+            "contacts": robot.contacts,
+            "touching": robot.touching,
+            "reward": reward,
+            "fitness": robot.fitness,
+        }
 
     def render(self):
         if self.render_mode == "rgb_array":

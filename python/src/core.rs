@@ -514,6 +514,23 @@ impl Core {
         }
     }
 
+    /// The chosen fitness's terms so far for `robot` (file order): its value and what it is
+    /// made of, named as `regatta run --json` names them (`cyclic_visits`, `contact_s`…).
+    pub fn fitness_terms(&self, robot: usize) -> serde_json::Value {
+        let terms = self.observer.terms(robot);
+        match self.fitness {
+            Fitness::Avoidance { .. } => serde_json::to_value(terms.avoidance),
+            Fitness::Regatta { .. } => serde_json::to_value(terms.regatta),
+            Fitness::Phototaxis { .. } => serde_json::to_value(terms.phototaxis),
+        }
+        .unwrap_or_default()
+    }
+
+    /// The chosen fitness's value so far for `robot` (file order).
+    pub fn fitness_value(&self, robot: usize) -> f64 {
+        self.observer.terms(robot).value(&self.fitness)
+    }
+
     /// Every robot's reward in the last step, in file order.
     pub fn rewards(&self) -> &[f64] {
         &self.rewards

@@ -503,6 +503,42 @@ impl VectorWorld {
             .collect()
     }
 
+    /// Each copy's driven robot after the last step, as arrays of `num_envs`: `time` (s into
+    /// the episode), `visits` (buoy visits so far), `contacts` (contacts begun so far),
+    /// `touching`, and `fitness` (the chosen fitness's value so far). A copy that restarted
+    /// in the last step gives its new episode's.
+    fn info<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        let slots = &self.batch().slots;
+        let mut time = Vec::with_capacity(slots.len());
+        let mut visits = Vec::with_capacity(slots.len());
+        let mut contacts = Vec::with_capacity(slots.len());
+        let mut touching = Vec::with_capacity(slots.len());
+        let mut fitness = Vec::with_capacity(slots.len());
+        for slot in slots {
+            let simulation = slot.core.simulation();
+            let robot = slot.core.controlled().first().copied().unwrap_or(0);
+            time.push(simulation.time);
+            let Some(state) = simulation.robots.get(robot) else {
+                visits.push(0);
+                contacts.push(0);
+                touching.push(false);
+                fitness.push(0.0);
+                continue;
+            };
+            visits.push(state.visits.sequence.len() as i64);
+            contacts.push(state.contacts.events);
+            touching.push(state.contacts.is_touching());
+            fitness.push(slot.core.fitness_value(robot));
+        }
+        let dict = pyo3::types::PyDict::new(py);
+        dict.set_item("time", PyArray1::from_vec(py, time))?;
+        dict.set_item("visits", PyArray1::from_vec(py, visits))?;
+        dict.set_item("contacts", PyArray1::from_vec(py, contacts))?;
+        dict.set_item("touching", PyArray1::from_vec(py, touching))?;
+        dict.set_item("fitness", PyArray1::from_vec(py, fitness))?;
+        Ok(dict)
+    }
+
     /// Copy `index`'s episode so far as `World.summary_json()` gives it.
     fn summary_json(&mut self, index: usize) -> PyResult<String> {
         Ok(self.slot(index)?.core.summary_json())

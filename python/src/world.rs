@@ -617,6 +617,34 @@ impl Robot {
         reward
     }
 
+    /// The chosen fitness so far: its `value` and its terms, named as `regatta run --json`
+    /// names them (`regatta`: `cyclic_visits`, `other_visits`, `contact_s`; `avoidance`: the
+    /// means `speed`, `turning`, `proximity`; `phototaxis`: the `buoy` it is drawn to).
+    #[getter]
+    fn fitness<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let terms = {
+            let world = self.world.borrow(py);
+            let terms = world.core().fitness_terms(self.index);
+            terms
+        };
+        let dict = PyDict::new(py);
+        if let serde_json::Value::Object(map) = terms {
+            for (name, value) in map {
+                match value {
+                    // Counts stay whole numbers; seconds and means are floats.
+                    serde_json::Value::Number(n) => match (n.as_u64(), n.as_f64()) {
+                        (Some(whole), _) => dict.set_item(name, whole)?,
+                        (None, Some(real)) => dict.set_item(name, real)?,
+                        (None, None) => dict.set_item(name, py.None())?,
+                    },
+                    serde_json::Value::Bool(b) => dict.set_item(name, b)?,
+                    _ => dict.set_item(name, py.None())?,
+                }
+            }
+        }
+        Ok(dict)
+    }
+
     /// Everything above as a dict.
     fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let dict = PyDict::new(py);

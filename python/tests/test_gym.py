@@ -3,6 +3,8 @@ environment with Gymnasium 1.x autoreset, and determinism for any thread count."
 
 from __future__ import annotations
 
+import json
+
 import gymnasium
 import numpy as np
 import pytest
@@ -47,12 +49,41 @@ def test_step_info_holds_visits_contacts_and_the_reward():
     entered = []
     for _ in range(600):
         _, reward, _, _, info = env.step(np.array([1.0, 1.0], dtype=np.float32))
-        assert set(info) == {"time", "visits", "new_visits", "contacts", "touching", "reward"}
+        assert set(info) == {
+            "time", "visits", "new_visits", "contacts", "touching", "reward", "fitness"
+        }
         assert info["reward"] == reward
         entered += info["new_visits"]
     robot = env.unwrapped.world[env.unwrapped.world.controlled[0]]
     assert entered == list(robot.visits) and info["visits"] == len(entered)
     assert info["contacts"] == robot.contacts
+    # The regatta fitness so far and its terms, as `regatta run --json` names them.
+    fitness = info["fitness"]
+    assert set(fitness) == {"value", "cyclic_visits", "other_visits", "contact_s"}
+    assert fitness == robot.fitness
+    assert fitness["cyclic_visits"] + fitness["other_visits"] <= len(entered)
+    assert fitness["value"] == pytest.approx(
+        fitness["cyclic_visits"] - 0.5 * fitness["contact_s"]
+    )
+
+
+def test_vector_step_info_holds_each_copy_s_visits_contacts_and_fitness():
+    envs = regatta.gym.RegattaVectorEnv(3, duration=30.0)
+    envs.reset(seed=1)
+    total = np.zeros(3)
+    for _ in range(600):
+        _, rewards, _, _, info = envs.step(np.full((3, 2), 1.0, dtype=np.float32))
+        total += rewards
+        for key in ("time", "visits", "contacts", "touching", "reward", "fitness"):
+            assert info[key].shape == (3,) and info["_" + key].all(), key
+        np.testing.assert_array_equal(info["reward"], rewards)
+    # The fitness so far is the sum of the rewards; the counts are each copy's robot's.
+    np.testing.assert_allclose(info["fitness"], total)
+    for i in range(3):
+        summary = json.loads(envs.vector_world.summary_json(i))["robots"][0]
+        assert info["visits"][i] == len(summary["visits"])
+        assert info["contacts"][i] == summary["contacts"]["events"]
+    envs.close()
 
 
 def test_reset_with_a_seed_reproduces_and_without_one_continues():

@@ -33,6 +33,12 @@ def test_agents_are_the_robots_and_share_one_world():
         observations, rewards, terminations, truncations, infos = env.step(actions)
         steps += 1
         assert env.world["red"].wheels == (20, 20) and env.world["blue"].wheels == (-20, 10)
+        for agent in ("red", "blue"):
+            info = infos[agent]
+            assert info["reward"] == rewards[agent]
+            assert info["visits"] == len(env.world[agent].visits)
+            assert info["contacts"] == env.world[agent].contacts
+            assert info["fitness"] == env.world[agent].fitness
     assert steps == 20 and all(truncations.values())
     assert env.render().shape == (256, 256, 3)
 

@@ -35,7 +35,7 @@ mod world;
 use std::io::IsTerminal;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 use outcome::Outcome;
 
@@ -127,8 +127,33 @@ fn main() -> ExitCode {
     }
 }
 
+/// The command line's grammar, every flag that takes a value taking one that starts with a
+/// minus: `--steps -5` then reaches the flag's own check ("invalid value '-5' for '--steps
+/// <N>'") instead of clap's "unexpected argument '-5'", whose tip (`-- -5`) does not work for
+/// a flag. No flag of regatta is a negative number, so nothing is lost.
+fn command() -> clap::Command {
+    fn negatives(command: clap::Command) -> clap::Command {
+        command
+            .mut_args(|arg| {
+                if arg.get_action().takes_values() {
+                    arg.allow_negative_numbers(true)
+                } else {
+                    arg
+                }
+            })
+            .mut_subcommands(negatives)
+    }
+    negatives(Cli::command())
+}
+
+fn parse() -> Result<Cli, clap::Error> {
+    let mut command = command();
+    let matches = command.try_get_matches_from_mut(std::env::args_os())?;
+    Cli::from_arg_matches(&matches).map_err(|error| error.format(&mut command))
+}
+
 fn run() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    let cli = match parse() {
         Ok(cli) => cli,
         Err(error) => {
             let _ = error.print();
@@ -199,7 +224,28 @@ fn report(error: &anyhow::Error) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::report;
+    use super::{command, report};
+
+    #[test]
+    fn every_flag_that_takes_a_value_takes_a_negative_number() {
+        fn check(command: &clap::Command, path: &str) {
+            for arg in command.get_arguments() {
+                if arg.get_action().takes_values() {
+                    assert!(
+                        arg.is_allow_negative_numbers_set(),
+                        "{path} {}",
+                        arg.get_id()
+                    );
+                }
+            }
+            for sub in command.get_subcommands() {
+                check(sub, &format!("{path} {}", sub.get_name()));
+            }
+        }
+        let mut command = command();
+        command.build();
+        check(&command, "regatta");
+    }
 
     #[derive(Debug, thiserror::Error)]
     #[error("cannot write the log: {0}")]

@@ -75,6 +75,7 @@ pub struct PlotArgs {
     #[arg(
         long = "trajectory-color",
         alias = "color-by",
+        value_name = "BY",
         value_enum,
         default_value_t
     )]

@@ -220,8 +220,13 @@ fn finish_load(
             .iter()
             .filter(|d| d.diagnostic.is_error())
             .count();
+        let errors = if errors == 1 {
+            "1 error".to_owned()
+        } else {
+            format!("{errors} errors")
+        };
         bail!(
-            "{} has {errors} error(s); `regatta check` lists them",
+            "{} has {errors}; `regatta check` lists them",
             world_name(path)
         );
     }

@@ -26,6 +26,53 @@ fn a_negative_duration_gets_the_duration_check() {
 }
 
 #[test]
+fn a_negative_whole_number_gets_the_flag_s_own_message() {
+    let world = root().join("worlds/regatta.wbt");
+    let world = world.to_str().unwrap();
+    for (flag, value_name) in [("--steps", "STEPS"), ("--seed", "SEED")] {
+        let (code, stderr) = stderr_of(&["run", world, flag, "-5"], &root());
+        assert_eq!(code, Some(2), "{stderr}");
+        assert!(
+            stderr.contains(&format!("invalid value '-5' for '{flag} <{value_name}>'")),
+            "{stderr}"
+        );
+        assert!(!stderr.contains("unexpected argument"), "{stderr}");
+    }
+}
+
+#[test]
+fn a_world_with_one_error_says_one_error() {
+    let dir = temp_dir("flags-one-error");
+    std::fs::write(
+        dir.join("typo.wbt"),
+        "#VRML_SIM R2023b utf8\nWorldInfo { basicTimeStep 32 }\nKhepera {\n  translaton 0 0 0\n}\n",
+    )
+    .unwrap();
+    let (code, stderr) = stderr_of(&["run", "typo.wbt", "--steps", "3"], &dir);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("error: typo.wbt has 1 error; `regatta check` lists them"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn plot_help_tells_the_trajectory_colour_from_the_terminal_colour() {
+    let output = regatta().args(["plot", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&output.stdout);
+    assert!(help.contains("--trajectory-color <BY>"), "{help}");
+    assert!(
+        help.contains("--color <WHEN>") && help.contains("(not figures)"),
+        "{help}"
+    );
+    assert!(
+        !help.contains("COLOR_BY") && !help.contains("--color-by"),
+        "{help}"
+    );
+}
+
+#[test]
 fn a_log_path_through_a_file_or_to_a_folder_is_named() {
     let dir = temp_dir("flags-log");
     std::fs::write(dir.join("notes.txt"), "a file").unwrap();

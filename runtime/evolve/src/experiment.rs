@@ -26,7 +26,7 @@ pub enum LoadError {
     #[error(transparent)]
     Edit(#[from] EditError),
     /// The diagnostics, rendered, and each error where it stands.
-    #[error("{name} has {errors} error(s):\n{rendered}")]
+    #[error("{name} has {}:\n{rendered}", errors_phrase(*errors))]
     Check {
         name: String,
         errors: usize,
@@ -575,6 +575,15 @@ impl Experiment {
     }
 }
 
+/// "1 error", "2 errors".
+fn errors_phrase(errors: usize) -> String {
+    if errors == 1 {
+        "1 error".to_owned()
+    } else {
+        format!("{errors} errors")
+    }
+}
+
 /// Why a varied world was refused, in a line: its first error (the edited text's lines are
 /// the variation's, not the user's, so the error's message says more than its place).
 fn refusal(error: LoadError) -> String {
@@ -584,7 +593,7 @@ fn refusal(error: LoadError) -> String {
         } => match located.first() {
             Some(first) if errors > 1 => format!("{} ({errors} errors)", first.message),
             Some(first) => first.message.clone(),
-            None => format!("{errors} error(s)"),
+            None => errors_phrase(errors),
         },
         other => other.to_string(),
     }
@@ -713,6 +722,11 @@ impl Observer {
             distance[robot] += (here - last[robot]).length();
             last[robot] = here;
         });
+    }
+
+    /// Every fitness's terms so far for `robot` (file order), as the summary gives them.
+    pub fn terms(&self, robot: usize) -> crate::fitness::FitnessTerms {
+        self.meters[robot].terms()
     }
 
     /// Each robot's reward in the last step (the chosen fitness's step contribution, see
