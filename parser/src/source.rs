@@ -140,7 +140,9 @@ pub fn read_bytes(reader: impl Read, limit: u64) -> Result<Vec<u8>, ReadError> {
     } else {
         raw
     };
-    if bytes.contains(&0) {
+    // A vectorised search: `<[u8]>::contains` looks at a word at a time, which was about
+    // one instruction a byte (3.5 M of a 3.7 MB world's 356 M for `check`).
+    if memchr::memchr(0, &bytes).is_some() {
         return Err(ReadError::Binary);
     }
     Ok(bytes)
