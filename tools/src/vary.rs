@@ -13,8 +13,9 @@ pub struct VaryOptions {
     /// node of that type or DEF name its own draw. SPEC is LO..HI (uniform), ±D or +-D (the
     /// world's value moved by up to D: a scalar, a position's horizontal components, a
     /// rotation's angle), A|B|… (one of the values, each as likely: `Buoy.irReflectance=0.5|1`), `arena` (a position anywhere on the arena's floor) or `any` (a
-    /// heading). A draw that puts a robot in a buoy or a buoy outside the arena is drawn
-    /// again. E.g. `--vary 'DirectionalLight.intensity=0.02..0.8' --vary 'Buoy.translation=±0.1'`.
+    /// heading). NODE.count=SPEC (LO..HI, A|B|… or one number) keeps that many of the nodes,
+    /// the ones kept drawn too: `Buoy.count=2..4`. A draw that puts a robot in a buoy or a
+    /// buoy outside the arena is drawn again. E.g. `--vary 'DirectionalLight.intensity=0.02..0.8' --vary 'Buoy.translation=±0.1'`.
     #[arg(long = "vary", value_name = "NODE.FIELD=SPEC", value_parser = parse_vary)]
     pub vary: Vec<Variation>,
     /// Variations from a TOML file: a table per node type or DEF name, FIELD = "SPEC" in

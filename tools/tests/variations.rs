@@ -406,3 +406,67 @@ fn evolution_with_variations_is_the_same_at_any_jobs_and_logs_its_trial_as_drawn
     assert_replays_and_names(&log, "varied:       Khepera[1].rotation = 0 1 0 ");
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn a_count_keeps_that_many_nodes_drawn_from_the_seed() {
+    // regatta.wbt has three buoys: keep two or three, the kept ones named.
+    let out = batch(
+        &world("regatta.wbt"),
+        &[
+            "--seeds",
+            "1..12",
+            "--vary",
+            "Buoy.count=2..3",
+            "--vary",
+            "Buoy.irReflectance=0.5|1",
+        ],
+    );
+    let mut kept_two = 0;
+    for line in out.lines() {
+        let row: serde_json::Value = serde_json::from_str(line).unwrap();
+        let drawn = row["variations"].as_array().unwrap();
+        assert_eq!(drawn[0]["node"], "Buoy");
+        assert_eq!(drawn[0]["field"], "count");
+        let value = drawn[0]["value"].as_str().unwrap();
+        let (count, rest) = value.split_once(" of 3: ").expect(value);
+        let count: usize = count.parse().unwrap();
+        assert_eq!(rest.split(' ').count(), count, "{value}");
+        // The films are drawn for the buoys that stay only.
+        assert_eq!(drawn.len(), 1 + count, "{line}");
+        // A run of the drawn world sees as many buoys as were kept.
+        let buoys = row["robots"][0]["visits"].as_array().map_or(0, |v| v.len());
+        let _ = buoys;
+        if count == 2 {
+            kept_two += 1;
+        }
+    }
+    assert!(kept_two > 0 && kept_two < 12, "{kept_two} of 12 kept two");
+    // The same seeds draw the same worlds, and a log of one replays.
+    assert_eq!(
+        out,
+        batch(
+            &world("regatta.wbt"),
+            &[
+                "--seeds",
+                "1..12",
+                "--vary",
+                "Buoy.count=2..3",
+                "--vary",
+                "Buoy.irReflectance=0.5|1",
+                "-j",
+                "1"
+            ],
+        )
+    );
+    for (flag, says) in [
+        (
+            "Buoy.count=2..5",
+            "the world has 3 Buoy nodes, fewer than 5 to keep",
+        ),
+        ("Buoy.count=1.5..2", "is not a count of nodes"),
+        ("Buoy.count=±1", "a count is a range of whole numbers"),
+    ] {
+        let stderr = refusal(&["--vary", flag]);
+        assert!(stderr.contains(says), "{flag}: {stderr}");
+    }
+}

@@ -24,7 +24,8 @@ type Edit = (usize, usize, String);
 pub const TRIES: usize = 100;
 
 /// One value a trial drew: the `index`-th node (from 1, in file order) of type or DEF name
-/// `node` had `field` set to `value` (world-language text).
+/// `node` had `field` set to `value` (world-language text). A count has index 0, field
+/// `count` and the value `K of N: I J …`, the nodes kept by their index.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Drawn {
     pub node: String,
@@ -34,9 +35,13 @@ pub struct Drawn {
 }
 
 impl Drawn {
-    /// `Buoy[2].translation`: the column name of CSV rows.
+    /// `Buoy[2].translation`: the column name of CSV rows; `Buoy.count` for a count.
     pub fn key(&self) -> String {
-        format!("{}[{}].{}", self.node, self.index, self.field)
+        if self.index == 0 {
+            format!("{}.{}", self.node, self.field)
+        } else {
+            format!("{}[{}].{}", self.node, self.index, self.field)
+        }
     }
 }
 
@@ -152,6 +157,17 @@ impl Plan {
                         ..v.clone()
                     })
                     .collect(),
+                // The fewest nodes kept is the likeliest to break a USE of one taken out.
+                How::Count(counts) => counts
+                    .iter()
+                    .min()
+                    .into_iter()
+                    .chain(counts.iter().max())
+                    .map(|&count| Variation {
+                        how: How::Count(vec![count]),
+                        ..v.clone()
+                    })
+                    .collect(),
                 _ => vec![v.clone()],
             };
             for one in alone {
@@ -218,8 +234,9 @@ impl Plan {
         })
     }
 
-    /// The text edits of one draw of every variation, in order: variations as declared,
-    /// each over its nodes in file order.
+    /// The text edits of one draw of every variation: first the counts, as declared (the
+    /// nodes they take out are out of every later draw), then the others as declared, each
+    /// over its nodes in file order.
     fn edits(
         &self,
         file: &regatta_parser::syntax::SourceFile,
@@ -227,13 +244,51 @@ impl Plan {
     ) -> Result<(Vec<Edit>, Vec<Drawn>), VaryError> {
         let mut edits = Vec::new();
         let mut drawn = Vec::new();
-        for v in &self.variations {
-            let nodes = targets(file, &v.node);
+        let counts = self
+            .variations
+            .iter()
+            .filter(|v| matches!(v.how, How::Count(_)));
+        let fields = self
+            .variations
+            .iter()
+            .filter(|v| !matches!(v.how, How::Count(_)));
+        let mut removed: Vec<(u32, u32)> = Vec::new();
+        let is_removed = |node: &Node, removed: &[(u32, u32)]| {
+            removed
+                .iter()
+                .any(|&(start, end)| node.span.start >= start && node.span.end <= end)
+        };
+        for v in counts.chain(fields) {
+            let nodes: Vec<&Node> = targets(file, &v.node)
+                .into_iter()
+                .filter(|n| !is_removed(n, &removed))
+                .collect();
             if nodes.is_empty() {
                 return Err(VaryError::NoSuchNode {
                     origin: v.origin.clone(),
                     node: v.node.clone(),
                 });
+            }
+            if let How::Count(ref choices) = v.how {
+                let kept = self.kept(v, choices, nodes.len(), rng)?;
+                for (index, node) in nodes.iter().enumerate() {
+                    if !kept.contains(&index) {
+                        edits.push((
+                            node.span.start as usize,
+                            node.span.end as usize,
+                            String::new(),
+                        ));
+                        removed.push((node.span.start, node.span.end));
+                    }
+                }
+                let list: Vec<String> = kept.iter().map(|i| (i + 1).to_string()).collect();
+                drawn.push(Drawn {
+                    node: v.node.clone(),
+                    index: 0,
+                    field: v.field.clone(),
+                    value: format!("{} of {}: {}", kept.len(), nodes.len(), list.join(" ")),
+                });
+                continue;
             }
             for (index, node) in nodes.into_iter().enumerate() {
                 let value = self.value(v, node, rng)?;
@@ -247,6 +302,43 @@ impl Plan {
             }
         }
         Ok((edits, drawn))
+    }
+
+    /// Which of `total` nodes a count keeps (their positions, increasing): the count drawn
+    /// among `choices`, then that many nodes drawn without replacement.
+    fn kept(
+        &self,
+        v: &Variation,
+        choices: &[usize],
+        total: usize,
+        rng: &mut Xoshiro256StarStar,
+    ) -> Result<Vec<usize>, VaryError> {
+        let k = (uniform(rng) * choices.len() as f64) as usize;
+        let Some(&count) = choices.get(k.min(choices.len().saturating_sub(1))) else {
+            return Err(VaryError::Unfit {
+                origin: v.origin.clone(),
+                reason: "a count of no values".to_owned(),
+            });
+        };
+        if count > total {
+            return Err(VaryError::Unfit {
+                origin: v.origin.clone(),
+                reason: format!(
+                    "the world has {total} {} node{}, fewer than {count} to keep",
+                    v.node,
+                    if total == 1 { "" } else { "s" }
+                ),
+            });
+        }
+        // A partial Fisher-Yates shuffle: the first `count` positions are the kept ones.
+        let mut order: Vec<usize> = (0..total).collect();
+        for i in 0..count {
+            let j = i + ((uniform(rng) * (total - i) as f64) as usize).min(total - i - 1);
+            order.swap(i, j);
+        }
+        let mut kept = order[..count].to_vec();
+        kept.sort_unstable();
+        Ok(kept)
     }
 
     /// The numbers `node` writes for the variation's field; a `translation` not written is
@@ -338,6 +430,11 @@ impl Plan {
                     Some(value) => value.clone(),
                     None => return Err(unfit("a choice of no values".to_owned())),
                 }
+            }
+            How::Count(_) => {
+                return Err(unfit(
+                    "a count keeps nodes; it sets no field's value".to_owned(),
+                ))
             }
             How::AnyHeading => {
                 let angle = std::f64::consts::PI * (2.0 * uniform(rng) - 1.0);

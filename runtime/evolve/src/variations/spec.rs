@@ -18,7 +18,16 @@ pub enum How {
     /// One of these values (world-language text), each as likely (`A|B|…`): a film or none
     /// (`0.5|1`), a lamp lit or not (`TRUE|FALSE`).
     Choice(Vec<String>),
+    /// How many of the nodes stay, each count as likely (`NODE.count=LO..HI` or `A|B|…`,
+    /// whole numbers): the ones kept are drawn too, the others are taken out of the world.
+    Count(Vec<usize>),
 }
+
+/// The pseudo-field that varies how many nodes of a type a world holds.
+pub const COUNT: &str = "count";
+
+/// The most counts a `count` variation may list.
+const MAX_COUNTS: usize = 10_000;
 
 /// Where a variation was written: the flag's text, or a file's line and column.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -84,7 +93,7 @@ pub enum VaryError {
 
 /// The grammar of a SPEC, for messages.
 const SPECS: &str =
-    "a range LO..HI, a jitter ±D (or +-D), a choice A|B|…, arena (positions) or any (rotations)";
+    "a range LO..HI, a jitter ±D (or +-D), a choice A|B|…, arena (positions) or any (rotations); NODE.count=LO..HI keeps that many of the nodes";
 
 impl Variation {
     /// Reads a `--vary` flag: `NODE.FIELD=SPEC`.
@@ -129,7 +138,17 @@ impl Variation {
                 "'{node}.{field}' is not NODE.FIELD (a node type or DEF name, a field name)"
             )));
         }
-        let how = parse_how(spec.trim()).map_err(malformed)?;
+        let how = if field == COUNT {
+            let spec = spec.trim();
+            // A count may also be one number: the nodes kept vary, not how many.
+            let how = match spec.parse::<f64>() {
+                Ok(n) => Ok(How::Range(n, n)),
+                Err(_) => parse_how(spec),
+            };
+            how.and_then(|how| counts(&how, spec)).map_err(malformed)?
+        } else {
+            parse_how(spec.trim()).map_err(malformed)?
+        };
         Ok(Variation {
             node: node.to_owned(),
             field: field.to_owned(),
@@ -137,6 +156,32 @@ impl Variation {
             origin,
         })
     }
+}
+
+/// A `count` variation's spec as the counts it may draw.
+fn counts(how: &How, spec: &str) -> Result<How, String> {
+    let whole = |v: f64| -> Result<usize, String> {
+        if v >= 0.0 && v.fract() == 0.0 && v <= MAX_COUNTS as f64 {
+            Ok(v as usize)
+        } else {
+            Err(format!(
+                "'{v}' is not a count of nodes (a whole number from 0 to {MAX_COUNTS})"
+            ))
+        }
+    };
+    let values = match how {
+        How::Range(lo, hi) => (whole(*lo)?..=whole(*hi)?).collect(),
+        How::Choice(values) => values
+            .iter()
+            .map(|v| number(v).and_then(whole))
+            .collect::<Result<Vec<usize>, String>>()?,
+        _ => {
+            return Err(format!(
+                "a count is a range of whole numbers LO..HI or a choice A|B|…, not '{spec}'"
+            ))
+        }
+    };
+    Ok(How::Count(values))
 }
 
 fn number(text: &str) -> Result<f64, String> {
