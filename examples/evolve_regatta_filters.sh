@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 cargo build --release -p regatta
 regatta=target/release/regatta
 out=${OUT:-out/evolve-regatta-filters}
-generations=${GENERATIONS:-200}
+generations=${GENERATIONS:-250}
 jobs=${JOBS:-2}
 mkdir -p "$out"
 
@@ -19,7 +19,7 @@ time "$regatta" evolve worlds/regatta_neural_filters.wbt \
   --world worlds/regatta_small.wbt --world worlds/regatta_wide.wbt \
   --world worlds/regatta_offcentre.wbt --world worlds/regatta_four.wbt \
   --fitness regatta --generations "$generations" --trials 2 --duration 60 \
-  --seed 1 -j "$jobs" --out "$out" \
+  --seed 2 -j "$jobs" --out "$out" \
   --vary 'DirectionalLight.intensity=0.02..0.4' --vary 'Buoy.lampLight=TRUE|FALSE' \
   --vary 'Buoy.irReflectance=0.5|1' \
   --vary 'Khepera.translation=arena' --vary 'Khepera.rotation=any'
