@@ -143,19 +143,9 @@ class RegattaEnv(gymnasium.Env):
         return observation[0], reward, False, truncated, self._step_info(reward)
 
     def _step_info(self, reward: float) -> dict:
-        robot = self._world[self._world.controlled[0]]
-        visits = robot.visits
-        new = visits[self._visits_seen :]
-        self._visits_seen = len(visits)
-        return {
-            "time": self._world.time,
-            "visits": len(visits),
-            "new_visits": new,
-            "contacts": robot.contacts,
-            "touching": robot.touching,
-            "reward": reward,
-            "fitness": robot.fitness,
-        }
+        info = step_info(self._world, self._world.controlled[0], self._visits_seen, reward)
+        self._visits_seen = info["visits"]
+        return info
 
     def render(self):
         if self.render_mode == "rgb_array":
@@ -319,3 +309,19 @@ def register_environments() -> None:
             vector_entry_point=vector,
             nondeterministic=False,
         )
+
+
+def step_info(world, robot_name: str, visits_seen: int, reward: float) -> dict:
+    """A robot's step info: the time, its visits (all, and those since ``visits_seen``),
+    contacts, whether it touches something, the step's reward and its fitness so far."""
+    robot = world[robot_name]
+    visits = robot.visits
+    return {
+        "time": world.time,
+        "visits": len(visits),
+        "new_visits": visits[visits_seen:],
+        "contacts": robot.contacts,
+        "touching": robot.touching,
+        "reward": reward,
+        "fitness": robot.fitness,
+    }

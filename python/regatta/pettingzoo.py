@@ -21,6 +21,7 @@ from gymnasium.utils import seeding
 from pettingzoo import ParallelEnv
 
 from ._regatta import World
+from .gym import step_info
 
 
 class RegattaParallelEnv(ParallelEnv):
@@ -114,19 +115,9 @@ class RegattaParallelEnv(ParallelEnv):
 
     def _step_info(self, agent: str, reward: float) -> dict:
         """An agent's step, as :class:`regatta.gym.RegattaEnv` gives it."""
-        robot = self._world[agent]
-        visits = robot.visits
-        new = visits[self._visits_seen.get(agent, 0) :]
-        self._visits_seen[agent] = len(visits)
-        return {
-            "time": self._world.time,
-            "visits": len(visits),
-            "new_visits": new,
-            "contacts": robot.contacts,
-            "touching": robot.touching,
-            "reward": reward,
-            "fitness": robot.fitness,
-        }
+        info = step_info(self._world, agent, self._visits_seen.get(agent, 0), reward)
+        self._visits_seen[agent] = info["visits"]
+        return info
 
     def render(self):
         if self.render_mode == "rgb_array":
