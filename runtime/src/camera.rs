@@ -34,6 +34,8 @@ pub struct Camera {
     /// Per pixel, the length of its unnormalised direction `(1, up, right)` in the robot's
     /// frame: world distance per unit of the camera's depth (the rasteriser's near/far test).
     lengths: Vec<f64>,
+    /// The largest of `lengths`, at least 1.
+    longest: f64,
     target: Target,
 }
 
@@ -44,10 +46,12 @@ impl Camera {
                 .flat_map(|row| (0..rig.width).map(move |column| (column, row)))
                 .map(|(column, row)| rig.frame.linear * rig.pixel_direction(column, row))
         };
+        let lengths: Vec<f64> = pixels().map(|d| d.length()).collect();
         Camera {
             rig: rig.clone(),
             directions: pixels().map(|d| d.normalize_or(DVec3::X)).collect(),
-            lengths: pixels().map(|d| d.length()).collect(),
+            longest: crate::render::raster::longest(&lengths),
+            lengths,
             target: Target::default(),
         }
     }
@@ -87,6 +91,7 @@ impl Camera {
             near: self.rig.near.max(0.0),
             far: self.rig.far.max(0.0),
             lengths: &self.lengths,
+            longest: self.longest,
         };
         let quantise = self.rig.noise <= 0.0;
         raster.draw(plan, poses, Some(viewer), &view, quantise, &mut self.target);

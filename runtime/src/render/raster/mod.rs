@@ -20,7 +20,7 @@ use crate::compile::graph::{Owner, RenderGraph};
 use crate::compile::plan::Plan;
 use crate::geometry::Frame;
 use tessellate::{tessellate, TriangleSet};
-use triangle::{Corner, Screen};
+use triangle::{Buffers, Corner, Paint, Screen};
 
 /// One primitive's triangles: world space for static parts, robot space for attached ones.
 struct Part {
@@ -59,12 +59,25 @@ pub struct View<'a> {
     pub far: f64,
     /// Per pixel, the world distance per unit of camera depth along its ray.
     pub lengths: &'a [f64],
+    /// The largest of `lengths` (at least 1).
+    pub longest: f64,
+}
+
+/// The largest of a camera's per-pixel `lengths`, at least 1: [`View::longest`].
+pub fn longest(lengths: &[f64]) -> f64 {
+    lengths.iter().fold(1.0f64, |m, &l| m.max(l))
 }
 
 /// Buffers reused from frame to frame.
 #[derive(Default)]
 pub struct Target {
     depth: Vec<f32>,
+    /// Per pixel, which of `paints` covers it (its index plus one; 0: the background).
+    ids: Vec<u32>,
+    /// How each drawn triangle colours its pixels.
+    paints: Vec<Paint>,
+    /// Column centres, `column + 0.5`.
+    centres: Vec<f64>,
     /// Linear colour (when noise is added afterwards) ...
     pub linear: Vec<[f32; 3]>,
     /// ... or bytes, written straight (no noise).
@@ -172,10 +185,9 @@ impl<'g> Rasterizer<'g> {
             .shadows
             .as_ref()
             .map(|caster| (caster, caster.prepare(plan, poses, viewer)));
-        target.clear(self, view, quantise, pixels);
+        target.clear(view, pixels);
         // The nearest depth worth drawing: the near sphere's closest approach to the frustum.
-        let longest = view.lengths.iter().fold(1.0f64, |m, &l| m.max(l));
-        let near_x = (view.near / longest).max(1e-6);
+        let near_x = (view.near / view.longest).max(1e-6);
         let eye = view.to_world.translation;
         let screen = Screen {
             width: view.width,
@@ -242,8 +254,16 @@ impl<'g> Rasterizer<'g> {
                 lights: &lights,
                 occluders: occluders.as_ref().map(|(c, p)| (*c, p)),
             };
-            self.draw_part(part, placement.as_ref(), &frame, quantise, target);
+            self.draw_part(part, placement.as_ref(), &frame, target);
         }
+        let frame = Frame3 {
+            view,
+            screen: &screen,
+            eye,
+            lights: &lights,
+            occluders: occluders.as_ref().map(|(c, p)| (*c, p)),
+        };
+        self.resolve(&frame, quantise, target);
     }
 
     fn draw_part(
@@ -251,7 +271,6 @@ impl<'g> Rasterizer<'g> {
         part: &Part,
         placement: Option<&Frame>,
         frame: &Frame3,
-        quantise: bool,
         target: &mut Target,
     ) {
         let (view, screen, eye, lights) = (frame.view, frame.screen, frame.eye, frame.lights);
@@ -324,18 +343,59 @@ impl<'g> Rasterizer<'g> {
             // A shadow's edge crosses the triangle: its pixels are shaded one by one.
             let mixed = frame.occluders.is_some() && (a != b || b != c);
             let color = part.set.vertices[t[0] as usize].color;
-            let mut exact = |pixel: usize, depth: f64, normal: DVec3| {
-                let (column, row) = (pixel % view.width, pixel / view.width);
-                let up = (1.0 - 2.0 * (row as f64 + 0.5) / view.height as f64) * view.tan_v;
-                let right = (2.0 * (column as f64 + 0.5) / view.width as f64 - 1.0) * view.tan_h;
+            triangle::draw(
+                screen,
+                corners,
+                &mut Buffers {
+                    depth: &mut target.depth,
+                    ids: &mut target.ids,
+                    paints: &mut target.paints,
+                    centres: &target.centres,
+                },
+                mixed.then_some((part.material, color)),
+            );
+        }
+    }
+
+    /// Colours every pixel from what covers it once every part is drawn: the background, or
+    /// the nearest triangle's colour (flat, interpolated, or shaded at the pixel).
+    fn resolve(&self, frame: &Frame3, quantise: bool, target: &mut Target) {
+        let view = frame.view;
+        let (width, height) = (view.width, view.height);
+        let pixels = width * height;
+        let background = &self.graph.background;
+        let sky = background.sky;
+        let ground = background.ground;
+        let row_of = view.to_world.linear.row(1);
+        let byte = |c: [f64; 3]| c.map(triangle::to_byte);
+        let (sky_bytes, ground_bytes) = (byte(sky), ground.map(byte).unwrap_or(byte(sky)));
+        let (sky_linear, ground_linear) = (
+            sky.map(|v| v as f32),
+            ground.map_or(sky.map(|v| v as f32), |g| g.map(|v| v as f32)),
+        );
+        if quantise {
+            target.bytes.clear();
+            target.bytes.resize(pixels * 3, 0);
+        } else {
+            target.linear.clear();
+            target.linear.resize(pixels, [0.0; 3]);
+        }
+        let rights: Vec<f64> = (0..width)
+            .map(|c| (2.0 * (c as f64 + 0.5) / width as f64 - 1.0) * view.tan_h)
+            .collect();
+        let exact =
+            |material: usize, color: Option<[f64; 3]>, pixel: usize, depth: f64, normal: DVec3| {
+                let (column, row) = (pixel % width, pixel / width);
+                let up = (1.0 - 2.0 * (row as f64 + 0.5) / height as f64) * view.tan_v;
+                let right = (2.0 * (column as f64 + 0.5) / width as f64 - 1.0) * view.tan_h;
                 let point = view.to_world.apply(DVec3::new(1.0, up, right) * depth);
                 shade(
-                    material,
+                    &self.graph.materials[material],
                     color,
                     point,
                     normal,
-                    eye,
-                    lights,
+                    frame.eye,
+                    frame.lights,
                     &mut |point, kind| {
                         frame
                             .occluders
@@ -343,17 +403,126 @@ impl<'g> Rasterizer<'g> {
                     },
                 )
             };
-            triangle::draw(
-                screen,
-                corners,
-                quantise,
-                &mut target.depth,
-                &mut target.linear,
-                &mut target.bytes,
-                if mixed { Some(&mut exact) } else { None },
-            );
+        for r in 0..height {
+            let y = r as f64 + 0.5;
+            let up = (1.0 - 2.0 * (r as f64 + 0.5) / height as f64) * view.tan_v;
+            // The ray caster's rule: the ground where the pixel's ray points down. The test
+            // is linear along a row: equal at both ends, equal throughout.
+            let below =
+                |right: f64| ground.is_some() && row_of.x + row_of.y * up + row_of.z * right < 0.0;
+            let (first, last) = (below(rights[0]), below(rights[width - 1]));
+            let uniform = (first == last).then_some(first);
+            let base = r * width;
+            let ids = &target.ids[base..base + width];
+            let mut column = 0;
+            while column < width {
+                let id = ids[column];
+                let mut past = column + 1;
+                while past < width && ids[past] == id {
+                    past += 1;
+                }
+                let (bytes, linear) = if quantise {
+                    (
+                        &mut target.bytes[3 * (base + column)..3 * (base + past)],
+                        None,
+                    )
+                } else {
+                    (
+                        &mut target.bytes[..0],
+                        Some(&mut target.linear[base + column..base + past]),
+                    )
+                };
+                match id.checked_sub(1).map(|i| target.paints[i as usize]) {
+                    None => match (uniform, linear) {
+                        (Some(below), None) => {
+                            fill_bytes(bytes, if below { ground_bytes } else { sky_bytes })
+                        }
+                        (Some(below), Some(linear)) => {
+                            linear.fill(if below { ground_linear } else { sky_linear })
+                        }
+                        (None, None) => {
+                            for (pixel, &right) in
+                                bytes.chunks_exact_mut(3).zip(&rights[column..past])
+                            {
+                                pixel.copy_from_slice(if below(right) {
+                                    &ground_bytes
+                                } else {
+                                    &sky_bytes
+                                });
+                            }
+                        }
+                        (None, Some(linear)) => {
+                            for (pixel, &right) in linear.iter_mut().zip(&rights[column..past]) {
+                                *pixel = if below(right) {
+                                    ground_linear
+                                } else {
+                                    sky_linear
+                                };
+                            }
+                        }
+                    },
+                    Some(Paint::Flat {
+                        bytes: b,
+                        linear: l,
+                    }) => match linear {
+                        None => fill_bytes(bytes, b),
+                        Some(linear) => linear.fill(l),
+                    },
+                    Some(paint) => {
+                        for (k, i) in (base + column..base + past).enumerate() {
+                            let x = target.centres[column + k];
+                            let color = match paint {
+                                Paint::Smooth { w, color } => {
+                                    let wv = w.at(x, y);
+                                    color.map(|plane| plane.at(x, y) / wv)
+                                }
+                                Paint::Exact {
+                                    w,
+                                    normal,
+                                    material,
+                                    color,
+                                } => {
+                                    let wv = w.at(x, y);
+                                    let normal = normal.map(|plane| plane.at(x, y) / wv);
+                                    exact(
+                                        material,
+                                        color,
+                                        i,
+                                        1.0 / wv,
+                                        DVec3::from_array(normal).normalize_or_zero(),
+                                    )
+                                }
+                                Paint::Flat { .. } => unreachable!("flat runs are filled whole"),
+                            };
+                            if quantise {
+                                target.bytes[3 * i..3 * i + 3]
+                                    .copy_from_slice(&color.map(triangle::to_byte));
+                            } else {
+                                target.linear[i] = color.map(|v| v as f32);
+                            }
+                        }
+                    }
+                }
+                column = past;
+            }
         }
     }
+}
+
+/// Fills `bytes` with one RGB colour, a few pixels at a time.
+fn fill_bytes(bytes: &mut [u8], color: [u8; 3]) {
+    const PIXELS: usize = 32;
+    let mut pattern = [0u8; 3 * PIXELS];
+    for pixel in pattern.chunks_exact_mut(3) {
+        pixel.copy_from_slice(&color);
+    }
+    let mut chunks = bytes.chunks_exact_mut(3 * PIXELS);
+    for chunk in &mut chunks {
+        chunk.copy_from_slice(&pattern);
+    }
+    let rest = chunks.into_remainder();
+    let n = rest.len();
+    rest.copy_from_slice(&pattern[..n]);
 }
 
 /// What every part of a frame is drawn with.
@@ -366,76 +535,16 @@ struct Frame3<'a> {
 }
 
 impl Target {
-    /// Fills the buffers with the background: the sky, or the ground below the horizon.
-    fn clear(&mut self, raster: &Rasterizer, view: &View, quantise: bool, pixels: usize) {
+    /// Empties the depth and coverage buffers for a frame: nothing drawn, the background
+    /// everywhere.
+    fn clear(&mut self, view: &View, pixels: usize) {
         self.depth.clear();
         self.depth.resize(pixels, 0.0);
-        let background = &raster.graph.background;
-        let sky = background.sky;
-        let row = view.to_world.linear.row(1);
-        let byte = |c: [f64; 3]| c.map(triangle::to_byte);
-        let (sky_bytes, ground_bytes) = (byte(sky), background.ground.map(byte));
-        let (sky_linear, ground_linear) = (
-            sky.map(|v| v as f32),
-            background.ground.map(|g| g.map(|v| v as f32)),
-        );
-        if quantise {
-            self.bytes.clear();
-            self.bytes.reserve(pixels * 3);
-        } else {
-            self.linear.clear();
-            self.linear.reserve(pixels);
-        }
-        let rights: Vec<f64> = (0..view.width)
-            .map(|c| (2.0 * (c as f64 + 0.5) / view.width as f64 - 1.0) * view.tan_h)
-            .collect();
-        for r in 0..view.height {
-            let up = (1.0 - 2.0 * (r as f64 + 0.5) / view.height as f64) * view.tan_v;
-            // The ray caster's rule: the ground where the pixel's ray points down. A row
-            // wholly above or below the horizon is filled at once.
-            let below = |right: f64| {
-                background.ground.is_some() && row.x + row.y * up + row.z * right < 0.0
-            };
-            let (first, last) = (below(rights[0]), below(rights[view.width - 1]));
-            // (the test is linear along a row: equal at both ends, equal throughout).
-            if first == last {
-                let pick = first;
-                if quantise {
-                    let b = if pick {
-                        ground_bytes.unwrap_or(sky_bytes)
-                    } else {
-                        sky_bytes
-                    };
-                    for _ in 0..view.width {
-                        self.bytes.extend_from_slice(&b);
-                    }
-                } else {
-                    let l = if pick {
-                        ground_linear.unwrap_or(sky_linear)
-                    } else {
-                        sky_linear
-                    };
-                    self.linear.extend(std::iter::repeat_n(l, view.width));
-                }
-                continue;
-            }
-            for &right in &rights {
-                let below = below(right);
-                if quantise {
-                    let b = if below {
-                        ground_bytes.unwrap_or(sky_bytes)
-                    } else {
-                        sky_bytes
-                    };
-                    self.bytes.extend_from_slice(&b);
-                } else {
-                    self.linear.push(if below {
-                        ground_linear.unwrap_or(sky_linear)
-                    } else {
-                        sky_linear
-                    });
-                }
-            }
+        self.ids.clear();
+        self.ids.resize(pixels, 0);
+        self.paints.clear();
+        if self.centres.len() != view.width {
+            self.centres = (0..view.width).map(|c| c as f64 + 0.5).collect();
         }
     }
 }

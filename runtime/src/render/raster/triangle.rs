@@ -13,9 +13,36 @@ pub(super) struct Corner {
     pub normal: DVec3,
 }
 
-/// Shades one pixel from its index, its camera depth and its interpolated world normal: for
-/// triangles whose corners disagree about a shadow.
-pub(super) type PerPixel<'a, 'b> = Option<&'a mut (dyn FnMut(usize, f64, DVec3) -> [f64; 3] + 'b)>;
+/// How a drawn triangle's pixels get their colour once the frame's depth test is settled
+/// (deferred: only the pixels that stay visible are coloured).
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Paint {
+    /// One colour for every pixel (corners that agree, no shadow edge).
+    Flat { bytes: [u8; 3], linear: [f32; 3] },
+    /// Gouraud: the corners' colours interpolated perspective-correctly.
+    Smooth { w: Plane, color: [Plane; 3] },
+    /// Shaded per pixel (a shadow's edge crosses the triangle): the interpolated world normal
+    /// and the pixel's depth, with this material and colour override.
+    Exact {
+        w: Plane,
+        normal: [Plane; 3],
+        material: usize,
+        color: Option<[f64; 3]>,
+    },
+}
+
+/// Per-pixel shading for a triangle: its material and its first corner's colour override.
+pub(super) type PerPixel = Option<(usize, Option<[f64; 3]>)>;
+
+/// The depth and coverage buffers the triangles are drawn into, and what colours them.
+pub(super) struct Buffers<'a> {
+    pub depth: &'a mut [f32],
+    /// Per pixel, the covering triangle's index in `paints` plus one (0: the background).
+    pub ids: &'a mut [u32],
+    pub paints: &'a mut Vec<Paint>,
+    /// Column centres, `column + 0.5`.
+    pub centres: &'a [f64],
+}
 
 /// The image the triangles land on.
 pub(super) struct Screen<'a> {
@@ -40,11 +67,8 @@ pub(super) fn to_byte(value: f64) -> u8 {
 pub(super) fn draw(
     screen: &Screen,
     corners: [Corner; 3],
-    quantise: bool,
-    depth: &mut [f32],
-    linear: &mut [[f32; 3]],
-    bytes: &mut [u8],
-    mut per_pixel: PerPixel<'_, '_>,
+    buffers: &mut Buffers,
+    per_pixel: PerPixel,
 ) {
     if corners
         .iter()
@@ -89,18 +113,15 @@ pub(super) fn draw(
         fill(
             screen,
             [polygon[0], polygon[k], polygon[k + 1]],
-            quantise,
-            depth,
-            linear,
-            bytes,
-            per_pixel.as_deref_mut(),
+            buffers,
+            per_pixel,
         );
     }
 }
 
 /// A plane over the screen: `value(p) = a·x + b·y + c`.
-#[derive(Clone, Copy)]
-struct Plane {
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Plane {
     a: f64,
     b: f64,
     c: f64,
@@ -119,7 +140,7 @@ impl Plane {
         }
     }
 
-    fn at(&self, x: f64, y: f64) -> f64 {
+    pub(super) fn at(&self, x: f64, y: f64) -> f64 {
         self.a * x + self.b * y + self.c
     }
 }
@@ -154,15 +175,7 @@ impl Edge {
     }
 }
 
-fn fill(
-    screen: &Screen,
-    corners: [Corner; 3],
-    quantise: bool,
-    depth: &mut [f32],
-    linear: &mut [[f32; 3]],
-    bytes: &mut [u8],
-    mut per_pixel: PerPixel<'_, '_>,
-) {
+fn fill(screen: &Screen, corners: [Corner; 3], buffers: &mut Buffers, per_pixel: PerPixel) {
     let (w, h) = (screen.width as f64, screen.height as f64);
     let project = |q: DVec3| {
         DVec2::new(
@@ -184,20 +197,30 @@ fn fill(
     }
     let inverse_depth = c.map(|c| 1.0 / c.position.x);
     let w_plane = Plane::through(p, inverse_depth, area);
-    let flat = per_pixel.is_none() && c[0].color == c[1].color && c[1].color == c[2].color;
-    let normal_planes: [Plane; 3] = std::array::from_fn(|k| {
-        Plane::through(
-            p,
-            [0, 1, 2].map(|i| c[i].normal[k] * inverse_depth[i]),
-            area,
-        )
-    });
-    let color_planes: [Plane; 3] = std::array::from_fn(|k| {
-        Plane::through(p, [0, 1, 2].map(|i| c[i].color[k] * inverse_depth[i]), area)
-    });
-    let flat_color = c[0].color;
-    let flat_bytes = flat_color.map(to_byte);
-    let flat_linear = flat_color.map(|v| v as f32);
+    let paint = match per_pixel {
+        Some((material, color)) => Paint::Exact {
+            w: w_plane,
+            normal: std::array::from_fn(|k| {
+                Plane::through(
+                    p,
+                    [0, 1, 2].map(|i| c[i].normal[k] * inverse_depth[i]),
+                    area,
+                )
+            }),
+            material,
+            color,
+        },
+        None if c[0].color == c[1].color && c[1].color == c[2].color => Paint::Flat {
+            bytes: c[0].color.map(to_byte),
+            linear: c[0].color.map(|v| v as f32),
+        },
+        None => Paint::Smooth {
+            w: w_plane,
+            color: std::array::from_fn(|k| {
+                Plane::through(p, [0, 1, 2].map(|i| c[i].color[k] * inverse_depth[i]), area)
+            }),
+        },
+    };
     // With the area positive, each edge's value is positive on the triangle's side.
     let edges = [
         Edge::new(p[0], p[1]),
@@ -212,6 +235,7 @@ fn fill(
         return;
     }
     let last_row = last_row as usize;
+    let mut id = 0;
     for row in first_row..=last_row.min(screen.height - 1) {
         let y = row as f64 + 0.5;
         // Each edge bounds x on one side; the span is their intersection, widened by a pixel
@@ -248,63 +272,53 @@ fn fill(
         if end < start as isize {
             continue;
         }
+        if id == 0 {
+            buffers.paints.push(paint);
+            id = buffers.paints.len() as u32;
+        }
         let base = row * screen.width;
-        if flat && quantise {
-            // The common case, without per-pixel bounds checks: the same tests and values.
-            let (first, past) = (base + start, base + end as usize + 1);
-            let pixels = depth[first..past]
-                .iter_mut()
-                .zip(&screen.lengths[first..past])
-                .zip(bytes[3 * first..3 * past].chunks_exact_mut(3));
-            for (k, ((stored_depth, &length), pixel)) in pixels.enumerate() {
-                let wv = w_plane.at((start + k) as f64 + 0.5, y);
-                let stored = wv as f32;
-                if stored <= *stored_depth
-                    || wv <= 0.0
-                    || length < screen.near * wv
-                    || (screen.far > 0.0 && length > screen.far * wv)
-                {
-                    continue;
-                }
-                *stored_depth = stored;
-                pixel.copy_from_slice(&flat_bytes);
-            }
-            continue;
-        }
-        for column in start..=end as usize {
-            let x = column as f64 + 0.5;
-            let i = base + column;
-            let wv = w_plane.at(x, y);
-            let stored = wv as f32;
-            if stored <= depth[i] || wv <= 0.0 {
-                continue;
-            }
-            // The ray caster's clipping: distance along the ray within near…far.
-            let length = screen.lengths[i];
-            if length < screen.near * wv || (screen.far > 0.0 && length > screen.far * wv) {
-                continue;
-            }
-            depth[i] = stored;
-            if flat {
-                if quantise {
-                    bytes[3 * i..3 * i + 3].copy_from_slice(&flat_bytes);
-                } else {
-                    linear[i] = flat_linear;
-                }
-                continue;
-            }
-            let color = match per_pixel.as_deref_mut() {
-                Some(shade) => {
-                    let normal = normal_planes.map(|plane| plane.at(x, y) / wv);
-                    shade(i, 1.0 / wv, DVec3::from_array(normal).normalize_or_zero())
-                }
-                None => color_planes.map(|plane| plane.at(x, y) / wv),
-            };
-            if quantise {
-                bytes[3 * i..3 * i + 3].copy_from_slice(&color.map(to_byte));
-            } else {
-                linear[i] = color.map(|v| v as f32);
-            }
-        }
+        let (first, past) = (base + start, base + end as usize + 1);
+        span(
+            &mut buffers.depth[first..past],
+            &mut buffers.ids[first..past],
+            &screen.lengths[first..past],
+            &buffers.centres[start..=end as usize],
+            w_plane,
+            y,
+            screen.near,
+            screen.far,
+            id,
+        );
+    }
+}
+
+/// The depth test along one row's span: where the triangle is nearer than what is drawn and
+/// within the camera's near…far (as the ray caster clips: distance along the pixel's ray),
+/// its depth and `id` replace what was there. Branch-free, so that it vectorises.
+#[allow(clippy::too_many_arguments)]
+fn span(
+    depth: &mut [f32],
+    ids: &mut [u32],
+    lengths: &[f64],
+    centres: &[f64],
+    w_plane: Plane,
+    y: f64,
+    near: f64,
+    far: f64,
+    id: u32,
+) {
+    let n = depth.len();
+    let (ids, lengths, centres) = (&mut ids[..n], &lengths[..n], &centres[..n]);
+    // `Plane::at`'s sum, in its order: (a·x + b·y) + c.
+    let (a, by, c) = (w_plane.a, w_plane.b * y, w_plane.c);
+    let limited = far > 0.0;
+    for k in 0..n {
+        let wv = a * centres[k] + by + c;
+        let stored = wv as f32;
+        let length = lengths[k];
+        let hidden =
+            stored <= depth[k] || wv <= 0.0 || length < near * wv || (limited && length > far * wv);
+        depth[k] = if hidden { depth[k] } else { stored };
+        ids[k] = if hidden { ids[k] } else { id };
     }
 }
