@@ -296,6 +296,7 @@ fn fill(screen: &Screen, corners: [Corner; 3], buffers: &mut Buffers, per_pixel:
 /// within the camera's near…far (as the ray caster clips: distance along the pixel's ray),
 /// its depth and `id` replace what was there. Branch-free, so that it vectorises.
 #[allow(clippy::too_many_arguments)]
+#[inline(never)]
 fn span(
     depth: &mut [f32],
     ids: &mut [u32],
@@ -311,14 +312,42 @@ fn span(
     let (ids, lengths, centres) = (&mut ids[..n], &lengths[..n], &centres[..n]);
     // `Plane::at`'s sum, in its order: (a·x + b·y) + c.
     let (a, by, c) = (w_plane.a, w_plane.b * y, w_plane.c);
-    let limited = far > 0.0;
-    for k in 0..n {
-        let wv = a * centres[k] + by + c;
+    // No far limit: an infinite one hides the same pixels (those with `wv > 0`: none; the
+    // others are hidden anyway, and NaN compares false either way).
+    let far = if far > 0.0 { far } else { f64::INFINITY };
+    let test = |depth: &mut f32, ids: &mut u32, length: f64, x: f64| {
+        let wv = a * x + by + c;
         let stored = wv as f32;
-        let length = lengths[k];
-        let hidden =
-            stored <= depth[k] || wv <= 0.0 || length < near * wv || (limited && length > far * wv);
-        depth[k] = if hidden { depth[k] } else { stored };
-        ids[k] = if hidden { ids[k] } else { id };
+        let hidden = (stored <= *depth) | (wv <= 0.0) | (length < near * wv) | (length > far * wv);
+        *depth = if hidden { *depth } else { stored };
+        *ids = if hidden { *ids } else { id };
+    };
+    // Four pixels at a time (the same tests: each pixel is independent of the others).
+    const LANES: usize = 4;
+    let mut d = depth.chunks_exact_mut(LANES);
+    let mut i = ids.chunks_exact_mut(LANES);
+    let mut l = lengths.chunks_exact(LANES);
+    let mut x = centres.chunks_exact(LANES);
+    for (((d, i), l), x) in (&mut d).zip(&mut i).zip(&mut l).zip(&mut x) {
+        let wv: [f64; LANES] = std::array::from_fn(|j| a * x[j] + by + c);
+        let stored = wv.map(|v| v as f32);
+        let hidden: [bool; LANES] = std::array::from_fn(|j| {
+            (stored[j] <= d[j]) | (wv[j] <= 0.0) | (l[j] < near * wv[j]) | (l[j] > far * wv[j])
+        });
+        // Selected by masks rather than branches, so that the four go together.
+        let keep = hidden.map(|h| u32::from(h).wrapping_neg());
+        for j in 0..LANES {
+            d[j] = f32::from_bits((d[j].to_bits() & keep[j]) | (stored[j].to_bits() & !keep[j]));
+            i[j] = (i[j] & keep[j]) | (id & !keep[j]);
+        }
+    }
+    for (((d, i), &l), &x) in d
+        .into_remainder()
+        .iter_mut()
+        .zip(i.into_remainder())
+        .zip(l.remainder())
+        .zip(x.remainder())
+    {
+        test(d, i, l, x);
     }
 }
