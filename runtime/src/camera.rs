@@ -34,7 +34,8 @@ pub struct Camera {
     /// Per pixel, the length of its unnormalised direction `(1, up, right)` in the robot's
     /// frame: world distance per unit of the camera's depth (the rasteriser's near/far test).
     lengths: Vec<f64>,
-    /// The largest of `lengths`, at least 1.
+    /// The smallest of `lengths` (at most 1) and the largest (at least 1).
+    shortest: f64,
     longest: f64,
     target: Target,
 }
@@ -47,10 +48,12 @@ impl Camera {
                 .map(|(column, row)| rig.frame.linear * rig.pixel_direction(column, row))
         };
         let lengths: Vec<f64> = pixels().map(|d| d.length()).collect();
+        let (shortest, longest) = crate::render::raster::length_range(&lengths);
         Camera {
             rig: rig.clone(),
             directions: pixels().map(|d| d.normalize_or(DVec3::X)).collect(),
-            longest: crate::render::raster::longest(&lengths),
+            shortest,
+            longest,
             lengths,
             target: Target::default(),
         }
@@ -91,6 +94,7 @@ impl Camera {
             near: self.rig.near.max(0.0),
             far: self.rig.far.max(0.0),
             lengths: &self.lengths,
+            shortest: self.shortest,
             longest: self.longest,
         };
         let quantise = self.rig.noise <= 0.0;

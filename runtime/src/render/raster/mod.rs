@@ -59,13 +59,18 @@ pub struct View<'a> {
     pub far: f64,
     /// Per pixel, the world distance per unit of camera depth along its ray.
     pub lengths: &'a [f64],
-    /// The largest of `lengths` (at least 1).
+    /// The smallest and the largest of `lengths` ([`length_range`]).
+    pub shortest: f64,
     pub longest: f64,
 }
 
-/// The largest of a camera's per-pixel `lengths`, at least 1: [`View::longest`].
-pub fn longest(lengths: &[f64]) -> f64 {
-    lengths.iter().fold(1.0f64, |m, &l| m.max(l))
+/// The smallest of a camera's per-pixel `lengths` (at most 1) and the largest (at least 1):
+/// [`View::shortest`], [`View::longest`].
+pub fn length_range(lengths: &[f64]) -> (f64, f64) {
+    (
+        lengths.iter().fold(1.0f64, |m, &l| m.min(l)),
+        lengths.iter().fold(1.0f64, |m, &l| m.max(l)),
+    )
 }
 
 /// Buffers reused from frame to frame.
@@ -198,6 +203,8 @@ impl<'g> Rasterizer<'g> {
             tan_h: view.tan_h,
             tan_v: view.tan_v,
             lengths: view.lengths,
+            shortest: view.shortest,
+            longest: view.longest,
         };
         // How much the camera's frame may stretch a bounding sphere.
         let l = view.to_camera.linear;
@@ -358,7 +365,8 @@ impl<'g> Rasterizer<'g> {
     }
 
     /// Colours every pixel from what covers it once every part is drawn: the background, or
-    /// the nearest triangle's colour (flat, interpolated, or shaded at the pixel).
+    /// the nearest triangle's colour (flat, interpolated, or shaded at the pixel). Pixels are
+    /// appended in order, so the image needs no clearing.
     fn resolve(&self, frame: &Frame3, quantise: bool, target: &mut Target) {
         let view = frame.view;
         let (width, height) = (view.width, view.height);
@@ -367,19 +375,17 @@ impl<'g> Rasterizer<'g> {
         let sky = background.sky;
         let ground = background.ground;
         let row_of = view.to_world.linear.row(1);
-        let byte = |c: [f64; 3]| c.map(triangle::to_byte);
-        let (sky_bytes, ground_bytes) = (byte(sky), ground.map(byte).unwrap_or(byte(sky)));
-        let (sky_linear, ground_linear) = (
-            sky.map(|v| v as f32),
-            ground.map_or(sky.map(|v| v as f32), |g| g.map(|v| v as f32)),
-        );
-        if quantise {
+        let sky_colour = Colour::of(sky);
+        let ground_colour = Colour::of(ground.unwrap_or(sky));
+        let mut out = if quantise {
             target.bytes.clear();
-            target.bytes.resize(pixels * 3, 0);
+            target.bytes.reserve(pixels * 3);
+            Out::Bytes(&mut target.bytes)
         } else {
             target.linear.clear();
-            target.linear.resize(pixels, [0.0; 3]);
-        }
+            target.linear.reserve(pixels);
+            Out::Linear(&mut target.linear)
+        };
         let rights: Vec<f64> = (0..width)
             .map(|c| (2.0 * (c as f64 + 0.5) / width as f64 - 1.0) * view.tan_h)
             .collect();
@@ -403,6 +409,15 @@ impl<'g> Rasterizer<'g> {
                     },
                 )
             };
+        // A pixel never drawn keeps depth 0 (a drawn one is nearer than 0, or NaN): its id is
+        // left from an earlier frame and means the background.
+        let id_at = |i: usize| {
+            if target.depth[i] == 0.0 {
+                0
+            } else {
+                target.ids[i]
+            }
+        };
         for r in 0..height {
             let y = r as f64 + 0.5;
             let up = (1.0 - 2.0 * (r as f64 + 0.5) / height as f64) * view.tan_v;
@@ -411,63 +426,34 @@ impl<'g> Rasterizer<'g> {
             let below =
                 |right: f64| ground.is_some() && row_of.x + row_of.y * up + row_of.z * right < 0.0;
             let (first, last) = (below(rights[0]), below(rights[width - 1]));
-            let uniform = (first == last).then_some(first);
             let base = r * width;
-            let ids = &target.ids[base..base + width];
             let mut column = 0;
             while column < width {
-                let id = ids[column];
+                let id = id_at(base + column);
                 let mut past = column + 1;
-                while past < width && ids[past] == id {
+                while past < width && id_at(base + past) == id {
                     past += 1;
                 }
-                let (bytes, linear) = if quantise {
-                    (
-                        &mut target.bytes[3 * (base + column)..3 * (base + past)],
-                        None,
-                    )
-                } else {
-                    (
-                        &mut target.bytes[..0],
-                        Some(&mut target.linear[base + column..base + past]),
-                    )
-                };
                 match id.checked_sub(1).map(|i| target.paints[i as usize]) {
-                    None => match (uniform, linear) {
-                        (Some(below), None) => {
-                            fill_bytes(bytes, if below { ground_bytes } else { sky_bytes })
-                        }
-                        (Some(below), Some(linear)) => {
-                            linear.fill(if below { ground_linear } else { sky_linear })
-                        }
-                        (None, None) => {
-                            for (pixel, &right) in
-                                bytes.chunks_exact_mut(3).zip(&rights[column..past])
-                            {
-                                pixel.copy_from_slice(if below(right) {
-                                    &ground_bytes
+                    None if first == last => out.run(
+                        if first { &ground_colour } else { &sky_colour },
+                        past - column,
+                    ),
+                    None => {
+                        for &right in &rights[column..past] {
+                            out.run(
+                                if below(right) {
+                                    &ground_colour
                                 } else {
-                                    &sky_bytes
-                                });
-                            }
+                                    &sky_colour
+                                },
+                                1,
+                            );
                         }
-                        (None, Some(linear)) => {
-                            for (pixel, &right) in linear.iter_mut().zip(&rights[column..past]) {
-                                *pixel = if below(right) {
-                                    ground_linear
-                                } else {
-                                    sky_linear
-                                };
-                            }
-                        }
-                    },
-                    Some(Paint::Flat {
-                        bytes: b,
-                        linear: l,
-                    }) => match linear {
-                        None => fill_bytes(bytes, b),
-                        Some(linear) => linear.fill(l),
-                    },
+                    }
+                    Some(Paint::Flat { bytes, linear }) => {
+                        out.run(&Colour { bytes, linear }, past - column)
+                    }
                     Some(paint) => {
                         for (k, i) in (base + column..base + past).enumerate() {
                             let x = target.centres[column + k];
@@ -494,12 +480,7 @@ impl<'g> Rasterizer<'g> {
                                 }
                                 Paint::Flat { .. } => unreachable!("flat runs are filled whole"),
                             };
-                            if quantise {
-                                target.bytes[3 * i..3 * i + 3]
-                                    .copy_from_slice(&color.map(triangle::to_byte));
-                            } else {
-                                target.linear[i] = color.map(|v| v as f32);
-                            }
+                            out.pixel(color);
                         }
                     }
                 }
@@ -509,20 +490,55 @@ impl<'g> Rasterizer<'g> {
     }
 }
 
-/// Fills `bytes` with one RGB colour, a few pixels at a time.
-fn fill_bytes(bytes: &mut [u8], color: [u8; 3]) {
-    const PIXELS: usize = 32;
-    let mut pattern = [0u8; 3 * PIXELS];
-    for pixel in pattern.chunks_exact_mut(3) {
-        pixel.copy_from_slice(&color);
+/// A colour as the image stores it: bytes, or linear for noise to be added.
+struct Colour {
+    bytes: [u8; 3],
+    linear: [f32; 3],
+}
+
+impl Colour {
+    fn of(color: [f64; 3]) -> Colour {
+        Colour {
+            bytes: color.map(triangle::to_byte),
+            linear: color.map(|v| v as f32),
+        }
     }
-    let mut chunks = bytes.chunks_exact_mut(3 * PIXELS);
-    for chunk in &mut chunks {
-        chunk.copy_from_slice(&pattern);
+}
+
+/// The image being written, pixel after pixel.
+enum Out<'a> {
+    Bytes(&'a mut Vec<u8>),
+    Linear(&'a mut Vec<[f32; 3]>),
+}
+
+impl Out<'_> {
+    /// `n` pixels of one colour.
+    fn run(&mut self, colour: &Colour, n: usize) {
+        match self {
+            Out::Bytes(bytes) => {
+                const PIXELS: usize = 32;
+                let mut pattern = [0u8; 3 * PIXELS];
+                for pixel in pattern.chunks_exact_mut(3) {
+                    pixel.copy_from_slice(&colour.bytes);
+                }
+                let mut left = n;
+                while left >= PIXELS {
+                    bytes.extend_from_slice(&pattern);
+                    left -= PIXELS;
+                }
+                bytes.extend_from_slice(&pattern[..3 * left]);
+            }
+            Out::Linear(linear) => linear.extend(std::iter::repeat_n(colour.linear, n)),
+        }
     }
-    let rest = chunks.into_remainder();
-    let n = rest.len();
-    rest.copy_from_slice(&pattern[..n]);
+
+    /// One pixel of a linear colour.
+    fn pixel(&mut self, color: [f64; 3]) {
+        match self {
+            Out::Bytes(bytes) => bytes.extend_from_slice(&color.map(triangle::to_byte)),
+            Out::Linear(linear) => linear.push(color.map(|v| v as f32)),
+        }
+    }
 }
 
 /// What every part of a frame is drawn with.
@@ -540,7 +556,7 @@ impl Target {
     fn clear(&mut self, view: &View, pixels: usize) {
         self.depth.clear();
         self.depth.resize(pixels, 0.0);
-        self.ids.clear();
+        // Ids are read only where the depth says something was drawn this frame.
         self.ids.resize(pixels, 0);
         self.paints.clear();
         if self.centres.len() != view.width {

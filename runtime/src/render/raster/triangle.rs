@@ -55,6 +55,9 @@ pub(super) struct Screen<'a> {
     pub tan_h: f64,
     pub tan_v: f64,
     pub lengths: &'a [f64],
+    /// The smallest and the largest of `lengths`.
+    pub shortest: f64,
+    pub longest: f64,
 }
 
 /// A linear channel value to 0…255, rounded half up, clamped (NaN: 0), as the ray-cast
@@ -278,17 +281,89 @@ fn fill(screen: &Screen, corners: [Corner; 3], buffers: &mut Buffers, per_pixel:
         }
         let base = row * screen.width;
         let (first, past) = (base + start, base + end as usize + 1);
-        span(
+        let (depth, ids) = (
             &mut buffers.depth[first..past],
             &mut buffers.ids[first..past],
-            &screen.lengths[first..past],
-            &buffers.centres[start..=end as usize],
-            w_plane,
-            y,
-            screen.near,
-            screen.far,
-            id,
         );
+        let centres = &buffers.centres[start..=end as usize];
+        if clipping_needed(screen, w_plane, y, centres) {
+            span(
+                depth,
+                ids,
+                &screen.lengths[first..past],
+                centres,
+                w_plane,
+                y,
+                screen.near,
+                screen.far,
+                id,
+            );
+        } else {
+            span_unclipped(depth, ids, centres, w_plane, y, id);
+        }
+    }
+}
+
+/// Whether the near…far test can hide any pixel of a span (`centres`, on row centre `y`);
+/// when not, the span is drawn without reading the pixels' ray lengths.
+///
+/// Along the row the plane's exact value is linear, so it lies between its values at the
+/// span's ends; each pixel's computed value is within a few roundings of it (bounded by
+/// `slack`). Rounded products are monotonic, so `near·wv` and `far·wv` stay on the safe side
+/// of every pixel's length when they do at the bounds (NaN anywhere: the full test).
+fn clipping_needed(screen: &Screen, w_plane: Plane, y: f64, centres: &[f64]) -> bool {
+    let (Some(&first), Some(&last)) = (centres.first(), centres.last()) else {
+        return false;
+    };
+    let (a, by, c) = (w_plane.a, w_plane.b * y, w_plane.c);
+    let (w0, w1) = (a * first + by + c, a * last + by + c);
+    let slack = 8.0 * f64::EPSILON * (a.abs() * first.abs().max(last.abs()) + by.abs() + c.abs());
+    let (low, high) = (w0.min(w1) - slack, w0.max(w1) + slack);
+    let near_safe = screen.near * high < screen.shortest;
+    let far_safe = !(screen.far > 0.0) || screen.far * low >= screen.longest;
+    !(near_safe && far_safe)
+}
+
+/// [`span`] where no pixel is nearer than `near` or farther than `far`: the same depth test
+/// without them.
+#[inline(never)]
+fn span_unclipped(
+    depth: &mut [f32],
+    ids: &mut [u32],
+    centres: &[f64],
+    w_plane: Plane,
+    y: f64,
+    id: u32,
+) {
+    let n = depth.len();
+    let (ids, centres) = (&mut ids[..n], &centres[..n]);
+    let (a, by, c) = (w_plane.a, w_plane.b * y, w_plane.c);
+    const LANES: usize = 4;
+    let mut d = depth.chunks_exact_mut(LANES);
+    let mut i = ids.chunks_exact_mut(LANES);
+    let mut x = centres.chunks_exact(LANES);
+    for ((d, i), x) in (&mut d).zip(&mut i).zip(&mut x) {
+        let wv: [f64; LANES] = std::array::from_fn(|j| a * x[j] + by + c);
+        let stored = wv.map(|v| v as f32);
+        let hidden: [bool; LANES] = std::array::from_fn(|j| (stored[j] <= d[j]) | (wv[j] <= 0.0));
+        let keep = hidden.map(|h| u32::from(h).wrapping_neg());
+        for j in 0..LANES {
+            d[j] = f32::from_bits((d[j].to_bits() & keep[j]) | (stored[j].to_bits() & !keep[j]));
+            i[j] = (i[j] & keep[j]) | (id & !keep[j]);
+        }
+    }
+    for ((d, i), &x) in d
+        .into_remainder()
+        .iter_mut()
+        .zip(i.into_remainder())
+        .zip(x.remainder())
+    {
+        let wv = a * x + by + c;
+        let stored = wv as f32;
+        if !((stored <= *d) | (wv <= 0.0)) {
+            *d = stored;
+            *i = id;
+        }
     }
 }
 
