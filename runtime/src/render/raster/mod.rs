@@ -409,15 +409,6 @@ impl<'g> Rasterizer<'g> {
                     },
                 )
             };
-        // A pixel never drawn keeps depth 0 (a drawn one is nearer than 0, or NaN): its id is
-        // left from an earlier frame and means the background.
-        let id_at = |i: usize| {
-            if target.depth[i] == 0.0 {
-                0
-            } else {
-                target.ids[i]
-            }
-        };
         for r in 0..height {
             let y = r as f64 + 0.5;
             let up = (1.0 - 2.0 * (r as f64 + 0.5) / height as f64) * view.tan_v;
@@ -427,13 +418,14 @@ impl<'g> Rasterizer<'g> {
                 |right: f64| ground.is_some() && row_of.x + row_of.y * up + row_of.z * right < 0.0;
             let (first, last) = (below(rights[0]), below(rights[width - 1]));
             let base = r * width;
+            let (depths, ids) = (
+                &target.depth[base..base + width],
+                &target.ids[base..base + width],
+            );
             let mut column = 0;
             while column < width {
-                let id = id_at(base + column);
-                let mut past = column + 1;
-                while past < width && id_at(base + past) == id {
-                    past += 1;
-                }
+                let id = id_at(depths[column], ids[column]);
+                let past = column + 1 + run_length(&depths[column + 1..], &ids[column + 1..], id);
                 match id.checked_sub(1).map(|i| target.paints[i as usize]) {
                     None if first == last => out.run(
                         if first { &ground_colour } else { &sky_colour },
@@ -488,6 +480,39 @@ impl<'g> Rasterizer<'g> {
             }
         }
     }
+}
+
+/// What covers a pixel: its id, or 0 (the background) where its depth says nothing was drawn
+/// this frame (a drawn pixel is nearer than depth 0, or NaN); the ids of pixels not drawn are
+/// left from an earlier frame.
+fn id_at(depth: f32, id: u32) -> u32 {
+    if depth == 0.0 {
+        0
+    } else {
+        id
+    }
+}
+
+/// How many pixels from the start of a row's rest `id` covers.
+fn run_length(depths: &[f32], ids: &[u32], id: u32) -> usize {
+    const LANES: usize = 8;
+    let mut n = 0;
+    for (d, i) in depths.chunks_exact(LANES).zip(ids.chunks_exact(LANES)) {
+        // All eight at once (a vector compare), then one by one where one differs.
+        let same = d
+            .iter()
+            .zip(i)
+            .fold(true, |all, (&d, &i)| all & (id_at(d, i) == id));
+        if !same {
+            break;
+        }
+        n += LANES;
+    }
+    n + depths[n..]
+        .iter()
+        .zip(&ids[n..])
+        .take_while(|&(&d, &i)| id_at(d, i) == id)
+        .count()
 }
 
 /// A colour as the image stores it: bytes, or linear for noise to be added.
