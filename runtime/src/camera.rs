@@ -42,16 +42,15 @@ pub struct Camera {
 
 impl Camera {
     pub fn new(rig: &CameraRig) -> Camera {
-        let pixels = || {
-            (0..rig.height)
-                .flat_map(|row| (0..rig.width).map(move |column| (column, row)))
-                .map(|(column, row)| rig.frame.linear * rig.pixel_direction(column, row))
-        };
-        let lengths: Vec<f64> = pixels().map(|d| d.length()).collect();
+        let pixels: Vec<DVec3> = rig
+            .pixel_directions()
+            .map(|d| rig.frame.linear * d)
+            .collect();
+        let lengths: Vec<f64> = pixels.iter().map(|d| d.length()).collect();
         let (shortest, longest) = crate::render::raster::length_range(&lengths);
         Camera {
             rig: rig.clone(),
-            directions: pixels().map(|d| d.normalize_or(DVec3::X)).collect(),
+            directions: pixels.iter().map(|d| d.normalize_or(DVec3::X)).collect(),
             shortest,
             longest,
             lengths,

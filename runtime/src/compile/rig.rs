@@ -238,8 +238,22 @@ impl CameraRig {
     /// column 0 at the left), not normalised.
     pub fn pixel_direction(&self, column: usize, row: usize) -> DVec3 {
         let tan_h = libm::tan(self.field_of_view / 2.0);
+        self.direction_with(column, row, tan_h, self.tan_half_vertical())
+    }
+
+    /// [`CameraRig::pixel_direction`] of every pixel, row by row, the top row first (the
+    /// tangents computed once).
+    pub fn pixel_directions(&self) -> impl Iterator<Item = DVec3> + '_ {
+        let tan_h = libm::tan(self.field_of_view / 2.0);
+        let tan_v = self.tan_half_vertical();
+        (0..self.height).flat_map(move |row| {
+            (0..self.width).map(move |column| self.direction_with(column, row, tan_h, tan_v))
+        })
+    }
+
+    fn direction_with(&self, column: usize, row: usize, tan_h: f64, tan_v: f64) -> DVec3 {
         let right = (2.0 * (column as f64 + 0.5) / self.width as f64 - 1.0) * tan_h;
-        let up = (1.0 - 2.0 * (row as f64 + 0.5) / self.height as f64) * self.tan_half_vertical();
+        let up = (1.0 - 2.0 * (row as f64 + 0.5) / self.height as f64) * tan_v;
         DVec3::new(1.0, up, right)
     }
 
