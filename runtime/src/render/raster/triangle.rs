@@ -286,7 +286,12 @@ fn fill(screen: &Screen, corners: [Corner; 3], buffers: &mut Buffers, per_pixel:
             &mut buffers.ids[first..past],
         );
         let centres = &buffers.centres[start..=end as usize];
-        if clipping_needed(screen, w_plane, y, centres) {
+        let (low, high) = span_bounds(w_plane, y, centres);
+        // Rounded products are monotonic, so `near·wv` and `far·wv` stay on the safe side of
+        // every pixel's length when they do at the bounds (NaN anywhere: the full test).
+        let near_safe = screen.near * high < screen.shortest;
+        let far_safe = !(screen.far > 0.0) || screen.far * low >= screen.longest;
+        if !(near_safe && far_safe) {
             span(
                 depth,
                 ids,
@@ -298,36 +303,35 @@ fn fill(screen: &Screen, corners: [Corner; 3], buffers: &mut Buffers, per_pixel:
                 screen.far,
                 id,
             );
+        } else if low > 0.0 {
+            span_unclipped::<true>(depth, ids, centres, w_plane, y, id);
         } else {
-            span_unclipped(depth, ids, centres, w_plane, y, id);
+            span_unclipped::<false>(depth, ids, centres, w_plane, y, id);
         }
     }
 }
 
-/// Whether the near…far test can hide any pixel of a span (`centres`, on row centre `y`);
-/// when not, the span is drawn without reading the pixels' ray lengths.
+/// Bounds of the plane's computed values over a span (`centres`, on row centre `y`): where
+/// they show that no pixel can be clipped by near…far, the span is drawn without reading the
+/// pixels' ray lengths, and where they are positive, without testing for it.
 ///
 /// Along the row the plane's exact value is linear, so it lies between its values at the
-/// span's ends; each pixel's computed value is within a few roundings of it (bounded by
-/// `slack`). Rounded products are monotonic, so `near·wv` and `far·wv` stay on the safe side
-/// of every pixel's length when they do at the bounds (NaN anywhere: the full test).
-fn clipping_needed(screen: &Screen, w_plane: Plane, y: f64, centres: &[f64]) -> bool {
+/// span's ends; each pixel's computed value is within a few roundings of it, and `slack`
+/// bounds those (with room for the ends' own).
+fn span_bounds(w_plane: Plane, y: f64, centres: &[f64]) -> (f64, f64) {
     let (Some(&first), Some(&last)) = (centres.first(), centres.last()) else {
-        return false;
+        return (f64::NAN, f64::NAN);
     };
     let (a, by, c) = (w_plane.a, w_plane.b * y, w_plane.c);
     let (w0, w1) = (a * first + by + c, a * last + by + c);
     let slack = 8.0 * f64::EPSILON * (a.abs() * first.abs().max(last.abs()) + by.abs() + c.abs());
-    let (low, high) = (w0.min(w1) - slack, w0.max(w1) + slack);
-    let near_safe = screen.near * high < screen.shortest;
-    let far_safe = !(screen.far > 0.0) || screen.far * low >= screen.longest;
-    !(near_safe && far_safe)
+    (w0.min(w1) - slack, w0.max(w1) + slack)
 }
 
 /// [`span`] where no pixel is nearer than `near` or farther than `far`: the same depth test
-/// without them.
+/// without them (and, when `POSITIVE`, every pixel's value is known to be positive).
 #[inline(never)]
-fn span_unclipped(
+fn span_unclipped<const POSITIVE: bool>(
     depth: &mut [f32],
     ids: &mut [u32],
     centres: &[f64],
@@ -345,7 +349,8 @@ fn span_unclipped(
     for ((d, i), x) in (&mut d).zip(&mut i).zip(&mut x) {
         let wv: [f64; LANES] = std::array::from_fn(|j| a * x[j] + by + c);
         let stored = wv.map(|v| v as f32);
-        let hidden: [bool; LANES] = std::array::from_fn(|j| (stored[j] <= d[j]) | (wv[j] <= 0.0));
+        let hidden: [bool; LANES] =
+            std::array::from_fn(|j| (stored[j] <= d[j]) | (!POSITIVE & (wv[j] <= 0.0)));
         let keep = hidden.map(|h| u32::from(h).wrapping_neg());
         for j in 0..LANES {
             d[j] = f32::from_bits((d[j].to_bits() & keep[j]) | (stored[j].to_bits() & !keep[j]));
@@ -360,7 +365,7 @@ fn span_unclipped(
     {
         let wv = a * x + by + c;
         let stored = wv as f32;
-        if !((stored <= *d) | (wv <= 0.0)) {
+        if !((stored <= *d) | (!POSITIVE & (wv <= 0.0))) {
             *d = stored;
             *i = id;
         }
