@@ -7,7 +7,10 @@
 //! Shadows (lights with `castShadows`) are the ray caster's shadow rays, cast at each vertex,
 //! and at each pixel of a triangle whose corners disagree (a shadow's edge crosses it).
 //! Lighting between vertices is interpolated, not evaluated (exact for flat faces under
-//! directional lights). `docs/camera-raster.md` gives the measured agreement.
+//! directional lights). Colouring is deferred: triangles write depth and a coverage id, and
+//! each pixel is coloured once when every part is drawn (the colour it would have had from
+//! the triangle that won it), so hidden pixels are never shaded. `docs/camera-raster.md`
+//! gives the measured agreement and speed.
 
 pub mod tessellate;
 mod triangle;

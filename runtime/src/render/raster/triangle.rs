@@ -1,6 +1,7 @@
 //! One triangle into the buffers: clipped at the near plane, projected, filled span by span
 //! with a consistent tie rule (a pixel centre on an edge shared by two triangles is drawn
-//! once), its depth and colour interpolated perspective-correctly.
+//! once), its depth interpolated perspective-correctly and written with the triangle's
+//! coverage id; its [`Paint`] colours the pixels it keeps once the frame is drawn.
 
 use glam::{DVec2, DVec3};
 
@@ -290,7 +291,9 @@ fn fill(screen: &Screen, corners: [Corner; 3], buffers: &mut Buffers, per_pixel:
         // Rounded products are monotonic, so `near·wv` and `far·wv` stay on the safe side of
         // every pixel's length when they do at the bounds (NaN anywhere: the full test).
         let near_safe = screen.near * high < screen.shortest;
-        let far_safe = !(screen.far > 0.0) || screen.far * low >= screen.longest;
+        // (`far` not positive, NaN included: no far limit, as `span` reads it.)
+        let unlimited = screen.far.is_nan() || screen.far <= 0.0;
+        let far_safe = unlimited || screen.far * low >= screen.longest;
         if !(near_safe && far_safe) {
             span(
                 depth,
