@@ -73,14 +73,7 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
     } else {
         crate::vary::load_varied(&args.world, &args.options, args.seed, variations, color)?
     };
-    crate::webots::refuse_unbuilt_robots(&loaded)?;
-    crate::webots::resolve_controllers(
-        &mut loaded.compiled,
-        &args.controllers,
-        args.options.lenient,
-        None,
-    )?;
-    loaded.release_scene();
+    crate::webots::prepare_run(&mut loaded, &args.controllers, args.options.lenient)?;
     let compiled = &loaded.compiled;
     let name = crate::world::world_name(&args.world);
     let mut simulation =
@@ -90,11 +83,13 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
     if let Some(backend) = backend {
         simulation.set_vision_backend(backend);
     }
-    let steps = match (args.steps, args.duration) {
-        (Some(steps), _) => steps,
-        (None, Some(duration)) => crate::world::steps_for(duration, simulation.time_step)?,
-        (None, None) => crate::world::steps_for(60.0, simulation.time_step)?,
-    };
+    // Without --steps or --duration a run lasts a simulated minute.
+    let steps = crate::world::step_limit(
+        args.steps,
+        Some(args.duration.unwrap_or(60.0)),
+        simulation.time_step,
+    )?
+    .unwrap_or(0);
     let mut recorder = args
         .log
         .as_deref()

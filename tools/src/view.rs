@@ -129,14 +129,7 @@ impl Pace {
 
 fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
     let mut loaded = crate::world::load(&args.world, &args.options, color)?;
-    crate::webots::refuse_unbuilt_robots(&loaded)?;
-    crate::webots::resolve_controllers(
-        &mut loaded.compiled,
-        &args.controllers,
-        args.options.lenient,
-        None,
-    )?;
-    loaded.release_scene();
+    crate::webots::prepare_run(&mut loaded, &args.controllers, args.options.lenient)?;
     let compiled = &loaded.compiled;
     let name = crate::world::world_name(&args.world);
     let renderer = crate::vision::RendererKind::default();

@@ -31,6 +31,20 @@ pub fn refuse_unbuilt_robots(loaded: &Loaded) -> anyhow::Result<()> {
     }
 }
 
+/// Readies a loaded world for a run that drives every robot itself (`run`, `view`): refuses
+/// unbuilt robots, resolves every controller, and frees the typed scene, which a run never
+/// reads again.
+pub fn prepare_run(
+    loaded: &mut Loaded,
+    overrides: &ControllerOverride,
+    lenient: bool,
+) -> anyhow::Result<()> {
+    refuse_unbuilt_robots(loaded)?;
+    resolve_controllers(&mut loaded.compiled, overrides, lenient, None)?;
+    loaded.release_scene();
+    Ok(())
+}
+
 /// Applies `--controller` overrides and resolves every robot's controller name to a built-in
 /// one (robot `served`, driven over the protocol, needs none). Prints a note for each name
 /// it maps; an unknown or external controller is an error, or in lenient mode a warning and

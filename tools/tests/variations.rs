@@ -3,20 +3,13 @@
 //! refusals that name the flag or the file's line, and a transfer table equal to `batch`.
 
 use std::path::Path;
-use std::process::Output;
 
 mod common;
 
-use common::{regatta, root};
+use common::{ok, regatta, root};
 
 fn world(name: &str) -> String {
     root().join("worlds").join(name).display().to_string()
-}
-
-fn ok(output: &Output) -> String {
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(0), "{stderr}");
-    String::from_utf8(output.stdout.clone()).unwrap()
 }
 
 /// The log at `log` replays to the same bytes, and `log info` shows the `varied` line.

@@ -11,7 +11,7 @@ use std::net::TcpStream;
 use std::process::{Child, ChildStdout, Stdio};
 use std::time::{Duration, Instant};
 
-use common::{regatta, root, temp_dir};
+use common::{ok, regatta, root, temp_dir};
 
 /// Starts `regatta view ARGS`; returns the child, its URL's address (host:port) and the rest
 /// of its standard output.
@@ -100,11 +100,7 @@ fn clients_that_vanish_read_slowly_or_crowd_change_no_byte_of_the_log() {
         .arg(&plain)
         .output()
         .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    ok(&run);
 
     let (child, address, _out) = view(&[
         world,
@@ -183,11 +179,7 @@ fn a_log_replays_with_every_sample_at_once() {
         .arg(&log)
         .output()
         .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    ok(&run);
     let (child, address, _out) = view(&[log.to_str().unwrap()]);
     let _running = Running(child);
     let state = request(&address, "GET", "/state.json");

@@ -102,6 +102,11 @@ impl StallEscape {
         Some((self.direction * turn, -self.direction * turn))
     }
 
+    /// The commands to send: `command`, or the escape's turn while the robot must turn away.
+    pub fn command(&mut self, proximity: &[u16; 8], command: (i32, i32), bias: f64) -> (i32, i32) {
+        self.check(proximity, command, bias).unwrap_or(command)
+    }
+
     /// Folds a call's commands, as their sum and difference, into the running means.
     fn average(&mut self, sum: i32, difference: i32) {
         self.forward_mean += self.smoothing * (sum as f64 / 2.0 - self.forward_mean);

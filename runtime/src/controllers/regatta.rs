@@ -324,8 +324,7 @@ impl Controller for Regatta {
         let command = (to_command(left), to_command(right));
         let (left, right) = self
             .escape
-            .check(&proximity, command, self.parameters.bias)
-            .unwrap_or(command);
+            .command(&proximity, command, self.parameters.bias);
         robot.set_speed(left, right)
     }
 

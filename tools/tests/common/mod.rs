@@ -3,11 +3,18 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, Output};
 
 /// The `regatta` binary of this build.
 pub fn regatta() -> Command {
     Command::new(env!("CARGO_BIN_EXE_regatta"))
+}
+
+/// The standard output of a command that must have succeeded (else its standard error).
+pub fn ok(output: &Output) -> String {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    String::from_utf8(output.stdout.clone()).unwrap()
 }
 
 /// The repository root.

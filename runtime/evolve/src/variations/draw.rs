@@ -158,16 +158,20 @@ impl Plan {
                     })
                     .collect(),
                 // The fewest nodes kept is the likeliest to break a USE of one taken out.
-                How::Count(counts) => counts
-                    .iter()
-                    .min()
-                    .into_iter()
-                    .chain(counts.iter().max())
-                    .map(|&count| Variation {
-                        how: How::Count(vec![count]),
-                        ..v.clone()
-                    })
-                    .collect(),
+                How::Count(counts) => {
+                    let mut extremes: Vec<usize> = (counts.iter().min().into_iter())
+                        .chain(counts.iter().max())
+                        .copied()
+                        .collect();
+                    extremes.dedup();
+                    extremes
+                        .into_iter()
+                        .map(|count| Variation {
+                            how: How::Count(vec![count]),
+                            ..v.clone()
+                        })
+                        .collect()
+                }
                 _ => vec![v.clone()],
             };
             for one in alone {
