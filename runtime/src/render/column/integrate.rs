@@ -6,13 +6,14 @@
 use glam::{DVec2, DVec3};
 
 use super::super::shade;
+use super::impostor::IMPOSTOR_PIXELS;
 use super::photodiode::{
     band_atan, nearest_index, Band, Face, Free, LitSegments, LitSink, Raster, Scratch, Segment,
     SegmentSink, Segments,
 };
 use super::scene::{ColumnFrame, ColumnScene};
 use super::strip::Strip;
-use super::sweep::{self, Look, Reach, Sector, Sweep};
+use super::sweep::{self, EyeObject, Look, Reach, Sector, Sweep};
 use crate::compile::graph::LightKind;
 use crate::render::Detail;
 use crate::retina::luminance;
@@ -152,9 +153,16 @@ impl ColumnScene<'_> {
                     .and_then(|(lo, hi)| Sector::new(heading, lo, hi))
             })
             .flatten();
+        // Far small static objects become impostors, drawn as boxes over contiguous windows.
+        let impostors = detail.crowd_distance.is_finite() && strip.contiguous;
         let reach = Reach {
             sector,
             crowd_distance: detail.crowd_distance,
+            impostor_width: if impostors {
+                IMPOSTOR_PIXELS * strip.width
+            } else {
+                0.0
+            },
         };
         self.look_into(frame, viewer, eye, heading, reach, look);
         let look = &*look;
@@ -173,6 +181,18 @@ impl ColumnScene<'_> {
                 sky,
                 ground,
                 buffers,
+                scratch,
+                &mut out[..pixels],
+            );
+            self.draw_impostors(
+                look,
+                sweep,
+                frame,
+                strip,
+                band,
+                sky,
+                ground,
+                &mut buffers.facing,
                 scratch,
                 &mut out[..pixels],
             );
@@ -221,6 +241,81 @@ impl ColumnScene<'_> {
                 p0 = p1;
             }
             out[pixel] = sum / strip.width;
+        }
+        self.draw_impostors(
+            look,
+            sweep,
+            frame,
+            strip,
+            band,
+            sky,
+            ground,
+            facing,
+            scratch,
+            &mut out[..pixels],
+        );
+    }
+
+    /// Adds each visible impostor as a box over its interval: its effect on the column through
+    /// its centre (composited with its pieces and without), times its visible share. The
+    /// strip's windows are contiguous (impostors are made only then).
+    #[allow(clippy::too_many_arguments)]
+    fn draw_impostors(
+        &self,
+        look: &Look,
+        sweep: &mut Sweep,
+        frame: &ColumnFrame,
+        strip: &Strip,
+        band: f64,
+        sky: f64,
+        ground: f64,
+        facing: &mut Vec<u32>,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) {
+        let pixels = out.len();
+        if look.impostor_order.is_empty() || pixels == 0 {
+            return;
+        }
+        let width = strip.width;
+        let extent_hi = strip.centers[0] + width / 2.0;
+        let extent_lo = strip.centers[pixels - 1] - width / 2.0;
+        let inverse_width = 1.0 / width;
+        let mut raster = Raster {
+            origin: extent_hi,
+            inverse_width,
+            width,
+            out,
+        };
+        for &index in &look.impostor_order {
+            let impostor = &look.impostors[index as usize];
+            if impostor.hi <= extent_lo || impostor.lo >= extent_hi {
+                continue;
+            }
+            let alpha = (0.5 * (impostor.lo + impostor.hi)).clamp(extent_lo, extent_hi);
+            let pixel = nearest_index((strip.centers[0] - alpha) * inverse_width, pixels - 1);
+            let direction = look.turn(strip, pixel, alpha);
+            sweep.facing_over(look, impostor.lo, impostor.hi, facing);
+            let first = impostor.first_piece as usize;
+            let pieces = &look.impostor_pieces[first..first + impostor.pieces as usize];
+            // Ids past the look's objects: ties in depth go after them, in piece order.
+            let id = (look.objects.len() + first) as u32;
+            let (without, with) = self.column_with(
+                frame,
+                look,
+                direction,
+                facing,
+                (pieces, id),
+                strip.tan_half_band,
+                band,
+                sky,
+                ground,
+                scratch,
+            );
+            let effect = (with - without) * impostor.visible;
+            if effect != 0.0 {
+                raster.add(impostor.lo, impostor.hi, effect, 0.0);
+            }
         }
     }
 
@@ -370,120 +465,35 @@ impl ColumnScene<'_> {
     ) {
         let inverse = DVec2::ONE / direction;
         for &index in facing {
-            let object = &look.objects[index as usize];
-            let Some((t_in, t_out, normal)) = object.relative.cross(direction, inverse) else {
-                continue;
-            };
-            let id = index;
-            let (y0, y1) = (object.y0, object.y1);
-            if t_in > 0.0 {
-                let inv_in = 1.0 / t_in;
-                if object.side {
-                    segments.insert(Segment {
-                        depth: t_in,
-                        t0: y0 * inv_in,
-                        t1: y1 * inv_in,
-                        object: id,
-                        primitive: object.primitive,
-                        face: Face::Side(normal),
-                    });
-                }
-                if object.top && y1 < 0.0 {
-                    segments.insert(Segment {
-                        depth: t_out,
-                        t0: y1 * inv_in,
-                        t1: y1 / t_out,
-                        object: id,
-                        primitive: object.primitive,
-                        face: Face::Cap {
-                            y: y1 + look.eye.y,
-                            up: true,
-                        },
-                    });
-                }
-                if object.bottom && y0 > 0.0 {
-                    segments.insert(Segment {
-                        depth: t_out,
-                        t0: y0 / t_out,
-                        t1: y0 * inv_in,
-                        object: id,
-                        primitive: object.primitive,
-                        face: Face::Cap {
-                            y: y0 + look.eye.y,
-                            up: false,
-                        },
-                    });
-                }
-            } else if y1 < 0.0 {
-                // Standing over it (a floor): its top fills everything below its far edge.
-                if object.top {
-                    segments.insert(Segment {
-                        depth: t_out,
-                        t0: f64::NEG_INFINITY,
-                        t1: y1 / t_out,
-                        object: id,
-                        primitive: object.primitive,
-                        face: Face::Cap {
-                            y: y1 + look.eye.y,
-                            up: true,
-                        },
-                    });
-                }
-            } else if y0 > 0.0 {
-                if object.bottom {
-                    segments.insert(Segment {
-                        depth: t_out,
-                        t0: y0 / t_out,
-                        t1: f64::INFINITY,
-                        object: id,
-                        primitive: object.primitive,
-                        face: Face::Cap {
-                            y: y0 + look.eye.y,
-                            up: false,
-                        },
-                    });
-                }
-            } else {
-                // Inside it (a round arena, a room): its inner faces, as the ray caster sees
-                // them, at the exit distance.
-                let inward = -object.relative.exit_normal(direction, t_out);
-                if object.side {
-                    segments.insert(Segment {
-                        depth: t_out,
-                        t0: y0 / t_out,
-                        t1: y1 / t_out,
-                        object: id,
-                        primitive: object.primitive,
-                        face: Face::Side(inward),
-                    });
-                }
-                if object.top {
-                    segments.insert(Segment {
-                        depth: t_out,
-                        t0: y1 / t_out,
-                        t1: f64::INFINITY,
-                        object: id,
-                        primitive: object.primitive,
-                        face: Face::Cap {
-                            y: y1 + look.eye.y,
-                            up: false,
-                        },
-                    });
-                }
-                if object.bottom {
-                    segments.insert(Segment {
-                        depth: t_out,
-                        t0: f64::NEG_INFINITY,
-                        t1: y0 / t_out,
-                        object: id,
-                        primitive: object.primitive,
-                        face: Face::Cap {
-                            y: y0 + look.eye.y,
-                            up: true,
-                        },
-                    });
-                }
-            }
+            collect_object(
+                &look.objects[index as usize],
+                index,
+                look.eye.y,
+                direction,
+                inverse,
+                segments,
+            );
+        }
+    }
+
+    /// The column's segments of `pieces` (an impostor's), ids from `first_id` up.
+    fn collect_pieces(
+        &self,
+        look: &Look,
+        direction: DVec2,
+        (pieces, first_id): (&[EyeObject], u32),
+        segments: &mut impl SegmentSink,
+    ) {
+        let inverse = DVec2::ONE / direction;
+        for (k, object) in pieces.iter().enumerate() {
+            collect_object(
+                object,
+                first_id + k as u32,
+                look.eye.y,
+                direction,
+                inverse,
+                segments,
+            );
         }
     }
 
@@ -532,6 +542,58 @@ impl ColumnScene<'_> {
         band.composite(segments.iter(), free, |segment, middle, covered| {
             self.segment_luminance(frame, segment, look.eye, direction, middle, covered)
         })
+    }
+
+    /// [`ColumnScene::column`] without and with `extra` (an impostor's pieces and their first
+    /// id) among the segments.
+    #[allow(clippy::too_many_arguments)]
+    fn column_with(
+        &self,
+        frame: &ColumnFrame,
+        look: &Look,
+        direction: DVec2,
+        facing: &[u32],
+        extra: (&[EyeObject], u32),
+        tan_half: f64,
+        band: f64,
+        sky: f64,
+        ground: f64,
+        scratch: &mut Scratch,
+    ) -> (f64, f64) {
+        let Scratch {
+            segments,
+            lit,
+            free,
+        } = scratch;
+        let band = Band {
+            tan_half,
+            band,
+            sky,
+            ground,
+        };
+        if frame.all_fast {
+            lit.len = 0;
+            let mut sink = LitSink {
+                lit,
+                shades: &frame.shades,
+            };
+            self.collect_segments(look, direction, facing, &mut sink);
+            let without = band.composite(sink.lit.as_slice(), free, |s, _, _| s.luminance);
+            self.collect_pieces(look, direction, extra, &mut sink);
+            let with = band.composite(sink.lit.as_slice(), free, |s, _, _| s.luminance);
+            return (without, with);
+        }
+        segments.len = 0;
+        self.collect_segments(look, direction, facing, segments);
+        let mut composite = |segments: &Segments| {
+            band.composite(segments.iter(), free, |segment, middle, covered| {
+                self.segment_luminance(frame, segment, look.eye, direction, middle, covered)
+            })
+        };
+        let without = composite(segments);
+        self.collect_pieces(look, direction, extra, segments);
+        let with = composite(segments);
+        (without, with)
     }
 
     /// Luminance of a segment's face at tan-elevation `middle / covered` (the fast path skips
@@ -600,6 +662,131 @@ impl ColumnScene<'_> {
             &self.graph.materials[self.graph.primitives[segment.primitive as usize].material];
         let mut none = |_: DVec3, _: &LightKind| false;
         shade(material, None, point, normal, eye, &frame.lights, &mut none)
+    }
+}
+
+/// One object's segments in the column along `direction` (`inverse`: its components'
+/// reciprocals), under id `id`.
+#[inline(always)]
+fn collect_object(
+    object: &EyeObject,
+    id: u32,
+    eye_y: f64,
+    direction: DVec2,
+    inverse: DVec2,
+    segments: &mut impl SegmentSink,
+) {
+    let Some((t_in, t_out, normal)) = object.relative.cross(direction, inverse) else {
+        return;
+    };
+    let (y0, y1) = (object.y0, object.y1);
+    if t_in > 0.0 {
+        let inv_in = 1.0 / t_in;
+        if object.side {
+            segments.insert(Segment {
+                depth: t_in,
+                t0: y0 * inv_in,
+                t1: y1 * inv_in,
+                object: id,
+                primitive: object.primitive,
+                face: Face::Side(normal),
+            });
+        }
+        if object.top && y1 < 0.0 {
+            segments.insert(Segment {
+                depth: t_out,
+                t0: y1 * inv_in,
+                t1: y1 / t_out,
+                object: id,
+                primitive: object.primitive,
+                face: Face::Cap {
+                    y: y1 + eye_y,
+                    up: true,
+                },
+            });
+        }
+        if object.bottom && y0 > 0.0 {
+            segments.insert(Segment {
+                depth: t_out,
+                t0: y0 / t_out,
+                t1: y0 * inv_in,
+                object: id,
+                primitive: object.primitive,
+                face: Face::Cap {
+                    y: y0 + eye_y,
+                    up: false,
+                },
+            });
+        }
+    } else if y1 < 0.0 {
+        // Standing over it (a floor): its top fills everything below its far edge.
+        if object.top {
+            segments.insert(Segment {
+                depth: t_out,
+                t0: f64::NEG_INFINITY,
+                t1: y1 / t_out,
+                object: id,
+                primitive: object.primitive,
+                face: Face::Cap {
+                    y: y1 + eye_y,
+                    up: true,
+                },
+            });
+        }
+    } else if y0 > 0.0 {
+        if object.bottom {
+            segments.insert(Segment {
+                depth: t_out,
+                t0: y0 / t_out,
+                t1: f64::INFINITY,
+                object: id,
+                primitive: object.primitive,
+                face: Face::Cap {
+                    y: y0 + eye_y,
+                    up: false,
+                },
+            });
+        }
+    } else {
+        // Inside it (a round arena, a room): its inner faces, as the ray caster sees
+        // them, at the exit distance.
+        let inward = -object.relative.exit_normal(direction, t_out);
+        if object.side {
+            segments.insert(Segment {
+                depth: t_out,
+                t0: y0 / t_out,
+                t1: y1 / t_out,
+                object: id,
+                primitive: object.primitive,
+                face: Face::Side(inward),
+            });
+        }
+        if object.top {
+            segments.insert(Segment {
+                depth: t_out,
+                t0: y1 / t_out,
+                t1: f64::INFINITY,
+                object: id,
+                primitive: object.primitive,
+                face: Face::Cap {
+                    y: y1 + eye_y,
+                    up: false,
+                },
+            });
+        }
+        if object.bottom {
+            segments.insert(Segment {
+                depth: t_out,
+                t0: f64::NEG_INFINITY,
+                t1: y0 / t_out,
+                object: id,
+                primitive: object.primitive,
+                face: Face::Cap {
+                    y: y0 + eye_y,
+                    up: true,
+                },
+            });
+        }
     }
 }
 

@@ -21,6 +21,7 @@
 
 mod crowd;
 mod footprint;
+mod impostor;
 mod integrate;
 mod photodiode;
 mod scene;

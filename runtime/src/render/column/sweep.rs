@@ -8,6 +8,7 @@ use glam::{DVec2, DVec3};
 use super::crowd::CrowdGrid;
 use super::footprint::Relative;
 use super::footprint::{azimuth_interval, corner_of, wrap, Interval, PendingEdge, Upright};
+use super::impostor::{self, Impostor, Occlusion, Standing};
 use super::photodiode::rotate_small;
 use super::scene::{ColumnFrame, ColumnScene};
 use super::strip::Strip;
@@ -71,6 +72,16 @@ pub struct Look {
     pub(super) edges: Vec<PendingEdge>,
     /// The robots within the crowd distance.
     near: Vec<u32>,
+    /// Small static objects beyond the crowd distance, drawn as impostors (crowd level of
+    /// detail only), and their pieces (not among `objects`: no region faces them).
+    pub(super) impostors: Vec<Impostor>,
+    pub(super) impostor_pieces: Vec<EyeObject>,
+    /// The objects drawn exactly that may hide impostors, and the bins that say where.
+    standing: Vec<Standing>,
+    occlusion: Occlusion,
+    /// Scratch for ordering impostors.
+    impostor_keys: Vec<u64>,
+    pub(super) impostor_order: Vec<u32>,
 }
 
 impl Look {
@@ -122,6 +133,88 @@ impl Look {
         );
         DVec2::new(cw, -sw)
     }
+}
+
+/// What became of an object placed in a look (and so of the pieces sharing its footprint).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Fate {
+    Placed,
+    LeftOut,
+    Impostor,
+}
+
+/// An object as seen from `eye`, its interval `[lo, hi]` (wrapped).
+fn eye_object(object: &Upright, eye: DVec3, lo: f64, hi: f64) -> EyeObject {
+    let eye2 = DVec2::new(eye.x, eye.z);
+    let relative = match object.footprint {
+        Footprint::Circle { center, radius } => {
+            let oc = eye2 - center;
+            Relative::Circle {
+                oc,
+                c: oc.length_squared() - radius * radius,
+                radius,
+            }
+        }
+        Footprint::Rect {
+            center,
+            u,
+            v,
+            half_u,
+            half_v,
+        } => {
+            let oc = eye2 - center;
+            Relative::Rect {
+                pu: oc.dot(u),
+                pv: oc.dot(v),
+                u,
+                v,
+                half_u,
+                half_v,
+                axis_aligned: u == DVec2::X && v == DVec2::Y,
+            }
+        }
+    };
+    EyeObject {
+        lo,
+        hi,
+        wraps: lo > hi,
+        relative,
+        y0: object.y0 - eye.y,
+        y1: object.y1 - eye.y,
+        side: object.side,
+        top: object.top,
+        bottom: object.bottom,
+        primitive: object.primitive as u32,
+    }
+}
+
+/// The impostor `object` becomes, if it is round, beyond the crowd distance, at most
+/// `reach.impostor_width` wide and not behind the eye (its interval does not pass ±π).
+fn impostor_of(
+    object: &Upright,
+    interval: Option<Interval>,
+    eye: DVec3,
+    reach: Reach,
+) -> Option<Impostor> {
+    let Footprint::Circle { center, radius } = object.footprint else {
+        return None;
+    };
+    let interval = interval?;
+    let distance = center.distance(DVec2::new(eye.x, eye.z));
+    let (lo, hi) = (wrap(interval.lo), wrap(interval.hi));
+    (distance - radius > reach.crowd_distance
+        && interval.hi - interval.lo <= reach.impostor_width
+        && lo <= hi)
+        .then_some(Impostor {
+            lo,
+            hi,
+            distance,
+            y0: object.y0 - eye.y,
+            y1: object.y1 - eye.y,
+            first_piece: 0,
+            pieces: 1,
+            visible: 1.0,
+        })
 }
 
 /// A closure over a frame's objects, typed so that it may keep references to them.
@@ -299,6 +392,9 @@ pub(super) struct Reach {
     pub(super) sector: Option<Sector>,
     /// Other robots farther than this are not drawn (infinite: all are).
     pub(super) crowd_distance: f64,
+    /// Static objects without hiders, round, farther than the crowd distance and at most this
+    /// wide (radians) are drawn as impostors (0: none are).
+    pub(super) impostor_width: f64,
 }
 
 impl Reach {
@@ -306,6 +402,7 @@ impl Reach {
     pub(super) const EVERYTHING: Reach = Reach {
         sector: None,
         crowd_distance: f64::INFINITY,
+        impostor_width: 0.0,
     };
 }
 
@@ -406,15 +503,22 @@ impl ColumnScene<'_> {
             edges,
             static_slots,
             near,
+            impostors,
+            impostor_pieces,
+            standing,
             ..
         } = look;
         objects.clear();
         breaks.clear();
         edges.clear();
         static_slots.clear();
+        impostors.clear();
+        impostor_pieces.clear();
+        standing.clear();
         let statics = frame.statics.len();
-        // The previous object placed, its interval, and whether it was left out.
-        let mut previous: Option<(&Upright, Option<Interval>, bool)> = None;
+        let impostor_width = reach.impostor_width;
+        // The previous object placed, its interval, and what became of it.
+        let mut previous: Option<(&Upright, Option<Interval>, Fate)> = None;
         // Static objects, then robot parts (each viewer's own as its turret sees them), by
         // two plain loops: the per-object work is small, so the iteration shows.
         let mut order = 0usize;
@@ -434,12 +538,20 @@ impl ColumnScene<'_> {
                 None => before.footprint == object.footprint,
             };
             let (interval, shared) = match previous {
-                Some((before, interval, left_out)) if shares_previous(before) => {
-                    if left_out {
+                Some((before, interval, fate)) if shares_previous(before) => match fate {
+                    Fate::LeftOut => return,
+                    Fate::Impostor => {
+                        // Another piece of the same impostor (a lamp on its far buoy).
+                        if let (Some(last), Some(i)) = (impostors.last_mut(), interval) {
+                            last.y0 = last.y0.min(object.y0 - eye.y);
+                            last.y1 = last.y1.max(object.y1 - eye.y);
+                            last.pieces += 1;
+                            impostor_pieces.push(eye_object(object, eye, wrap(i.lo), wrap(i.hi)));
+                        }
                         return;
                     }
-                    (interval, true)
-                }
+                    Fate::Placed => (interval, true),
+                },
                 _ => {
                     // Robot parts, and static objects no corner test names.
                     let may_leave = order >= statics || self.cullable[order];
@@ -447,14 +559,26 @@ impl ColumnScene<'_> {
                         let (center, radius) = object.footprint.bounding_circle();
                         let offset = center - eye2;
                         if sector.excludes(DVec2::new(offset.x, -offset.y), radius) {
-                            previous = Some((object, None, true));
+                            previous = Some((object, None, Fate::LeftOut));
                             return;
                         }
                     }
-                    (azimuth_interval(object, eye2, heading), false)
+                    let interval = azimuth_interval(object, eye2, heading);
+                    if impostor_width > 0.0 && order < statics && may_leave {
+                        if let Some(impostor) = impostor_of(object, interval, eye, reach) {
+                            impostors.push(Impostor {
+                                first_piece: impostor_pieces.len() as u32,
+                                ..impostor
+                            });
+                            impostor_pieces.push(eye_object(object, eye, impostor.lo, impostor.hi));
+                            previous = Some((object, interval, Fate::Impostor));
+                            return;
+                        }
+                    }
+                    (interval, false)
                 }
             };
-            previous = Some((object, interval, false));
+            previous = Some((object, interval, Fate::Placed));
             // A shared round silhouette's edges are already in (a rectangle's may yet be
             // hidden for one object and not for the other).
             let edges_in = shared && interval.is_some_and(|i| i.corners.is_none());
@@ -487,46 +611,28 @@ impl ColumnScene<'_> {
             let (lo, hi) = interval.map_or((f64::NEG_INFINITY, f64::INFINITY), |i| {
                 (wrap(i.lo), wrap(i.hi))
             });
-            let relative = match object.footprint {
-                Footprint::Circle { center, radius } => {
-                    let oc = eye2 - center;
-                    Relative::Circle {
-                        oc,
-                        c: oc.length_squared() - radius * radius,
-                        radius,
+            let placed = eye_object(object, eye, lo, hi);
+            if impostor_width > 0.0 {
+                // Round objects drawn exactly may hide impostors: stacked pieces of one
+                // footprint (a near buoy and its lamp) as one.
+                if let (Footprint::Circle { center, .. }, false) = (object.footprint, placed.wraps)
+                {
+                    match standing.last_mut() {
+                        Some(last) if shared && placed.y0 <= last.y1 => {
+                            last.y0 = last.y0.min(placed.y0);
+                            last.y1 = last.y1.max(placed.y1);
+                        }
+                        _ => standing.push(Standing {
+                            lo,
+                            hi,
+                            distance: center.distance(eye2),
+                            y0: placed.y0,
+                            y1: placed.y1,
+                        }),
                     }
                 }
-                Footprint::Rect {
-                    center,
-                    u,
-                    v,
-                    half_u,
-                    half_v,
-                } => {
-                    let oc = eye2 - center;
-                    Relative::Rect {
-                        pu: oc.dot(u),
-                        pv: oc.dot(v),
-                        u,
-                        v,
-                        half_u,
-                        half_v,
-                        axis_aligned: u == DVec2::X && v == DVec2::Y,
-                    }
-                }
-            };
-            objects.push(EyeObject {
-                lo,
-                hi,
-                wraps: lo > hi,
-                relative,
-                y0: object.y0 - eye.y,
-                y1: object.y1 - eye.y,
-                side: object.side,
-                top: object.top,
-                bottom: object.bottom,
-                primitive: object.primitive as u32,
-            });
+            }
+            objects.push(placed);
         });
         for object in frame.statics.iter() {
             place(object);
@@ -581,6 +687,14 @@ impl ColumnScene<'_> {
                 breaks.push(edge.angle);
             }
         }
+        impostor::settle(
+            &mut look.impostors,
+            &look.standing,
+            &mut look.occlusion,
+            &mut look.impostor_keys,
+        );
+        impostor::by_start(&look.impostors, &mut look.impostor_order);
+        let breaks = &mut look.breaks;
         // Equal edges are merged below, so their order does not matter: insertion for the
         // dozen edges of an arena, O(B log B) for a crowd.
         if breaks.len() <= FEW {
