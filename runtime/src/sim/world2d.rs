@@ -88,28 +88,20 @@ impl Slab {
                 primitive: index,
             });
         }
-        let robot_reflectance = (0..rig.robots.len())
-            .map(|robot| {
-                graph
-                    .primitives
-                    .iter()
-                    .filter(|p| p.owner == Owner::Robot(robot))
-                    .filter_map(|p| match p.shape {
-                        Shape::Cylinder { radius, .. } => {
-                            Some((radius, graph.materials[p.material].ir_reflectance))
-                        }
-                        _ => None,
-                    })
-                    .fold((0.0, 1.0), |best, (radius, reflectance)| {
-                        if radius > best.0 {
-                            (radius, reflectance)
-                        } else {
-                            best
-                        }
-                    })
-                    .1
-            })
-            .collect();
+        // Each robot's largest cylinder (the first of equal radii), in one pass over the
+        // primitives: a swarm has many robots and many primitives.
+        let mut largest = vec![(0.0, 1.0); rig.robots.len()];
+        for p in &graph.primitives {
+            let (Owner::Robot(robot), Shape::Cylinder { radius, .. }) = (p.owner, &p.shape) else {
+                continue;
+            };
+            if let Some(best) = largest.get_mut(robot) {
+                if *radius > best.0 {
+                    *best = (*radius, graph.materials[p.material].ir_reflectance);
+                }
+            }
+        }
+        let robot_reflectance = largest.into_iter().map(|(_, r)| r).collect();
         Slab {
             obstacles,
             robot_reflectance,

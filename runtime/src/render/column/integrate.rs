@@ -6,10 +6,11 @@
 use glam::{DVec2, DVec3};
 
 use super::super::shade;
+use super::impostor::Impostor;
 use super::impostor::IMPOSTOR_PIXELS;
 use super::photodiode::{
     band_atan, nearest_index, Band, Face, Free, LitSegments, LitSink, Raster, Scratch, Segment,
-    SegmentSink, Segments,
+    SegmentSink, Segments, Shown,
 };
 use super::scene::{ColumnFrame, ColumnScene};
 use super::strip::Strip;
@@ -27,6 +28,8 @@ struct RegionBuffers {
     values: Vec<f64>,
     /// The objects facing the eye in one region.
     facing: Vec<u32>,
+    /// What one of a region's sampled columns shows, for the impostors there.
+    profile: Vec<Shown>,
 }
 
 /// One thread's working buffers: an update's look, sweep, regions and column scratch. Kept
@@ -184,18 +187,6 @@ impl ColumnScene<'_> {
                 scratch,
                 &mut out[..pixels],
             );
-            self.draw_impostors(
-                look,
-                sweep,
-                frame,
-                strip,
-                band,
-                sky,
-                ground,
-                &mut buffers.facing,
-                scratch,
-                &mut out[..pixels],
-            );
             return;
         }
         let facing = &mut buffers.facing;
@@ -244,7 +235,6 @@ impl ColumnScene<'_> {
         }
         self.draw_impostors(
             look,
-            sweep,
             frame,
             strip,
             band,
@@ -263,7 +253,6 @@ impl ColumnScene<'_> {
     fn draw_impostors(
         &self,
         look: &Look,
-        sweep: &mut Sweep,
         frame: &ColumnFrame,
         strip: &Strip,
         band: f64,
@@ -295,7 +284,7 @@ impl ColumnScene<'_> {
             let alpha = (0.5 * (impostor.lo + impostor.hi)).clamp(extent_lo, extent_hi);
             let pixel = nearest_index((strip.centers[0] - alpha) * inverse_width, pixels - 1);
             let direction = look.turn(strip, pixel, alpha);
-            sweep.facing_over(look, impostor.lo, impostor.hi, facing);
+            look.facing_over(impostor.lo, impostor.hi, facing);
             let first = impostor.first_piece as usize;
             let pieces = &look.impostor_pieces[first..first + impostor.pieces as usize];
             // Ids past the look's objects: ties in depth go after them, in piece order.
@@ -351,7 +340,18 @@ impl ColumnScene<'_> {
             positions,
             values,
             facing,
+            profile,
         } = buffers;
+        let column_band = Band {
+            tan_half: strip.tan_half_band,
+            band,
+            sky,
+            ground,
+        };
+        // Impostors by centre; each drawn in the region its centre falls in (the first and
+        // last regions take those whose centre lies beyond the strip).
+        let mut next_impostor = 0;
+        let regions = bounds.len().saturating_sub(1);
         // Region bounds, ascending.
         bounds.clear();
         bounds.push(extent_lo);
@@ -371,7 +371,7 @@ impl ColumnScene<'_> {
             width,
             out,
         };
-        for pair in bounds.windows(2) {
+        for (region, pair) in bounds.windows(2).enumerate() {
             let (r0, r1) = (pair[0], pair[1]);
             let span = r1 - r0;
             let count = if span <= width {
@@ -403,6 +403,51 @@ impl ColumnScene<'_> {
                     ground,
                     scratch,
                 ));
+            }
+            // The region's impostors, each against the profile of the sample nearest it
+            // (between two edges the same objects face the eye: the profile changes little).
+            let mut profile_of = usize::MAX;
+            while let Some(&index) = look.impostor_order.get(next_impostor) {
+                let impostor = &look.impostors[index as usize];
+                let centre = 0.5 * (impostor.lo + impostor.hi);
+                if centre >= r1 && region + 1 < regions {
+                    break;
+                }
+                next_impostor += 1;
+                if impostor.hi <= extent_lo || impostor.lo >= extent_hi {
+                    continue;
+                }
+                let k = nearest_index((centre - r0) / piece - 0.5, count - 1);
+                if profile_of != k {
+                    let alpha = positions[k];
+                    let pixel =
+                        nearest_index((strip.centers[0] - alpha) * inverse_width, pixels - 1);
+                    let direction = look.turn(strip, pixel, alpha);
+                    self.profile(
+                        frame,
+                        look,
+                        direction,
+                        facing,
+                        &column_band,
+                        scratch,
+                        profile,
+                    );
+                    profile_of = k;
+                }
+                let pixel = nearest_index((strip.centers[0] - centre) * inverse_width, pixels - 1);
+                let direction = look.turn(strip, pixel, centre);
+                let effect = self.impostor_effect(
+                    frame,
+                    look,
+                    direction,
+                    impostor,
+                    profile,
+                    &column_band,
+                    scratch,
+                );
+                if effect != 0.0 {
+                    raster.add(impostor.lo, impostor.hi, effect * impostor.visible, 0.0);
+                }
             }
             if count == 1 {
                 raster.add(r0, r1, values[0], 0.0);
@@ -542,6 +587,87 @@ impl ColumnScene<'_> {
         band.composite(segments.iter(), free, |segment, middle, covered| {
             self.segment_luminance(frame, segment, look.eye, direction, middle, covered)
         })
+    }
+
+    /// What the column along `direction` shows, piece by piece (see [`Band::profile`]).
+    #[allow(clippy::too_many_arguments)]
+    fn profile(
+        &self,
+        frame: &ColumnFrame,
+        look: &Look,
+        direction: DVec2,
+        facing: &[u32],
+        band: &Band,
+        scratch: &mut Scratch,
+        out: &mut Vec<Shown>,
+    ) {
+        let Scratch {
+            segments,
+            lit,
+            free,
+        } = scratch;
+        if frame.all_fast {
+            lit.len = 0;
+            let mut sink = LitSink {
+                lit,
+                shades: &frame.shades,
+            };
+            self.collect_segments(look, direction, facing, &mut sink);
+            band.profile(sink.lit.as_slice(), free, |s, _, _| s.luminance, out);
+            return;
+        }
+        segments.len = 0;
+        self.collect_segments(look, direction, facing, segments);
+        band.profile(
+            segments.iter(),
+            free,
+            |segment, middle, covered| {
+                self.segment_luminance(frame, segment, look.eye, direction, middle, covered)
+            },
+            out,
+        );
+    }
+
+    /// An impostor's effect on the band's mean along `direction` (through its centre), its
+    /// faces composited into `profile` (what the column shows without it).
+    #[allow(clippy::too_many_arguments)]
+    fn impostor_effect(
+        &self,
+        frame: &ColumnFrame,
+        look: &Look,
+        direction: DVec2,
+        impostor: &Impostor,
+        profile: &[Shown],
+        band: &Band,
+        scratch: &mut Scratch,
+    ) -> f64 {
+        let first = impostor.first_piece as usize;
+        let pieces = &look.impostor_pieces[first..first + impostor.pieces as usize];
+        let id = (look.objects.len() + first) as u32;
+        let Scratch {
+            segments,
+            lit,
+            free,
+        } = scratch;
+        if frame.all_fast {
+            lit.len = 0;
+            let mut sink = LitSink {
+                lit,
+                shades: &frame.shades,
+            };
+            self.collect_pieces(look, direction, (pieces, id), &mut sink);
+            return band.effect(profile, sink.lit.as_slice(), free, |s, _, _| s.luminance);
+        }
+        segments.len = 0;
+        self.collect_pieces(look, direction, (pieces, id), segments);
+        band.effect(
+            profile,
+            segments.iter(),
+            free,
+            |segment, middle, covered| {
+                self.segment_luminance(frame, segment, look.eye, direction, middle, covered)
+            },
+        )
     }
 
     /// [`ColumnScene::column`] without and with `extra` (an impostor's pieces and their first

@@ -255,12 +255,22 @@ impl Extent for Lit {
     fn extent(&self) -> (f64, f64) {
         (self.t0, self.t1)
     }
+
+    #[inline]
+    fn depth(&self) -> f64 {
+        self.depth
+    }
 }
 
 impl Extent for Segment {
     #[inline]
     fn extent(&self) -> (f64, f64) {
         (self.t0, self.t1)
+    }
+
+    #[inline]
+    fn depth(&self) -> f64 {
+        self.depth
     }
 }
 
@@ -337,10 +347,24 @@ impl SegmentSink for LitSink<'_> {
     }
 }
 
-/// A segment's tan-elevation interval.
+/// A segment's tan-elevation interval and depth.
 pub(super) trait Extent {
     fn extent(&self) -> (f64, f64);
+    fn depth(&self) -> f64;
 }
+
+/// What one column shows over a tan-elevation interval: the depth of the face there
+/// (infinite: the sky or the ground) and its luminance.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Shown {
+    pub(super) t0: f64,
+    pub(super) t1: f64,
+    pub(super) depth: f64,
+    pub(super) luminance: f64,
+}
+
+/// Most visible parts one face keeps track of in [`Band::profile`] and [`Band::effect`].
+const PARTS: usize = 8;
 
 /// The elevation band of a column and what lies beyond every object.
 pub(super) struct Band {
@@ -352,6 +376,150 @@ pub(super) struct Band {
 }
 
 impl Band {
+    /// The angle of tan-elevation `x` within the band (the band's edges and the horizon
+    /// exactly, as [`Band::composite`] takes them).
+    #[inline]
+    fn angle(&self, x: f64) -> f64 {
+        if x == self.tan_half {
+            0.5 * self.band
+        } else if x == -self.tan_half {
+            -0.5 * self.band
+        } else if x == 0.0 {
+            0.0
+        } else {
+            band_atan(x)
+        }
+    }
+
+    /// What a column of segments sorted front to back shows, as pieces in tan-elevation order
+    /// covering the band (into `out`), each visible part of a face with the luminance
+    /// [`Band::composite`] gives it.
+    pub(super) fn profile<'s, S: Extent + 's>(
+        &self,
+        segments: impl IntoIterator<Item = &'s S>,
+        free: &mut Free,
+        mut luminance: impl FnMut(&S, f64, f64) -> f64,
+        out: &mut Vec<Shown>,
+    ) {
+        out.clear();
+        free.reset(-self.tan_half, self.tan_half);
+        for segment in segments {
+            if free.is_empty() {
+                break;
+            }
+            let (t0, t1) = segment.extent();
+            let (a, b) = (larger(t0, -self.tan_half), smaller(t1, self.tan_half));
+            if a >= b {
+                continue;
+            }
+            let first = out.len();
+            let (mut covered, mut middle) = (0.0, 0.0);
+            free.take(a, b, |x0, x1| {
+                let weight = self.angle(x1) - self.angle(x0);
+                middle += 0.5 * (x0 + x1) * weight;
+                covered += weight;
+                out.push(Shown {
+                    t0: x0,
+                    t1: x1,
+                    depth: segment.depth(),
+                    luminance: 0.0,
+                });
+            });
+            if covered > 0.0 {
+                let value = luminance(segment, middle, covered);
+                for shown in &mut out[first..] {
+                    shown.luminance = value;
+                }
+            } else {
+                out.truncate(first);
+            }
+        }
+        for &(x0, x1) in free.as_slice() {
+            let mut background = |t0: f64, t1: f64, luminance: f64| {
+                out.push(Shown {
+                    t0,
+                    t1,
+                    depth: f64::INFINITY,
+                    luminance,
+                })
+            };
+            if x0 >= 0.0 {
+                background(x0, x1, self.sky);
+            } else if x1 <= 0.0 {
+                background(x0, x1, self.ground);
+            } else {
+                background(x0, 0.0, self.ground);
+                background(0.0, x1, self.sky);
+            }
+        }
+        // A few dozen pieces at most, mostly in order: insertion.
+        for i in 1..out.len() {
+            let piece = out[i];
+            let mut j = i;
+            while j > 0 && out[j - 1].t0 > piece.t0 {
+                out[j] = out[j - 1];
+                j -= 1;
+            }
+            out[j] = piece;
+        }
+    }
+
+    /// The change in a column's mean luminance over the band when `segments` (sorted front to
+    /// back: an impostor's faces) join what `profile` shows: where a face is the nearest, its
+    /// luminance replaces what showed there.
+    pub(super) fn effect<'s, S: Extent + 's>(
+        &self,
+        profile: &[Shown],
+        segments: impl IntoIterator<Item = &'s S>,
+        free: &mut Free,
+        mut luminance: impl FnMut(&S, f64, f64) -> f64,
+    ) -> f64 {
+        free.reset(-self.tan_half, self.tan_half);
+        let mut sum = 0.0;
+        for segment in segments {
+            let (t0, t1) = segment.extent();
+            let (a, b) = (larger(t0, -self.tan_half), smaller(t1, self.tan_half));
+            if a >= b || free.is_empty() {
+                continue;
+            }
+            let depth = segment.depth();
+            // The parts its own nearer faces leave, each split where the profile shows
+            // something nearer (kept) or farther (replaced).
+            let mut parts = [(0.0, 0.0); PARTS];
+            let mut count = 0;
+            free.take(a, b, |x0, x1| {
+                if count < PARTS {
+                    parts[count] = (x0, x1);
+                    count += 1;
+                }
+            });
+            let (mut covered, mut middle) = (0.0, 0.0);
+            let mut replaced = 0.0;
+            for &(x0, x1) in &parts[..count] {
+                let start = profile.partition_point(|p| p.t1 <= x0);
+                for p in &profile[start..] {
+                    if p.t0 >= x1 {
+                        break;
+                    }
+                    if p.depth <= depth {
+                        continue;
+                    }
+                    let (c0, c1) = (larger(x0, p.t0), smaller(x1, p.t1));
+                    if c1 > c0 {
+                        let weight = self.angle(c1) - self.angle(c0);
+                        middle += 0.5 * (c0 + c1) * weight;
+                        covered += weight;
+                        replaced += p.luminance * weight;
+                    }
+                }
+            }
+            if covered > 0.0 {
+                sum += luminance(segment, middle, covered) * covered - replaced;
+            }
+        }
+        sum / self.band
+    }
+
     /// Mean luminance over the band of segments sorted front to back, integrated exactly in
     /// angle; `luminance(segment, middle, covered)` gives a face's luminance from the visible
     /// parts' angle-weighted tan-elevation sum and their angle.

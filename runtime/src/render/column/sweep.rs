@@ -81,6 +81,7 @@ pub struct Look {
     occlusion: Occlusion,
     /// Scratch for ordering impostors.
     impostor_keys: Vec<u64>,
+    centre_keys: Vec<u128>,
     pub(super) impostor_order: Vec<u32>,
 }
 
@@ -186,35 +187,6 @@ fn eye_object(object: &Upright, eye: DVec3, lo: f64, hi: f64) -> EyeObject {
         bottom: object.bottom,
         primitive: object.primitive as u32,
     }
-}
-
-/// The impostor `object` becomes, if it is round, beyond the crowd distance, at most
-/// `reach.impostor_width` wide and not behind the eye (its interval does not pass ±π).
-fn impostor_of(
-    object: &Upright,
-    interval: Option<Interval>,
-    eye: DVec3,
-    reach: Reach,
-) -> Option<Impostor> {
-    let Footprint::Circle { center, radius } = object.footprint else {
-        return None;
-    };
-    let interval = interval?;
-    let distance = center.distance(DVec2::new(eye.x, eye.z));
-    let (lo, hi) = (wrap(interval.lo), wrap(interval.hi));
-    (distance - radius > reach.crowd_distance
-        && interval.hi - interval.lo <= reach.impostor_width
-        && lo <= hi)
-        .then_some(Impostor {
-            lo,
-            hi,
-            distance,
-            y0: object.y0 - eye.y,
-            y1: object.y1 - eye.y,
-            first_piece: 0,
-            pieces: 1,
-            visible: 1.0,
-        })
 }
 
 /// A closure over a frame's objects, typed so that it may keep references to them.
@@ -563,19 +535,40 @@ impl ColumnScene<'_> {
                             return;
                         }
                     }
-                    let interval = azimuth_interval(object, eye2, heading);
                     if impostor_width > 0.0 && order < statics && may_leave {
-                        if let Some(impostor) = impostor_of(object, interval, eye, reach) {
+                        let far = match object.footprint {
+                            Footprint::Circle { center, radius } => impostor::far(
+                                center,
+                                radius,
+                                eye,
+                                heading,
+                                reach.crowd_distance,
+                                impostor_width,
+                            ),
+                            Footprint::Rect { .. } => None,
+                        };
+                        if let Some((lo, hi, distance)) = far {
                             impostors.push(Impostor {
+                                lo,
+                                hi,
+                                distance,
+                                y0: object.y0 - eye.y,
+                                y1: object.y1 - eye.y,
                                 first_piece: impostor_pieces.len() as u32,
-                                ..impostor
+                                pieces: 1,
+                                visible: 1.0,
                             });
-                            impostor_pieces.push(eye_object(object, eye, impostor.lo, impostor.hi));
-                            previous = Some((object, interval, Fate::Impostor));
+                            impostor_pieces.push(eye_object(object, eye, lo, hi));
+                            let interval = Interval {
+                                lo,
+                                hi,
+                                corners: None,
+                            };
+                            previous = Some((object, Some(interval), Fate::Impostor));
                             return;
                         }
                     }
-                    (interval, false)
+                    (azimuth_interval(object, eye2, heading), false)
                 }
             };
             previous = Some((object, interval, Fate::Placed));
@@ -693,7 +686,11 @@ impl ColumnScene<'_> {
             &mut look.occlusion,
             &mut look.impostor_keys,
         );
-        impostor::by_start(&look.impostors, &mut look.impostor_order);
+        impostor::by_centre(
+            &look.impostors,
+            &mut look.centre_keys,
+            &mut look.impostor_order,
+        );
         let breaks = &mut look.breaks;
         // Equal edges are merged below, so their order does not matter: insertion for the
         // dozen edges of an arena, O(B log B) for a crowd.
