@@ -92,6 +92,7 @@ pub fn compile(scene: &Scene) -> Compiled {
         tables: Shared::default(),
         turns: Shared::default(),
         body: Authoring::World,
+        robot_names: Default::default(),
     };
     let root = scene.root_rotation();
     let root_frame = Frame {
@@ -153,6 +154,8 @@ struct Compiler<'s> {
     /// Who wrote the children being walked (their parent's body), for the turns between
     /// axis conventions.
     body: Authoring,
+    /// The robots' names so far (a second robot of a name gets a warning).
+    robot_names: std::collections::HashSet<String>,
 }
 
 /// A frame turned by an axis-angle rotation (`None`: unchanged).
@@ -494,7 +497,7 @@ impl Compiler<'_> {
         let control_steps = rig::control_steps(scene.float(node, "controlPeriod"), time_step)
             .unwrap_or_else(|ratio| (libm::round(ratio).clamp(1.0, u32::MAX as f64) as u64).max(1));
         let index = self.rig.robots.len();
-        if self.rig.robots.iter().any(|r| r.name == name) {
+        if !self.robot_names.insert(name.clone()) {
             self.warnings.push(format!(
                 "two robots are named '{name}'; --robot picks the first"
             ));
@@ -743,12 +746,12 @@ fn find_floors(graph: &mut RenderGraph, rig: &mut SensorRig) {
             (b.min.x..=b.max.x).contains(&robot.start.x)
                 && (b.min.z..=b.max.z).contains(&robot.start.z)
         };
+        // The static primitives in graph order (a swarm has many more robot parts).
         let statics = || {
             graph
-                .primitives
+                .static_primitives
                 .iter()
-                .filter(|p| p.owner == Owner::Static)
-                .map(|p| p.bounds)
+                .map(|&p| graph.primitives[p].bounds)
         };
         // The highest floor under the robot is the one it stands on.
         let Some(top) = statics()

@@ -35,8 +35,8 @@ pub(super) struct Impostor {
     /// Heights of its pieces together, relative to the eye.
     pub(super) y0: f64,
     pub(super) y1: f64,
-    /// Its pieces, a range of the look's impostor pieces.
-    pub(super) first_piece: u32,
+    /// Its pieces: this many of the frame's static objects from `first_static` on.
+    pub(super) first_static: u32,
     pub(super) pieces: u32,
     /// The share of its interval no nearer standing object hides (set by [`settle`]).
     pub(super) visible: f64,
@@ -196,7 +196,8 @@ pub(super) fn far(
 ) -> Option<(f64, f64, f64)> {
     let offset = center - DVec2::new(eye.x, eye.z);
     let distance = offset.length();
-    if !(distance - radius > crowd_distance) {
+    // (A NaN distance is near: drawn exactly.)
+    if distance - radius <= crowd_distance || distance.is_nan() {
         return None;
     }
     let ratio = radius / distance;
@@ -293,7 +294,7 @@ mod tests {
             distance,
             y0: -0.05,
             y1: 0.02,
-            first_piece: 0,
+            first_static: 0,
             pieces: 1,
             visible: 1.0,
         }

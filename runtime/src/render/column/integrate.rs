@@ -14,7 +14,7 @@ use super::photodiode::{
 };
 use super::scene::{ColumnFrame, ColumnScene};
 use super::strip::Strip;
-use super::sweep::{self, EyeObject, Look, Reach, Sector, Sweep};
+use super::sweep::{self, eye_object, EyeObject, Look, Reach, Sector, Sweep};
 use crate::compile::graph::LightKind;
 use crate::render::Detail;
 use crate::retina::luminance;
@@ -28,8 +28,12 @@ struct RegionBuffers {
     values: Vec<f64>,
     /// The objects facing the eye in one region.
     facing: Vec<u32>,
-    /// What one of a region's sampled columns shows, for the impostors there.
+    /// What each of a region's sampled columns shows, for the impostors there, and where
+    /// each sample's pieces start.
     profile: Vec<Shown>,
+    profile_starts: Vec<usize>,
+    /// One impostor's pieces.
+    pieces: Vec<EyeObject>,
 }
 
 /// One thread's working buffers: an update's look, sweep, regions and column scratch. Kept
@@ -166,6 +170,7 @@ impl ColumnScene<'_> {
             } else {
                 0.0
             },
+            extent: strip.extent().unwrap_or((f64::NEG_INFINITY, f64::INFINITY)),
         };
         self.look_into(frame, viewer, eye, heading, reach, look);
         let look = &*look;
@@ -240,7 +245,7 @@ impl ColumnScene<'_> {
             band,
             sky,
             ground,
-            facing,
+            (facing, &mut buffers.pieces),
             scratch,
             &mut out[..pixels],
         );
@@ -258,7 +263,7 @@ impl ColumnScene<'_> {
         band: f64,
         sky: f64,
         ground: f64,
-        facing: &mut Vec<u32>,
+        (facing, pieces): (&mut Vec<u32>, &mut Vec<EyeObject>),
         scratch: &mut Scratch,
         out: &mut [f64],
     ) {
@@ -285,10 +290,9 @@ impl ColumnScene<'_> {
             let pixel = nearest_index((strip.centers[0] - alpha) * inverse_width, pixels - 1);
             let direction = look.turn(strip, pixel, alpha);
             look.facing_over(impostor.lo, impostor.hi, facing);
-            let first = impostor.first_piece as usize;
-            let pieces = &look.impostor_pieces[first..first + impostor.pieces as usize];
+            impostor_pieces(frame, look, impostor, pieces);
             // Ids past the look's objects: ties in depth go after them, in piece order.
-            let id = (look.objects.len() + first) as u32;
+            let id = look.objects.len() as u32;
             let (without, with) = self.column_with(
                 frame,
                 look,
@@ -341,6 +345,8 @@ impl ColumnScene<'_> {
             values,
             facing,
             profile,
+            profile_starts,
+            pieces,
         } = buffers;
         let column_band = Band {
             tan_half: strip.tan_half_band,
@@ -351,7 +357,6 @@ impl ColumnScene<'_> {
         // Impostors by centre; each drawn in the region its centre falls in (the first and
         // last regions take those whose centre lies beyond the strip).
         let mut next_impostor = 0;
-        let regions = bounds.len().saturating_sub(1);
         // Region bounds, ascending.
         bounds.clear();
         bounds.push(extent_lo);
@@ -371,6 +376,7 @@ impl ColumnScene<'_> {
             width,
             out,
         };
+        let regions = bounds.len() - 1;
         for (region, pair) in bounds.windows(2).enumerate() {
             let (r0, r1) = (pair[0], pair[1]);
             let span = r1 - r0;
@@ -386,43 +392,24 @@ impl ColumnScene<'_> {
             values.clear();
             let piece = span / count as f64;
             let mut middle = 0.5;
+            // A region with impostors keeps what each sample shows (the same mean).
+            let last = region + 1 == regions;
+            let takes = |impostor: &Impostor| last || 0.5 * (impostor.lo + impostor.hi) < r1;
+            let impostors_here = look
+                .impostor_order
+                .get(next_impostor)
+                .is_some_and(|&i| takes(&look.impostors[i as usize]));
+            profile.clear();
+            profile_starts.clear();
             for _ in 0..count {
                 let alpha = r0 + middle * piece;
                 middle += 1.0;
                 // The nearest pixel's direction, turned by the small remainder.
                 let pixel = nearest_index((strip.centers[0] - alpha) * inverse_width, pixels - 1);
                 positions.push(alpha);
-                values.push(self.column(
-                    frame,
-                    look,
-                    look.turn(strip, pixel, alpha),
-                    facing,
-                    strip.tan_half_band,
-                    band,
-                    sky,
-                    ground,
-                    scratch,
-                ));
-            }
-            // The region's impostors, each against the profile of the sample nearest it
-            // (between two edges the same objects face the eye: the profile changes little).
-            let mut profile_of = usize::MAX;
-            while let Some(&index) = look.impostor_order.get(next_impostor) {
-                let impostor = &look.impostors[index as usize];
-                let centre = 0.5 * (impostor.lo + impostor.hi);
-                if centre >= r1 && region + 1 < regions {
-                    break;
-                }
-                next_impostor += 1;
-                if impostor.hi <= extent_lo || impostor.lo >= extent_hi {
-                    continue;
-                }
-                let k = nearest_index((centre - r0) / piece - 0.5, count - 1);
-                if profile_of != k {
-                    let alpha = positions[k];
-                    let pixel =
-                        nearest_index((strip.centers[0] - alpha) * inverse_width, pixels - 1);
-                    let direction = look.turn(strip, pixel, alpha);
+                let direction = look.turn(strip, pixel, alpha);
+                values.push(if impostors_here {
+                    profile_starts.push(profile.len());
                     self.profile(
                         frame,
                         look,
@@ -431,9 +418,36 @@ impl ColumnScene<'_> {
                         &column_band,
                         scratch,
                         profile,
-                    );
-                    profile_of = k;
+                    )
+                } else {
+                    self.column(
+                        frame,
+                        look,
+                        direction,
+                        facing,
+                        strip.tan_half_band,
+                        band,
+                        sky,
+                        ground,
+                        scratch,
+                    )
+                });
+            }
+            profile_starts.push(profile.len());
+            // The region's impostors, each against what the sample nearest it shows (between
+            // two edges the same objects face the eye: that changes little).
+            while let Some(&index) = look.impostor_order.get(next_impostor) {
+                let impostor = &look.impostors[index as usize];
+                if !takes(impostor) {
+                    break;
                 }
+                let centre = 0.5 * (impostor.lo + impostor.hi);
+                next_impostor += 1;
+                if impostor.hi <= extent_lo || impostor.lo >= extent_hi {
+                    continue;
+                }
+                let k = nearest_index((centre - r0) / piece - 0.5, count - 1);
+                let shown = &profile[profile_starts[k]..profile_starts[k + 1]];
                 let pixel = nearest_index((strip.centers[0] - centre) * inverse_width, pixels - 1);
                 let direction = look.turn(strip, pixel, centre);
                 let effect = self.impostor_effect(
@@ -441,7 +455,7 @@ impl ColumnScene<'_> {
                     look,
                     direction,
                     impostor,
-                    profile,
+                    (shown, pieces),
                     &column_band,
                     scratch,
                 );
@@ -589,7 +603,8 @@ impl ColumnScene<'_> {
         })
     }
 
-    /// What the column along `direction` shows, piece by piece (see [`Band::profile`]).
+    /// What the column along `direction` shows, piece by piece (see [`Band::profile`]),
+    /// appended to `out`; returns [`ColumnScene::column`]'s value.
     #[allow(clippy::too_many_arguments)]
     fn profile(
         &self,
@@ -600,7 +615,7 @@ impl ColumnScene<'_> {
         band: &Band,
         scratch: &mut Scratch,
         out: &mut Vec<Shown>,
-    ) {
+    ) -> f64 {
         let Scratch {
             segments,
             lit,
@@ -613,8 +628,7 @@ impl ColumnScene<'_> {
                 shades: &frame.shades,
             };
             self.collect_segments(look, direction, facing, &mut sink);
-            band.profile(sink.lit.as_slice(), free, |s, _, _| s.luminance, out);
-            return;
+            return band.profile(sink.lit.as_slice(), free, |s, _, _| s.luminance, out);
         }
         segments.len = 0;
         self.collect_segments(look, direction, facing, segments);
@@ -625,7 +639,7 @@ impl ColumnScene<'_> {
                 self.segment_luminance(frame, segment, look.eye, direction, middle, covered)
             },
             out,
-        );
+        )
     }
 
     /// An impostor's effect on the band's mean along `direction` (through its centre), its
@@ -637,13 +651,12 @@ impl ColumnScene<'_> {
         look: &Look,
         direction: DVec2,
         impostor: &Impostor,
-        profile: &[Shown],
+        (profile, pieces): (&[Shown], &mut Vec<EyeObject>),
         band: &Band,
         scratch: &mut Scratch,
     ) -> f64 {
-        let first = impostor.first_piece as usize;
-        let pieces = &look.impostor_pieces[first..first + impostor.pieces as usize];
-        let id = (look.objects.len() + first) as u32;
+        impostor_pieces(frame, look, impostor, pieces);
+        let id = look.objects.len() as u32;
         let Scratch {
             segments,
             lit,
@@ -788,6 +801,20 @@ impl ColumnScene<'_> {
             &self.graph.materials[self.graph.primitives[segment.primitive as usize].material];
         let mut none = |_: DVec3, _: &LightKind| false;
         shade(material, None, point, normal, eye, &frame.lights, &mut none)
+    }
+}
+
+/// An impostor's pieces as its eye sees them, into `pieces`.
+fn impostor_pieces(
+    frame: &ColumnFrame,
+    look: &Look,
+    impostor: &Impostor,
+    pieces: &mut Vec<EyeObject>,
+) {
+    pieces.clear();
+    let first = impostor.first_static as usize;
+    for object in &frame.statics[first..first + impostor.pieces as usize] {
+        pieces.push(eye_object(object, look.eye, impostor.lo, impostor.hi));
     }
 }
 

@@ -391,18 +391,20 @@ impl Band {
         }
     }
 
-    /// What a column of segments sorted front to back shows, as pieces in tan-elevation order
-    /// covering the band (into `out`), each visible part of a face with the luminance
-    /// [`Band::composite`] gives it.
+    /// What a column of segments sorted front to back shows, appended to `out` as pieces in
+    /// tan-elevation order covering the band, each visible part of a face with the luminance
+    /// [`Band::composite`] gives it; returns the band's mean, [`Band::composite`]'s to the last
+    /// bit (the same sums in the same order).
     pub(super) fn profile<'s, S: Extent + 's>(
         &self,
         segments: impl IntoIterator<Item = &'s S>,
         free: &mut Free,
         mut luminance: impl FnMut(&S, f64, f64) -> f64,
         out: &mut Vec<Shown>,
-    ) {
-        out.clear();
+    ) -> f64 {
+        let start = out.len();
         free.reset(-self.tan_half, self.tan_half);
+        let mut sum = 0.0;
         for segment in segments {
             if free.is_empty() {
                 break;
@@ -427,6 +429,7 @@ impl Band {
             });
             if covered > 0.0 {
                 let value = luminance(segment, middle, covered);
+                sum += value * covered;
                 for shown in &mut out[first..] {
                     shown.luminance = value;
                 }
@@ -435,6 +438,7 @@ impl Band {
             }
         }
         for &(x0, x1) in free.as_slice() {
+            let (a0, a1) = (self.angle(x0), self.angle(x1));
             let mut background = |t0: f64, t1: f64, luminance: f64| {
                 out.push(Shown {
                     t0,
@@ -444,24 +448,29 @@ impl Band {
                 })
             };
             if x0 >= 0.0 {
+                sum += self.sky * (a1 - a0);
                 background(x0, x1, self.sky);
             } else if x1 <= 0.0 {
+                sum += self.ground * (a1 - a0);
                 background(x0, x1, self.ground);
             } else {
+                sum += self.ground * -a0 + self.sky * a1;
                 background(x0, 0.0, self.ground);
                 background(0.0, x1, self.sky);
             }
         }
         // A few dozen pieces at most, mostly in order: insertion.
-        for i in 1..out.len() {
-            let piece = out[i];
+        let pieces = &mut out[start..];
+        for i in 1..pieces.len() {
+            let piece = pieces[i];
             let mut j = i;
-            while j > 0 && out[j - 1].t0 > piece.t0 {
-                out[j] = out[j - 1];
+            while j > 0 && pieces[j - 1].t0 > piece.t0 {
+                pieces[j] = pieces[j - 1];
                 j -= 1;
             }
-            out[j] = piece;
+            pieces[j] = piece;
         }
+        sum / self.band
     }
 
     /// The change in a column's mean luminance over the band when `segments` (sorted front to

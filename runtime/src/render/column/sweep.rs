@@ -73,9 +73,8 @@ pub struct Look {
     /// The robots within the crowd distance.
     near: Vec<u32>,
     /// Small static objects beyond the crowd distance, drawn as impostors (crowd level of
-    /// detail only), and their pieces (not among `objects`: no region faces them).
+    /// detail only; not among `objects`: no region faces them).
     pub(super) impostors: Vec<Impostor>,
-    pub(super) impostor_pieces: Vec<EyeObject>,
     /// The objects drawn exactly that may hide impostors, and the bins that say where.
     standing: Vec<Standing>,
     occlusion: Occlusion,
@@ -145,7 +144,7 @@ enum Fate {
 }
 
 /// An object as seen from `eye`, its interval `[lo, hi]` (wrapped).
-fn eye_object(object: &Upright, eye: DVec3, lo: f64, hi: f64) -> EyeObject {
+pub(super) fn eye_object(object: &Upright, eye: DVec3, lo: f64, hi: f64) -> EyeObject {
     let eye2 = DVec2::new(eye.x, eye.z);
     let relative = match object.footprint {
         Footprint::Circle { center, radius } => {
@@ -367,6 +366,8 @@ pub(super) struct Reach {
     /// Static objects without hiders, round, farther than the crowd distance and at most this
     /// wide (radians) are drawn as impostors (0: none are).
     pub(super) impostor_width: f64,
+    /// The strip's relative azimuths: impostors wholly outside are left out.
+    pub(super) extent: (f64, f64),
 }
 
 impl Reach {
@@ -375,6 +376,7 @@ impl Reach {
         sector: None,
         crowd_distance: f64::INFINITY,
         impostor_width: 0.0,
+        extent: (f64::NEG_INFINITY, f64::INFINITY),
     };
 }
 
@@ -476,7 +478,6 @@ impl ColumnScene<'_> {
             static_slots,
             near,
             impostors,
-            impostor_pieces,
             standing,
             ..
         } = look;
@@ -485,7 +486,6 @@ impl ColumnScene<'_> {
         edges.clear();
         static_slots.clear();
         impostors.clear();
-        impostor_pieces.clear();
         standing.clear();
         let statics = frame.statics.len();
         let impostor_width = reach.impostor_width;
@@ -514,11 +514,10 @@ impl ColumnScene<'_> {
                     Fate::LeftOut => return,
                     Fate::Impostor => {
                         // Another piece of the same impostor (a lamp on its far buoy).
-                        if let (Some(last), Some(i)) = (impostors.last_mut(), interval) {
+                        if let Some(last) = impostors.last_mut() {
                             last.y0 = last.y0.min(object.y0 - eye.y);
                             last.y1 = last.y1.max(object.y1 - eye.y);
                             last.pieces += 1;
-                            impostor_pieces.push(eye_object(object, eye, wrap(i.lo), wrap(i.hi)));
                         }
                         return;
                     }
@@ -527,44 +526,44 @@ impl ColumnScene<'_> {
                 _ => {
                     // Robot parts, and static objects no corner test names.
                     let may_leave = order >= statics || self.cullable[order];
-                    if let Some(sector) = sector.filter(|_| may_leave) {
-                        let (center, radius) = object.footprint.bounding_circle();
-                        let offset = center - eye2;
-                        if sector.excludes(DVec2::new(offset.x, -offset.y), radius) {
-                            previous = Some((object, None, Fate::LeftOut));
-                            return;
-                        }
-                    }
+                    // A far small round static object is an impostor, or left out when it
+                    // lies beyond the strip: tested first, as most of a big arena's are.
                     if impostor_width > 0.0 && order < statics && may_leave {
-                        let far = match object.footprint {
-                            Footprint::Circle { center, radius } => impostor::far(
+                        if let Footprint::Circle { center, radius } = object.footprint {
+                            if let Some((lo, hi, distance)) = impostor::far(
                                 center,
                                 radius,
                                 eye,
                                 heading,
                                 reach.crowd_distance,
                                 impostor_width,
-                            ),
-                            Footprint::Rect { .. } => None,
-                        };
-                        if let Some((lo, hi, distance)) = far {
-                            impostors.push(Impostor {
-                                lo,
-                                hi,
-                                distance,
-                                y0: object.y0 - eye.y,
-                                y1: object.y1 - eye.y,
-                                first_piece: impostor_pieces.len() as u32,
-                                pieces: 1,
-                                visible: 1.0,
-                            });
-                            impostor_pieces.push(eye_object(object, eye, lo, hi));
-                            let interval = Interval {
-                                lo,
-                                hi,
-                                corners: None,
-                            };
-                            previous = Some((object, Some(interval), Fate::Impostor));
+                            ) {
+                                let (first, last) = reach.extent;
+                                let fate = if hi < first || lo > last {
+                                    Fate::LeftOut
+                                } else {
+                                    impostors.push(Impostor {
+                                        lo,
+                                        hi,
+                                        distance,
+                                        y0: object.y0 - eye.y,
+                                        y1: object.y1 - eye.y,
+                                        first_static: order as u32,
+                                        pieces: 1,
+                                        visible: 1.0,
+                                    });
+                                    Fate::Impostor
+                                };
+                                previous = Some((object, None, fate));
+                                return;
+                            }
+                        }
+                    }
+                    if let Some(sector) = sector.filter(|_| may_leave) {
+                        let (center, radius) = object.footprint.bounding_circle();
+                        let offset = center - eye2;
+                        if sector.excludes(DVec2::new(offset.x, -offset.y), radius) {
+                            previous = Some((object, None, Fate::LeftOut));
                             return;
                         }
                     }
