@@ -316,7 +316,7 @@ pub fn print_table(rows: &[Row], threads: usize, ir_only: bool, crowd_distance: 
                     .to_owned()
             }
             (false, Some(d)) => format!(
-                "Panoramic turrets (exact optics, other robots drawn within {d} m, odd filter), regatta controller"
+                "Panoramic turrets (exact optics, other robots drawn within {d} m, far buoys as impostors, odd filter), regatta controller"
             ),
         }
     );

@@ -325,7 +325,8 @@ fn robot_description(robot: &regatta_runtime::compile::rig::RobotRig) -> String 
                     (Optics::Paper, _) => "paper".to_owned(),
                     (Optics::Exact, false) => "exact".to_owned(),
                     (Optics::Exact, true) => format!(
-                        "exact (crowd level of detail: other robots drawn within {})",
+                        "exact (crowd level of detail: other robots drawn within {0}; buoys and other \
+                         small round static objects beyond {0} drawn as impostors)",
                         mm(p.crowd_distance)
                     ),
                 },
