@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The regatta evolved to transfer: the network of worlds/regatta_neural_transfer.wbt (IR,
-# ambient light, the raw retina and the odd filter; four Elman hidden neurons), evolved with
-# CMA-ES over thirteen layouts: the five arenas of examples/evolve_regatta_varied.sh, the
+# The regatta evolved to transfer: the network of worlds/regatta_neural_transfer.wbt
+# (worlds/regatta_evolved_varied.wbt's, grown by the ambient readings), evolved on from its
+# written weights (--from-weights) with CMA-ES over thirteen layouts: the five arenas of examples/evolve_regatta_varied.sh, the
 # five-buoy pentagon, two arenas of other sizes (0.7 m, 1.2 m), and five of them again with
 # every buoy's lamp lit (point lights). Every trial draws the arena's light (0.02 to 0.4, or
 # off), each buoy's IR film (or none), each buoy's place (±4 cm) and the robot's start. The
@@ -12,7 +12,7 @@ cd "$(dirname "$0")/.."
 cargo build --release -p regatta
 regatta=${CARGO_TARGET_DIR:-target}/release/regatta
 out=${OUT:-out/evolve-regatta-transfer}
-generations=${GENERATIONS:-220}
+generations=${GENERATIONS:-200}
 jobs=${JOBS:-2}
 mkdir -p "$out"
 
@@ -27,7 +27,7 @@ time "$regatta" evolve worlds/regatta_neural_transfer.wbt \
   --world worlds/regatta_train_lamps_broad.wbt \
   --fitness "${FITNESS:-regatta:other=-0.5}" --aggregate "${AGGREGATE:-mean}" \
   --generations "$generations" --trials 1 --duration "${DURATION:-80}" \
-  --seed "${SEED:-1}" -j "$jobs" --out "$out" \
+  --seed "${SEED:-1}" --from-weights --sigma "${SIGMA:-0.3}" -j "$jobs" --out "$out" \
   --vary 'DirectionalLight.intensity=0.02..0.4' --vary 'DirectionalLight.on=TRUE|FALSE' \
   --vary 'Buoy.irReflectance=0.5|1' --vary 'Buoy.translation=±0.04' \
   --vary 'Khepera.translation=arena' --vary 'Khepera.rotation=any'
