@@ -2,9 +2,9 @@
 # The regatta evolved to transfer: the network of worlds/regatta_neural_transfer.wbt
 # (worlds/regatta_evolved_varied.wbt's with its weights, grown by the odd filter's output and
 # the ambient readings, I_bda 3), evolved on from its written weights (--from-weights,
-# step size 0.3) with CMA-ES over thirteen layouts: the five arenas of examples/evolve_regatta_varied.sh, the
-# five-buoy pentagon, two arenas of other sizes (0.7 m, 1.2 m), and five of them again with
-# every buoy's lamp lit (point lights). Every trial draws the arena's light (0.02 to 0.4, or
+# step size 0.3) with CMA-ES over thirteen layouts: the five arenas of
+# examples/evolve_regatta_varied.sh, the five-buoy pentagon, two arenas of other sizes (0.7 m,
+# 1.2 m), and five of them again with every buoy's lamp lit (point lights). Every trial draws the arena's light (0.02 to 0.4, or
 # off), each buoy's IR film (or none), each buoy's place (±4 cm) and the robot's start. The
 # fitness charges visits out of cyclic order. Then examples/transfer_grid.sh: the transfer
 # grid on six layouts never sailed in training, and the target checked.
