@@ -56,6 +56,11 @@ pub struct Args {
     /// Save a checkpoint into DIR after every generation.
     #[arg(long, value_name = "DIR")]
     checkpoint: Option<PathBuf>,
+    /// Start from the first world's written weights (CMA-ES's mean, the genetic algorithm's
+    /// centre) instead of random ones: evolve on from a network evolved before (a network
+    /// grown by new inputs whose weights are written 0 keeps its behaviour at the start).
+    #[arg(long)]
+    from_weights: bool,
     /// Continue the evolution saved in DIR (same command and seed), bit for bit.
     #[arg(long, value_name = "DIR")]
     resume: Option<PathBuf>,
@@ -186,6 +191,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             .iter()
             .map(|e| (e.name.clone(), text_hash(&e.text)))
             .collect(),
+        from_weights: args.from_weights,
     };
     let mut evolution = match &args.resume {
         Some(dir) => {
@@ -197,6 +203,21 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 evolution.generation()
             );
             evolution
+        }
+        None if args.from_weights => {
+            let written = experiments[0]
+                .network
+                .as_ref()
+                .map(|n| n.weights.clone())
+                .unwrap_or_default();
+            if written.len() != dimension {
+                bail!(
+                    "--from-weights: {} holds {} weights, its network takes {dimension}",
+                    experiments[0].name,
+                    written.len()
+                );
+            }
+            Evolution::starting_at(settings, written)
         }
         None => Evolution::new(settings, dimension),
     };

@@ -474,3 +474,54 @@ fn batch_and_evolve_take_the_reading_options_of_run() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The weights of a world's (first) NeuralNetwork.
+fn written_weights(path: &Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let start = text.find("weights [").expect("a weights field") + "weights [".len();
+    let end = start + text[start..].find(']').unwrap();
+    text[start..end]
+        .split_whitespace()
+        .map(|w| w.parse().unwrap())
+        .collect()
+}
+
+#[test]
+fn evolve_from_weights_starts_at_the_written_network() {
+    let dir = temp_dir("evolve-from-weights");
+    let world = root().join("worlds/regatta_evolved_varied.wbt");
+    let written = written_weights(&world);
+    let farthest = |extra: &[&str]| {
+        let out = dir.join("out");
+        let mut args = vec![
+            "evolve",
+            "worlds/regatta_evolved_varied.wbt",
+            "--fitness",
+            "regatta",
+            "--population",
+            "4",
+            "--generations",
+            "1",
+            "--trials",
+            "1",
+            "--duration",
+            "1",
+            "--sigma",
+            "1e-9",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        stdout_of(&args);
+        let best = written_weights(&out.join("best.wbt"));
+        assert_eq!(best.len(), written.len());
+        best.iter()
+            .zip(&written)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+    };
+    // From the written weights, a tiny step size keeps every candidate on them.
+    assert!(farthest(&["--from-weights"]) < 1e-6);
+    // Without it, the evolution starts from random weights in −1 … 1.
+    assert!(farthest(&[]) > 0.1);
+}

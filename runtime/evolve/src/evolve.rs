@@ -54,6 +54,10 @@ pub struct Settings {
     pub sigma: f64,
     /// The worlds' names and a hash of each one's text.
     pub worlds: Vec<(String, String)>,
+    /// Whether the evolution started from the first world's written weights
+    /// ([`Evolution::starting_at`]) rather than from random ones.
+    #[serde(default)]
+    pub from_weights: bool,
 }
 
 /// The optimiser's state.
@@ -141,25 +145,42 @@ impl Evolution {
         let start: Vec<f64> = (0..dimension)
             .map(|_| 2.0 * stream.uniform() - 1.0)
             .collect();
-        let optimiser = match settings.method {
-            Method::Cmaes => Optimiser::Cmaes(Box::new(Cmaes::new(
-                start,
-                settings.sigma,
-                settings.population,
-            ))),
-            Method::Ga => Optimiser::Ga(Genetic::new(
-                &vec![0.0; dimension],
-                1.0,
-                settings.population,
-                settings.sigma,
-                settings.seed,
-            )),
-        };
+        let optimiser = Evolution::optimiser(&settings, start, vec![0.0; dimension]);
         Evolution {
             settings,
             optimiser,
             history: Vec::new(),
             best: None,
+        }
+    }
+
+    /// A new evolution that starts from `start` (a network's written weights: CMA-ES's mean
+    /// and the genetic algorithm's centre), to evolve on from a network evolved before.
+    pub fn starting_at(settings: Settings, start: Vec<f64>) -> Evolution {
+        let optimiser = Evolution::optimiser(&settings, start.clone(), start);
+        Evolution {
+            settings,
+            optimiser,
+            history: Vec::new(),
+            best: None,
+        }
+    }
+
+    /// The optimiser: CMA-ES about `mean`, or the genetic algorithm about `centre`.
+    fn optimiser(settings: &Settings, mean: Vec<f64>, centre: Vec<f64>) -> Optimiser {
+        match settings.method {
+            Method::Cmaes => Optimiser::Cmaes(Box::new(Cmaes::new(
+                mean,
+                settings.sigma,
+                settings.population,
+            ))),
+            Method::Ga => Optimiser::Ga(Genetic::new(
+                &centre,
+                1.0,
+                settings.population,
+                settings.sigma,
+                settings.seed,
+            )),
         }
     }
 
@@ -342,6 +363,8 @@ impl Evolution {
             Some("--sigma")
         } else if s.worlds != settings.worlds {
             Some("the worlds")
+        } else if s.from_weights != settings.from_weights {
+            Some("--from-weights")
         } else {
             None
         };

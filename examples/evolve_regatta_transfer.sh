@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# The regatta evolved to transfer: the network of worlds/regatta_neural_transfer.wbt
+# (worlds/regatta_evolved_varied.wbt's with its weights, grown by the odd filter's output and
+# the ambient readings, I_bda 3), evolved on from its written weights (--from-weights,
+# step size 0.3) with CMA-ES over thirteen layouts: the five arenas of
+# examples/evolve_regatta_varied.sh, the five-buoy pentagon, two arenas of other sizes (0.7 m,
+# 1.2 m), and five of them again with every buoy's lamp lit (point lights). Every trial draws the arena's light (0.02 to 0.4, or
+# off), each buoy's IR film (or none), each buoy's place (±4 cm) and the robot's start. The
+# fitness charges visits out of cyclic order. Then examples/transfer_grid.sh: the transfer
+# grid on six layouts never sailed in training, and the target checked.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release -p regatta
+regatta=${CARGO_TARGET_DIR:-target}/release/regatta
+out=${OUT:-out/evolve-regatta-transfer}
+generations=${GENERATIONS:-150}
+jobs=${JOBS:-2}
+mkdir -p "$out"
+
+TIMEFORMAT="evolution: %R s wall, %U s user + %S s system CPU on $jobs threads"
+time "$regatta" evolve worlds/regatta_neural_transfer.wbt \
+  --world worlds/regatta_small.wbt --world worlds/regatta_wide.wbt \
+  --world worlds/regatta_offcentre.wbt --world worlds/regatta_four.wbt \
+  --world worlds/regatta_five.wbt \
+  --world worlds/regatta_train_compact.wbt --world worlds/regatta_train_broad.wbt \
+  --world worlds/regatta_train_lamps_regatta.wbt --world worlds/regatta_train_lamps_four.wbt \
+  --world worlds/regatta_train_lamps_five.wbt --world worlds/regatta_train_lamps_compact.wbt \
+  --world worlds/regatta_train_lamps_broad.wbt \
+  --fitness "${FITNESS:-regatta:other=-0.5}" --aggregate "${AGGREGATE:-mean}" \
+  --generations "$generations" --trials 1 --duration "${DURATION:-80}" \
+  --seed "${SEED:-1}" --from-weights --sigma "${SIGMA:-0.3}" -j "$jobs" --out "$out" \
+  --vary 'DirectionalLight.intensity=0.02..0.4' --vary 'DirectionalLight.on=TRUE|FALSE' \
+  --vary 'Buoy.irReflectance=0.5|1' --vary 'Buoy.translation=±0.04' \
+  --vary 'Khepera.translation=arena' --vary 'Khepera.rotation=any'
+cp "$out/best.wbt" worlds/regatta_evolved_transfer.wbt
+
+OUT="$out/transfer" examples/transfer_grid.sh worlds/regatta.wbt \
+  worlds/regatta_evolved_varied.wbt worlds/regatta_evolved_transfer.wbt
