@@ -147,6 +147,37 @@ fn crowd_retinas(text: &str, detail: impl Fn(Detail) -> Detail) -> Vec<(Vec<f64>
     out
 }
 
+/// How far `crowd`'s 6-bit outputs are from `exact`'s: the mean over every output (LSB), the
+/// count of outputs compared, and the largest.
+fn digital_error(
+    crowd: &[(Vec<f64>, RetinaOutput)],
+    exact: &[(Vec<f64>, RetinaOutput)],
+) -> (f64, u64, u32) {
+    let (mut sum, mut outputs, mut worst) = (0u64, 0u64, 0u32);
+    for ((_, a), (_, b)) in crowd.iter().zip(exact) {
+        for ((_, x), (_, y)) in a.digital.iter().zip(&b.digital) {
+            for (p, q) in x.iter().zip(y) {
+                let error = (*p as i32 - *q as i32).unsigned_abs();
+                sum += error as u64;
+                worst = worst.max(error);
+                outputs += 1;
+            }
+        }
+    }
+    (sum as f64 / outputs.max(1) as f64, outputs, worst)
+}
+
+/// A seeded stream of uniform numbers in [0, 1) (xorshift), for scenes drawn from one seed.
+fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 /// The documented bound of the crowd level of detail at 0.5 m on crowds of 10 robots/m²
 /// (docs/crowd.md): the mean error of a scene's 6-bit outputs, and the largest.
 const CROWD_MEAN_LSB: f64 = 0.3;
@@ -183,13 +214,7 @@ proptest! {
         seed in 0u64..1_000_000,
     ) {
         let side = (count as f64 / 10.0).sqrt();
-        let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-        let mut unit = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut unit = uniform(seed);
         let robots: Vec<(f64, f64, f64)> = (0..count)
             .map(|_| (unit(), unit(), unit() * 6.4 - 3.2))
             .collect();
@@ -197,18 +222,7 @@ proptest! {
         let text = crowd_world(side, &robots, &buoys, &[], 16, 1);
         let exact = crowd_retinas(&text, |d| d);
         let crowd = crowd_retinas(&text, |d| Detail { crowd_distance: 0.5, ..d });
-        let (mut sum, mut outputs, mut worst) = (0u64, 0u64, 0u32);
-        for ((_, a), (_, b)) in crowd.iter().zip(&exact) {
-            for ((_, x), (_, y)) in a.digital.iter().zip(&b.digital) {
-                for (p, q) in x.iter().zip(y) {
-                    let error = (*p as i32 - *q as i32).unsigned_abs();
-                    sum += error as u64;
-                    worst = worst.max(error);
-                    outputs += 1;
-                }
-            }
-        }
-        let mean = sum as f64 / outputs.max(1) as f64;
+        let (mean, outputs, worst) = digital_error(&crowd, &exact);
         prop_assert!(mean <= CROWD_MEAN_LSB, "mean error {} LSB over {} outputs", mean, outputs);
         prop_assert!(worst <= CROWD_MAX_LSB, "largest error {} LSB", worst);
     }
@@ -233,40 +247,26 @@ proptest! {
         buoys in 40usize..240,
         side in 2.0f64..7.0,
         seed in 0u64..1_000_000,
+        stride in prop::sample::select(vec![1u32, 16]),
     ) {
-        let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-        let mut unit = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut unit = uniform(seed);
         // Robots within 0.3 m of the arena's centre.
         let near = 0.3 / (side * 0.96);
         let robots: Vec<(f64, f64, f64)> = (0..6)
             .map(|_| (0.5 + near * (unit() - 0.5), 0.5 + near * (unit() - 0.5), unit() * 6.4 - 3.2))
             .collect();
         let field: Vec<(f64, f64)> = (0..buoys).map(|_| (unit(), unit())).collect();
-        let text = crowd_world(side, &robots, &field, &[], 16, 1);
+        let text = crowd_world(side, &robots, &field, &[], stride, 1);
         let exact = crowd_retinas(&text, |d| d);
         let crowd = crowd_retinas(&text, |d| Detail { crowd_distance: 0.5, ..d });
-        let (mut sum, mut outputs, mut worst) = (0u64, 0u64, 0u32);
+        let (mean, outputs, worst) = digital_error(&crowd, &exact);
         let (mut relative, mut currents) = (0.0, 0usize);
-        for ((analog_a, a), (analog_b, b)) in crowd.iter().zip(&exact) {
-            for ((_, x), (_, y)) in a.digital.iter().zip(&b.digital) {
-                for (p, q) in x.iter().zip(y) {
-                    let error = (*p as i32 - *q as i32).unsigned_abs();
-                    sum += error as u64;
-                    worst = worst.max(error);
-                    outputs += 1;
-                }
-            }
-            for (x, y) in analog_a.iter().zip(analog_b) {
+        for ((a, _), (b, _)) in crowd.iter().zip(&exact) {
+            for (x, y) in a.iter().zip(b) {
                 relative += (x - y).abs() / y.abs().max(1e-12);
                 currents += 1;
             }
         }
-        let mean = sum as f64 / outputs.max(1) as f64;
         let relative = relative / currents.max(1) as f64;
         prop_assert!(mean <= IMPOSTOR_MEAN_LSB, "mean error {} LSB over {} outputs", mean, outputs);
         prop_assert!(worst <= IMPOSTOR_MAX_LSB, "largest error {} LSB", worst);

@@ -245,15 +245,15 @@ impl ColumnScene<'_> {
             band,
             sky,
             ground,
-            (facing, &mut buffers.pieces),
+            (facing, &mut buffers.pieces, &mut buffers.profile),
             scratch,
             &mut out[..pixels],
         );
     }
 
     /// Adds each visible impostor as a box over its interval: its effect on the column through
-    /// its centre (composited with its pieces and without), times its visible share. The
-    /// strip's windows are contiguous (impostors are made only then).
+    /// its centre (its faces composited into what that column shows), times its visible share.
+    /// The strip's windows are contiguous (impostors are made only then).
     #[allow(clippy::too_many_arguments)]
     fn draw_impostors(
         &self,
@@ -263,7 +263,7 @@ impl ColumnScene<'_> {
         band: f64,
         sky: f64,
         ground: f64,
-        (facing, pieces): (&mut Vec<u32>, &mut Vec<EyeObject>),
+        (facing, pieces, profile): (&mut Vec<u32>, &mut Vec<EyeObject>, &mut Vec<Shown>),
         scratch: &mut Scratch,
         out: &mut [f64],
     ) {
@@ -275,6 +275,12 @@ impl ColumnScene<'_> {
         let extent_hi = strip.centers[0] + width / 2.0;
         let extent_lo = strip.centers[pixels - 1] - width / 2.0;
         let inverse_width = 1.0 / width;
+        let column_band = Band {
+            tan_half: strip.tan_half_band,
+            band,
+            sky,
+            ground,
+        };
         let mut raster = Raster {
             origin: extent_hi,
             inverse_width,
@@ -286,28 +292,33 @@ impl ColumnScene<'_> {
             if impostor.hi <= extent_lo || impostor.lo >= extent_hi {
                 continue;
             }
-            let alpha = (0.5 * (impostor.lo + impostor.hi)).clamp(extent_lo, extent_hi);
+            // What the column through its centre shows (within the strip), then its faces
+            // there (its true centre).
+            let centre = 0.5 * (impostor.lo + impostor.hi);
+            let alpha = centre.clamp(extent_lo, extent_hi);
             let pixel = nearest_index((strip.centers[0] - alpha) * inverse_width, pixels - 1);
-            let direction = look.turn(strip, pixel, alpha);
             look.facing_over(impostor.lo, impostor.hi, facing);
-            impostor_pieces(frame, look, impostor, pieces);
-            // Ids past the look's objects: ties in depth go after them, in piece order.
-            let id = look.objects.len() as u32;
-            let (without, with) = self.column_with(
+            profile.clear();
+            self.profile(
                 frame,
                 look,
-                direction,
+                look.turn(strip, pixel, alpha),
                 facing,
-                (pieces, id),
-                strip.tan_half_band,
-                band,
-                sky,
-                ground,
+                &column_band,
+                scratch,
+                profile,
+            );
+            let effect = self.impostor_effect(
+                frame,
+                look,
+                look.turn(strip, pixel, centre),
+                impostor,
+                (profile, pieces),
+                &column_band,
                 scratch,
             );
-            let effect = (with - without) * impostor.visible;
             if effect != 0.0 {
-                raster.add(impostor.lo, impostor.hi, effect, 0.0);
+                raster.add(impostor.lo, impostor.hi, effect * impostor.visible, 0.0);
             }
         }
     }
@@ -681,58 +692,6 @@ impl ColumnScene<'_> {
                 self.segment_luminance(frame, segment, look.eye, direction, middle, covered)
             },
         )
-    }
-
-    /// [`ColumnScene::column`] without and with `extra` (an impostor's pieces and their first
-    /// id) among the segments.
-    #[allow(clippy::too_many_arguments)]
-    fn column_with(
-        &self,
-        frame: &ColumnFrame,
-        look: &Look,
-        direction: DVec2,
-        facing: &[u32],
-        extra: (&[EyeObject], u32),
-        tan_half: f64,
-        band: f64,
-        sky: f64,
-        ground: f64,
-        scratch: &mut Scratch,
-    ) -> (f64, f64) {
-        let Scratch {
-            segments,
-            lit,
-            free,
-        } = scratch;
-        let band = Band {
-            tan_half,
-            band,
-            sky,
-            ground,
-        };
-        if frame.all_fast {
-            lit.len = 0;
-            let mut sink = LitSink {
-                lit,
-                shades: &frame.shades,
-            };
-            self.collect_segments(look, direction, facing, &mut sink);
-            let without = band.composite(sink.lit.as_slice(), free, |s, _, _| s.luminance);
-            self.collect_pieces(look, direction, extra, &mut sink);
-            let with = band.composite(sink.lit.as_slice(), free, |s, _, _| s.luminance);
-            return (without, with);
-        }
-        segments.len = 0;
-        self.collect_segments(look, direction, facing, segments);
-        let mut composite = |segments: &Segments| {
-            band.composite(segments.iter(), free, |segment, middle, covered| {
-                self.segment_luminance(frame, segment, look.eye, direction, middle, covered)
-            })
-        };
-        let without = composite(segments);
-        self.collect_pieces(look, direction, extra, segments);
-        let with = composite(segments);
-        (without, with)
     }
 
     /// Luminance of a segment's face at tan-elevation `middle / covered` (the fast path skips
