@@ -7,7 +7,9 @@
 # 1.2 m), and five of them again with every buoy's lamp lit (point lights). Every trial draws the arena's light (0.02 to 0.4, or
 # off), each buoy's IR film (or none), each buoy's place (±4 cm) and the robot's start. The
 # fitness charges visits out of cyclic order. Then examples/transfer_grid.sh: the transfer
-# grid on six layouts never sailed in training, and the target checked.
+# grid on six layouts never sailed in training, and the target checked. The committed
+# worlds/regatta_evolved_transfer.wbt is this stage evolved on by
+# examples/evolve_regatta_transfer_more.sh (run it after this script).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -p regatta
