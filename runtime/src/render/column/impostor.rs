@@ -15,6 +15,7 @@
 use glam::{DVec2, DVec3};
 
 use super::footprint::wrap;
+use super::photodiode::total_key;
 
 /// Impostors are at most this many photodiode windows wide: wider objects would show their
 /// shading's variation across them, and are drawn exactly.
@@ -202,8 +203,8 @@ pub(super) fn far(
     }
     let ratio = radius / distance;
     // asin by its series: an impostor is narrower than a few photodiodes (ratio ≲ 0.06,
-    // where the terms left out are below 1e-12).
-    if 2.0 * ratio > width || ratio > 0.1 {
+    // where the terms left out are below 1e-12); past 0.1 the series is not used.
+    if ratio > 0.1 {
         return None;
     }
     let r2 = ratio * ratio;
@@ -260,8 +261,8 @@ fn atan2(y: f64, x: f64) -> f64 {
 /// The visible impostors in the order they are drawn: by the centre of their interval,
 /// ties by index.
 pub(super) fn by_centre(impostors: &[Impostor], keys: &mut Vec<u128>, order: &mut Vec<u32>) {
-    // Centres are finite: their bits order as the numbers do once the sign is folded in; the
-    // index below them breaks ties, and one integer compares both.
+    // Each centre's place in the order of numbers, the index below it breaking ties: one
+    // integer compares both.
     keys.clear();
     keys.extend(
         impostors
@@ -269,13 +270,7 @@ pub(super) fn by_centre(impostors: &[Impostor], keys: &mut Vec<u128>, order: &mu
             .enumerate()
             .filter(|(_, i)| i.visible > 0.0)
             .map(|(index, impostor)| {
-                let bits = (0.5 * (impostor.lo + impostor.hi)).to_bits();
-                let folded = if bits >> 63 == 1 {
-                    !bits
-                } else {
-                    bits | 1 << 63
-                };
-                (folded as u128) << 32 | index as u128
+                (total_key(0.5 * (impostor.lo + impostor.hi)) as u128) << 32 | index as u128
             }),
     );
     keys.sort_unstable();

@@ -136,6 +136,17 @@ pub(super) fn index_below(x: f64, limit: usize) -> usize {
     clamped as i64 as usize
 }
 
+/// `x`'s place in [`f64::total_cmp`]'s order, as an unsigned integer.
+#[inline(always)]
+pub(super) fn total_key(x: f64) -> u64 {
+    let bits = x.to_bits();
+    if bits >> 63 == 1 {
+        !bits
+    } else {
+        bits | 1 << 63
+    }
+}
+
 /// The larger of two numbers, by one compare: `f64::max` also settles NaN, at a cost on the
 /// hot paths, and none arises there (finite geometry; a NaN here picks `b`).
 #[inline(always)]

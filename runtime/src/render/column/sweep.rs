@@ -9,7 +9,7 @@ use super::crowd::CrowdGrid;
 use super::footprint::Relative;
 use super::footprint::{azimuth_interval, corner_of, wrap, Interval, PendingEdge, Upright};
 use super::impostor::{self, Impostor, Occlusion, Standing};
-use super::photodiode::rotate_small;
+use super::photodiode::{rotate_small, total_key};
 use super::scene::{ColumnFrame, ColumnScene};
 use super::strip::Strip;
 use crate::geometry::Footprint;
@@ -206,17 +206,6 @@ fn sort_small(values: &mut [f64]) {
             j -= 1;
         }
         values[j] = value;
-    }
-}
-
-/// `x`'s place in [`f64::total_cmp`]'s order, as an unsigned integer.
-#[inline(always)]
-fn total_key(x: f64) -> u64 {
-    let bits = x.to_bits();
-    if bits >> 63 == 1 {
-        !bits
-    } else {
-        bits | 1 << 63
     }
 }
 

@@ -218,6 +218,13 @@ impl<'g> Rasterizer<'g> {
             .max(l.z_axis.length());
         let slope_h = (1.0 + view.tan_h * view.tan_h).sqrt();
         let slope_v = (1.0 + view.tan_v * view.tan_v).sqrt();
+        let frame = Frame3 {
+            view,
+            screen: &screen,
+            eye,
+            lights: &lights,
+            occluders: occluders.as_ref().map(|(c, p)| (*c, p)),
+        };
         for part in &self.parts {
             let placement = match part.robot {
                 None => {
@@ -257,22 +264,8 @@ impl<'g> Rasterizer<'g> {
             {
                 continue;
             }
-            let frame = Frame3 {
-                view,
-                screen: &screen,
-                eye,
-                lights: &lights,
-                occluders: occluders.as_ref().map(|(c, p)| (*c, p)),
-            };
             self.draw_part(part, placement.as_ref(), &frame, target);
         }
-        let frame = Frame3 {
-            view,
-            screen: &screen,
-            eye,
-            lights: &lights,
-            occluders: occluders.as_ref().map(|(c, p)| (*c, p)),
-        };
         self.resolve(&frame, quantise, target);
     }
 
