@@ -643,14 +643,9 @@ pub fn convert(filtered: f64, i_bda: f64, bits: u32) -> u16 {
 #[inline]
 pub fn convert_scaled(filtered: f64, half: f64, gain: f64, top: f64) -> u16 {
     let value = half + filtered * gain + 0.5;
-    // Capped at top; `as` truncates (floor on (0, top)); NaN fails both compares and reads 0.
-    if value >= top {
-        top as u16
-    } else if value > 0.0 {
-        value as u16
-    } else {
-        0
-    }
+    // Clamped to [0, top], then `as` truncates (floor on (0, top)). `max` returns 0 for NaN,
+    // which therefore reads 0. No branch, so a row of pixels converts in vector lanes.
+    value.max(0.0).min(top) as u16
 }
 
 #[cfg(test)]
@@ -685,6 +680,9 @@ mod tests {
         assert_eq!(convert(-1.0, 1.0, 6), 0);
         assert_eq!(convert(5.0, 1.0, 6), 63);
         assert_eq!(convert(f64::NAN, 1.0, 6), 0);
+        assert_eq!(convert(f64::INFINITY, 1.0, 6), 63);
+        assert_eq!(convert(f64::NEG_INFINITY, 1.0, 6), 0);
+        assert_eq!(convert(-0.0, f64::INFINITY, 6), 32);
         assert_eq!(convert(0.0, 1.0, 8), 128);
     }
 }

@@ -40,6 +40,8 @@ fn retina_outputs(topology: &Topology) -> Vec<(FilterKind, Vec<u16>)> {
 /// The network running on a robot.
 pub struct Neural {
     topology: Arc<Topology>,
+    /// The topology's layer shapes, computed once rather than on every call.
+    shapes: Vec<(usize, usize, usize)>,
     weights: Arc<[f64]>,
     /// Each layer's current values (Elman contexts, CTRNN states y).
     state: Vec<Vec<f64>>,
@@ -66,6 +68,7 @@ impl Neural {
         let state = topology.layers().iter().map(|&n| vec![0.0; n]).collect();
         let retina = retina_outputs(&topology);
         Ok(Neural {
+            shapes: topology.layer_shapes(),
             topology,
             weights,
             state,
@@ -136,7 +139,7 @@ impl Neural {
     /// The two outputs, mapped to −1 … 1 where the activation is bounded.
     fn outputs(&mut self) -> (f64, f64) {
         let topology = &*self.topology;
-        let shapes = topology.layer_shapes();
+        let shapes = &self.shapes;
         let bias = topology.has_bias();
         let mut offset = 0;
         if topology.recurrence == Recurrence::Ctrnn {
