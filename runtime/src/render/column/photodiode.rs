@@ -77,10 +77,12 @@ impl Raster<'_> {
         }
         self.out[last - 1] += partial(last - 1);
         // Each centre from its index (one signed conversion, exact): a running `center += 1`
-        // would chain every pixel's add behind the last one's.
-        let base = (first + 1) as i64;
+        // would chain every pixel's add behind the last one's. A 32-bit index, because packed
+        // i32 → f64 conversion exists on every x86-64 and i64 → f64 does not: the loop then
+        // runs in vector lanes. Strips are far shorter than 2³¹ pixels.
+        let base = (first + 1) as i32;
         for (k, out) in self.out[first + 1..last - 1].iter_mut().enumerate() {
-            let center = (base + k as i64) as f64 + 0.5;
+            let center = (base + k as i32) as f64 + 0.5;
             *out += value + slope_u * (u1 - center);
         }
     }
