@@ -212,9 +212,30 @@ fn identity(n: usize) -> Vec<f64> {
 
 /// Eigenvalues and eigenvectors (columns, row-major) of a symmetric matrix by cyclic Jacobi
 /// rotations, until the off-diagonal part is negligible (or 64 sweeps).
+///
+/// A rotation updates two columns and then two rows of the matrix, and two columns of the
+/// eigenvectors. The eigenvectors are kept transposed while rotating, so that their update
+/// runs along two contiguous rows; every element gets the same arithmetic in the same order
+/// as in the textbook loops, so the result is the same to the bit.
 pub fn jacobi_eigen(matrix: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
     let mut a = matrix.to_vec();
-    let mut v = identity(n);
+    let mut vt = identity(n);
+    if n == 0 {
+        return (Vec::new(), vt);
+    }
+    // Two rows `p < q` of a row-major n-column matrix, for updating in step.
+    fn rows(m: &mut [f64], n: usize, p: usize, q: usize) -> (&mut [f64], &mut [f64]) {
+        let (head, tail) = m.split_at_mut(q * n);
+        (&mut head[p * n..(p + 1) * n], &mut tail[..n])
+    }
+    // c·x − s·y and s·x + c·y of each pair, in place.
+    fn rotate<'a>(pairs: impl Iterator<Item = (&'a mut f64, &'a mut f64)>, c: f64, s: f64) {
+        for (x, y) in pairs {
+            let (old_x, old_y) = (*x, *y);
+            *x = c * old_x - s * old_y;
+            *y = s * old_x + c * old_y;
+        }
+    }
     for _ in 0..64 {
         let off: f64 = (0..n)
             .flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j)))
@@ -235,22 +256,24 @@ pub fn jacobi_eigen(matrix: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
                 let t = if theta == 0.0 { 1.0 } else { t };
                 let c = 1.0 / libm::sqrt(t * t + 1.0);
                 let s = t * c;
-                for k in 0..n {
-                    let (akp, akq) = (a[k * n + p], a[k * n + q]);
-                    a[k * n + p] = c * akp - s * akq;
-                    a[k * n + q] = s * akp + c * akq;
+                // Columns p and q of the matrix, then its rows p and q, then columns p and q
+                // of the eigenvectors (rows of their transpose).
+                for row in a.chunks_exact_mut(n) {
+                    let (x, y) = (row[p], row[q]);
+                    row[p] = c * x - s * y;
+                    row[q] = s * x + c * y;
                 }
-                for k in 0..n {
-                    let (apk, aqk) = (a[p * n + k], a[q * n + k]);
-                    a[p * n + k] = c * apk - s * aqk;
-                    a[q * n + k] = s * apk + c * aqk;
-                }
-                for k in 0..n {
-                    let (vkp, vkq) = (v[k * n + p], v[k * n + q]);
-                    v[k * n + p] = c * vkp - s * vkq;
-                    v[k * n + q] = s * vkp + c * vkq;
-                }
+                let (row_p, row_q) = rows(&mut a, n, p, q);
+                rotate(row_p.iter_mut().zip(row_q.iter_mut()), c, s);
+                let (vt_p, vt_q) = rows(&mut vt, n, p, q);
+                rotate(vt_p.iter_mut().zip(vt_q.iter_mut()), c, s);
             }
+        }
+    }
+    let mut v = vec![0.0; n * n];
+    for (p, row) in vt.chunks_exact(n).enumerate() {
+        for (k, &value) in row.iter().enumerate() {
+            v[k * n + p] = value;
         }
     }
     ((0..n).map(|i| a[i * n + i]).collect(), v)
