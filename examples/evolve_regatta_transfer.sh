@@ -9,7 +9,8 @@
 # fitness charges visits out of cyclic order. Then examples/transfer_grid.sh: the transfer
 # grid on six layouts never sailed in training, and the target checked. The committed
 # worlds/regatta_evolved_transfer.wbt is this stage evolved on by
-# examples/evolve_regatta_transfer_more.sh (run it after this script).
+# examples/evolve_regatta_transfer_more.sh, then examples/evolve_regatta_transfer_final.sh (run
+# them after this script, in that order).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -p regatta

@@ -8,7 +8,9 @@
 # (worlds/regatta_train_lamps_large3.wbt, _large5.wbt, _flat.wbt, worlds/regatta_train_long.wbt);
 # the same variations, trials of 100 s. Stage 2: 150 generations charging out-of-order
 # visits -0.5 (as the first stage); stage 3: 120 generations from stage 2's best, charging
-# them -1. Then examples/transfer_grid.sh on the six held-out layouts.
+# them -1. Then examples/transfer_grid.sh on the six held-out layouts. The committed
+# worlds/regatta_evolved_transfer.wbt is stage 3 evolved on by
+# examples/evolve_regatta_transfer_final.sh (run it after this script).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -p regatta
