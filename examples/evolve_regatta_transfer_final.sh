@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fourth and fifth stages of worlds/regatta_evolved_transfer.wbt. They start from the third
 # stage's network, kept as worlds/regatta_evolved_transfer_stage3.wbt, so that this script
-# alone reproduces the controller byte for byte in about 13 minutes on 2 cores; to run the
+# alone reproduces the controller byte for byte in under 10 minutes on 2 cores; to run the
 # whole curriculum, run examples/evolve_regatta_transfer.sh and
 # examples/evolve_regatta_transfer_more.sh first and start from the latter's result
 # (FROM=out/evolve-regatta-transfer-more/stage3/best.wbt). The network evolved on from its own weights (--from-weights) with
