@@ -7,10 +7,10 @@
 # 1.2 m), and five of them again with every buoy's lamp lit (point lights). Every trial draws the arena's light (0.02 to 0.4, or
 # off), each buoy's IR film (or none), each buoy's place (±4 cm) and the robot's start. The
 # fitness charges visits out of cyclic order. Then examples/transfer_grid.sh: the transfer
-# grid on six layouts never sailed in training, and the target checked. The committed
-# worlds/regatta_evolved_transfer.wbt is this stage evolved on by
-# examples/evolve_regatta_transfer_more.sh, then examples/evolve_regatta_transfer_final.sh (run
-# them after this script, in that order).
+# grid on six layouts never sailed in training, and the target checked. The result stays in
+# the output folder: the committed worlds/regatta_evolved_transfer.wbt is this stage evolved on
+# by examples/evolve_regatta_transfer_more.sh, then examples/evolve_regatta_transfer_final.sh
+# (run them after this script, in that order).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -p regatta
@@ -35,7 +35,6 @@ time "$regatta" evolve worlds/regatta_neural_transfer.wbt \
   --vary 'DirectionalLight.intensity=0.02..0.4' --vary 'DirectionalLight.on=TRUE|FALSE' \
   --vary 'Buoy.irReflectance=0.5|1' --vary 'Buoy.translation=±0.04' \
   --vary 'Khepera.translation=arena' --vary 'Khepera.rotation=any'
-cp "$out/best.wbt" worlds/regatta_evolved_transfer.wbt
 
 OUT="$out/transfer" examples/transfer_grid.sh worlds/regatta.wbt \
-  worlds/regatta_evolved_varied.wbt worlds/regatta_evolved_transfer.wbt
+  worlds/regatta_evolved_varied.wbt "$out/best.wbt"

@@ -8,8 +8,9 @@
 # (worlds/regatta_train_lamps_large3.wbt, _large5.wbt, _flat.wbt, worlds/regatta_train_long.wbt);
 # the same variations, trials of 100 s. Stage 2: 150 generations charging out-of-order
 # visits -0.5 (as the first stage); stage 3: 120 generations from stage 2's best, charging
-# them -1. Then examples/transfer_grid.sh on the six held-out layouts. The committed
-# worlds/regatta_evolved_transfer.wbt is stage 3 evolved on by
+# them -1. Stage 3's network is worlds/regatta_evolved_transfer_stage3.wbt (written anew,
+# byte for byte the committed one); then examples/transfer_grid.sh on the six held-out
+# layouts. The committed worlds/regatta_evolved_transfer.wbt is stage 3 evolved on by
 # examples/evolve_regatta_transfer_final.sh (run it after this script).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -41,7 +42,7 @@ stage() { # stage FROM OUT GENERATIONS FITNESS
 }
 stage "$from" "$out/stage2" 150 'regatta:other=-0.5'
 stage "$out/stage2/best.wbt" "$out/stage3" 120 'regatta:other=-1.0'
-cp "$out/stage3/best.wbt" worlds/regatta_evolved_transfer.wbt
+cp "$out/stage3/best.wbt" worlds/regatta_evolved_transfer_stage3.wbt
 
 OUT="$out/transfer" examples/transfer_grid.sh worlds/regatta.wbt \
-  worlds/regatta_evolved_varied.wbt worlds/regatta_evolved_transfer.wbt
+  worlds/regatta_evolved_varied.wbt worlds/regatta_evolved_transfer_stage3.wbt
