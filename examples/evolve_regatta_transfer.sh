@@ -13,6 +13,7 @@
 # (run them after this script, in that order).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source examples/transfer_training.sh
 cargo build --release -p regatta
 regatta=${CARGO_TARGET_DIR:-target}/release/regatta
 out=${OUT:-out/evolve-regatta-transfer}
@@ -22,19 +23,11 @@ mkdir -p "$out"
 
 TIMEFORMAT="evolution: %R s wall, %U s user + %S s system CPU on $jobs threads"
 time "$regatta" evolve worlds/regatta_neural_transfer.wbt \
-  --world worlds/regatta_small.wbt --world worlds/regatta_wide.wbt \
-  --world worlds/regatta_offcentre.wbt --world worlds/regatta_four.wbt \
-  --world worlds/regatta_five.wbt \
-  --world worlds/regatta_train_compact.wbt --world worlds/regatta_train_broad.wbt \
-  --world worlds/regatta_train_lamps_regatta.wbt --world worlds/regatta_train_lamps_four.wbt \
-  --world worlds/regatta_train_lamps_five.wbt --world worlds/regatta_train_lamps_compact.wbt \
-  --world worlds/regatta_train_lamps_broad.wbt \
+  "${transfer_stage1_worlds[@]}" \
   --fitness "${FITNESS:-regatta:other=-0.5}" --aggregate "${AGGREGATE:-mean}" \
   --generations "$generations" --trials 1 --duration "${DURATION:-80}" \
   --seed "${SEED:-1}" --from-weights --sigma "${SIGMA:-0.3}" -j "$jobs" --out "$out" \
-  --vary 'DirectionalLight.intensity=0.02..0.4' --vary 'DirectionalLight.on=TRUE|FALSE' \
-  --vary 'Buoy.irReflectance=0.5|1' --vary 'Buoy.translation=±0.04' \
-  --vary 'Khepera.translation=arena' --vary 'Khepera.rotation=any'
+  "${transfer_variations[@]}"
 
 OUT="$out/transfer" examples/transfer_grid.sh worlds/regatta.wbt \
   worlds/regatta_evolved_varied.wbt "$out/best.wbt"

@@ -14,6 +14,7 @@
 # examples/evolve_regatta_transfer_final.sh (run it after this script).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source examples/transfer_training.sh
 cargo build --release -p regatta
 regatta=${CARGO_TARGET_DIR:-target}/release/regatta
 out=${OUT:-out/evolve-regatta-transfer-more}
@@ -24,21 +25,11 @@ mkdir -p "$out"
 stage() { # stage FROM OUT GENERATIONS FITNESS
   TIMEFORMAT="evolution ($2): %R s wall, %U s user + %S s system CPU on $jobs threads"
   time "$regatta" evolve "$1" \
-    --world worlds/regatta_small.wbt --world worlds/regatta_wide.wbt \
-    --world worlds/regatta_offcentre.wbt --world worlds/regatta_four.wbt \
-    --world worlds/regatta_five.wbt \
-    --world worlds/regatta_train_compact.wbt --world worlds/regatta_train_broad.wbt \
-    --world worlds/regatta_train_lamps_regatta.wbt --world worlds/regatta_train_lamps_four.wbt \
-    --world worlds/regatta_train_lamps_five.wbt --world worlds/regatta_train_lamps_compact.wbt \
-    --world worlds/regatta_train_lamps_broad.wbt \
-    --world worlds/regatta_train_lamps_large3.wbt --world worlds/regatta_train_lamps_large5.wbt \
-    --world worlds/regatta_train_lamps_flat.wbt --world worlds/regatta_train_long.wbt \
+    "${transfer_stage2_worlds[@]}" \
     --fitness "$4" --aggregate mean \
     --generations "$3" --trials 1 --duration 100 \
     --seed 1 --from-weights --sigma 0.15 -j "$jobs" --out "$2" \
-    --vary 'DirectionalLight.intensity=0.02..0.4' --vary 'DirectionalLight.on=TRUE|FALSE' \
-    --vary 'Buoy.irReflectance=0.5|1' --vary 'Buoy.translation=±0.04' \
-    --vary 'Khepera.translation=arena' --vary 'Khepera.rotation=any'
+    "${transfer_variations[@]}"
 }
 stage "$from" "$out/stage2" 150 'regatta:other=-0.5'
 stage "$out/stage2/best.wbt" "$out/stage3" 120 'regatta:other=-1.0'
