@@ -1,6 +1,8 @@
 //! A heat map: a table of numbers as coloured cells (rows × columns, e.g. controllers ×
 //! conditions → fitness), each cell with its value written in it, so that the figure reads
-//! as the table it is.
+//! as the table it is. A table too wide for the page (sixty conditions, three controllers) is
+//! turned, its columns running down the page in compact rows, so that every name and value
+//! still has room.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -23,13 +25,80 @@ pub struct HeatMap {
 }
 
 const CELL_HEIGHT: u32 = 90;
+/// Rows of a long table (more than [`FEW_ROWS`]) are this tall, their text smaller.
+const COMPACT_CELL_HEIGHT: u32 = 40;
+const FEW_ROWS: usize = 8;
 const TITLE_HEIGHT: u32 = 70;
 const HEADER_HEIGHT: u32 = 80;
 const FOOTER_HEIGHT: u32 = 60;
 const LEFT: u32 = 330;
+/// The room for row names when the table is turned (condition names are long).
+const TURNED_LEFT: u32 = 460;
 const WIDTH: u32 = 1200;
+/// Narrower columns than this cannot hold their names or values: a table with more columns
+/// than rows is then turned, its columns running down the page.
+const MIN_CELL_WIDTH: u32 = 70;
+
+/// Where a heat map's cells go: the table as given, or turned (rows and columns swapped).
+struct Layout<'m> {
+    rows: &'m [String],
+    columns: &'m [String],
+    turned: bool,
+    cell_height: u32,
+    left: u32,
+    /// Characters a row name keeps.
+    row_chars: usize,
+    /// Text size of row names and cell values.
+    text: u32,
+}
+
+impl Layout<'_> {
+    fn cell_width(&self) -> u32 {
+        (WIDTH - self.left - 30) / self.columns.len().max(1) as u32
+    }
+}
 
 impl HeatMap {
+    /// The layout: turned when the columns are too many for the page's width and outnumber
+    /// the rows (a transfer grid of many conditions and a few controllers).
+    fn layout(&self) -> Layout<'_> {
+        let as_given = (WIDTH - LEFT - 30) / self.columns.len().max(1) as u32;
+        let turned = as_given < MIN_CELL_WIDTH && self.columns.len() > self.rows.len();
+        let (rows, columns) = if turned {
+            (&self.columns, &self.rows)
+        } else {
+            (&self.rows, &self.columns)
+        };
+        let many = rows.len() > FEW_ROWS;
+        Layout {
+            rows,
+            columns,
+            turned,
+            cell_height: if many {
+                COMPACT_CELL_HEIGHT
+            } else {
+                CELL_HEIGHT
+            },
+            left: if turned { TURNED_LEFT } else { LEFT },
+            row_chars: if turned { 34 } else { 20 },
+            text: if many { style::TICK - 8 } else { style::TICK },
+        }
+    }
+
+    /// The value at (row, column) of the layout.
+    fn value(&self, layout: &Layout, row: usize, column: usize) -> Option<f64> {
+        let (r, c) = if layout.turned {
+            (column, row)
+        } else {
+            (row, column)
+        };
+        self.values
+            .get(r)
+            .and_then(|values| values.get(c))
+            .copied()
+            .flatten()
+    }
+
     /// The colour scale's ends: the values' range (a little widened when flat).
     fn range(&self) -> (f64, f64) {
         let mut values = self.values.iter().flatten().flatten().copied();
@@ -43,17 +112,30 @@ impl HeatMap {
     }
 }
 
-/// A label in at most two lines of about `chars` characters, cut where it is longer.
+/// A label in at most two lines of about `chars` characters, cut where it is longer. A word
+/// too long for a line breaks after its underscores (world names such as
+/// `regatta_evolved_transfer`).
 fn wrapped(text: &str, chars: usize) -> Vec<String> {
     let mut lines: Vec<String> = Vec::new();
     for word in text.split_whitespace() {
-        let full = lines.len() == 2;
-        match lines.last_mut() {
-            Some(line) if full || line.chars().count() + 1 + word.chars().count() <= chars => {
-                line.push(' ');
-                line.push_str(word);
+        let pieces: Vec<&str> = if word.chars().count() > chars {
+            word.split_inclusive('_').collect()
+        } else {
+            vec![word]
+        };
+        for (k, piece) in pieces.into_iter().enumerate() {
+            let glue = if k == 0 { " " } else { "" };
+            let full = lines.len() == 2;
+            match lines.last_mut() {
+                Some(line)
+                    if full
+                        || line.chars().count() + glue.len() + piece.chars().count() <= chars =>
+                {
+                    line.push_str(glue);
+                    line.push_str(piece);
+                }
+                _ => lines.push(piece.to_owned()),
             }
-            _ => lines.push(word.to_owned()),
         }
     }
     lines.iter().map(|l| shortened(l, chars)).collect()
@@ -71,10 +153,11 @@ fn shortened(text: &str, chars: usize) -> String {
 
 impl Figure for HeatMap {
     fn size(&self) -> (u32, u32) {
-        let rows = self.rows.len().max(1) as u32;
+        let layout = self.layout();
+        let rows = layout.rows.len().max(1) as u32;
         (
             WIDTH,
-            TITLE_HEIGHT + HEADER_HEIGHT + rows * CELL_HEIGHT + FOOTER_HEIGHT,
+            TITLE_HEIGHT + HEADER_HEIGHT + rows * layout.cell_height + FOOTER_HEIGHT,
         )
     }
 
@@ -94,15 +177,16 @@ impl Figure for HeatMap {
             (WIDTH as i32 / 2, TITLE_HEIGHT as i32 / 2),
             font(style::TITLE).pos(centred),
         ))?;
-        let columns = self.columns.len().max(1) as u32;
-        let cell_width = (WIDTH - LEFT - 30) / columns;
+        let layout = self.layout();
+        let (left, cell_height) = (layout.left, layout.cell_height);
+        let cell_width = layout.cell_width();
         let top = (TITLE_HEIGHT + HEADER_HEIGHT) as i32;
         // Column names over the cells, on two lines where columns are narrow (about 12
         // pixels a character at this size).
         let size = style::TICK - 4;
         let chars = (cell_width / 12).max(4) as usize;
-        for (c, name) in self.columns.iter().enumerate() {
-            let x = LEFT as i32 + (c as u32 * cell_width + cell_width / 2) as i32;
+        for (c, name) in layout.columns.iter().enumerate() {
+            let x = left as i32 + (c as u32 * cell_width + cell_width / 2) as i32;
             let lines = wrapped(name, chars);
             let step = size as i32 + 4;
             let first = top - 12 - step * (lines.len() as i32 - 1) - step / 2;
@@ -115,28 +199,23 @@ impl Figure for HeatMap {
             }
         }
         let (low, high) = self.range();
-        for (r, name) in self.rows.iter().enumerate() {
-            let y = top + (r as u32 * CELL_HEIGHT) as i32;
+        for (r, name) in layout.rows.iter().enumerate() {
+            let y = top + (r as u32 * cell_height) as i32;
             root.draw(&Text::new(
-                shortened(name, 20),
-                (LEFT as i32 - 16, y + CELL_HEIGHT as i32 / 2),
-                font(style::TICK).pos(Pos::new(HPos::Right, VPos::Center)),
+                shortened(name, layout.row_chars),
+                (left as i32 - 16, y + cell_height as i32 / 2),
+                font(layout.text).pos(Pos::new(HPos::Right, VPos::Center)),
             ))?;
-            for c in 0..self.columns.len() {
-                let x = LEFT as i32 + (c as u32 * cell_width) as i32;
-                let value = self
-                    .values
-                    .get(r)
-                    .and_then(|row| row.get(c))
-                    .copied()
-                    .flatten();
+            for c in 0..layout.columns.len() {
+                let x = left as i32 + (c as u32 * cell_width) as i32;
+                let value = self.value(&layout, r, c);
                 let fill = match value {
                     Some(v) => {
                         ViridisRGB.get_color(((v - low) / (high - low)).clamp(0.0, 1.0) as f32)
                     }
                     None => style::GRID,
                 };
-                let corners = [(x, y), (x + cell_width as i32, y + CELL_HEIGHT as i32)];
+                let corners = [(x, y), (x + cell_width as i32, y + cell_height as i32)];
                 root.draw(&Rectangle::new(corners, fill.filled()))?;
                 root.draw(&Rectangle::new(corners, WHITE.stroke_width(2)))?;
                 if let Some(v) = value {
@@ -146,8 +225,8 @@ impl Figure for HeatMap {
                     let ink = if luminance > 140.0 { style::INK } else { WHITE };
                     root.draw(&Text::new(
                         number_in_cell(v),
-                        (x + cell_width as i32 / 2, y + CELL_HEIGHT as i32 / 2),
-                        ("sans-serif", style::TICK)
+                        (x + cell_width as i32 / 2, y + cell_height as i32 / 2),
+                        ("sans-serif", layout.text)
                             .into_font()
                             .color(&ink)
                             .pos(centred),
@@ -155,7 +234,7 @@ impl Figure for HeatMap {
                 }
             }
         }
-        let bottom = top + (self.rows.len() as u32 * CELL_HEIGHT) as i32;
+        let bottom = top + (layout.rows.len() as u32 * cell_height) as i32;
         root.draw(&Text::new(
             format!(
                 "{} (colour from {} to {})",
@@ -216,5 +295,56 @@ mod tests {
         }
         let png = crate::render_png(&map).expect("draws");
         assert_eq!((png.width(), png.height()), map.size());
+        assert!(!map.layout().turned, "three columns fit across the page");
+    }
+
+    #[test]
+    fn long_names_break_after_underscores() {
+        assert_eq!(
+            wrapped("regatta_evolved_transfer", 19),
+            ["regatta_evolved_", "transfer"]
+        );
+        assert_eq!(wrapped("dim 0.02", 19), ["dim 0.02"]);
+        assert_eq!(
+            wrapped("aa bb cc", 2),
+            ["aa", "b…"],
+            "two lines at most, cut"
+        );
+    }
+
+    #[test]
+    fn a_wide_table_is_turned_and_keeps_its_names_and_values() {
+        let conditions: Vec<String> = (0..60)
+            .map(|k| format!("layout {} lamps lit no film", k))
+            .collect();
+        let map = HeatMap {
+            title: "transfer".into(),
+            value_label: "mean fitness".into(),
+            rows: vec!["hand-tuned".into(), "varied".into(), "transfer".into()],
+            values: (0..3)
+                .map(|r| (0..60).map(|c| Some((r * 100 + c) as f64)).collect())
+                .collect(),
+            columns: conditions,
+        };
+        let layout = map.layout();
+        assert!(layout.turned);
+        assert_eq!(layout.rows.len(), 60);
+        assert_eq!(
+            map.value(&layout, 59, 2),
+            Some(259.0),
+            "row 59 is condition 59"
+        );
+        let svg = crate::render_svg(&map).expect("draws");
+        for text in ["layout 59 lamps lit no film", "transfer", "259", "0.00"] {
+            assert!(svg.contains(text), "{text} missing");
+        }
+        let png = crate::render_png(&map).expect("draws");
+        assert_eq!(
+            (png.width(), png.height()),
+            (
+                WIDTH,
+                TITLE_HEIGHT + HEADER_HEIGHT + 60 * COMPACT_CELL_HEIGHT + FOOTER_HEIGHT
+            )
+        );
     }
 }
