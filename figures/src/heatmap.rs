@@ -35,6 +35,8 @@ const LEFT: u32 = 330;
 /// The room for row names when the table is turned (condition names are long).
 const TURNED_LEFT: u32 = 460;
 const WIDTH: u32 = 1200;
+/// The margin right of the cells.
+const RIGHT: u32 = 30;
 /// Narrower columns than this cannot hold their names or values: a table with more columns
 /// than rows is then turned, its columns running down the page.
 const MIN_CELL_WIDTH: u32 = 70;
@@ -54,16 +56,21 @@ struct Layout<'m> {
 
 impl Layout<'_> {
     fn cell_width(&self) -> u32 {
-        (WIDTH - self.left - 30) / self.columns.len().max(1) as u32
+        cell_width(self.left, self.columns.len())
     }
+}
+
+/// The width of each of `columns` cells right of a margin of `left` pixels.
+fn cell_width(left: u32, columns: usize) -> u32 {
+    (WIDTH - left - RIGHT) / columns.max(1) as u32
 }
 
 impl HeatMap {
     /// The layout: turned when the columns are too many for the page's width and outnumber
     /// the rows (a transfer grid of many conditions and a few controllers).
     fn layout(&self) -> Layout<'_> {
-        let as_given = (WIDTH - LEFT - 30) / self.columns.len().max(1) as u32;
-        let turned = as_given < MIN_CELL_WIDTH && self.columns.len() > self.rows.len();
+        let turned = cell_width(LEFT, self.columns.len()) < MIN_CELL_WIDTH
+            && self.columns.len() > self.rows.len();
         let (rows, columns) = if turned {
             (&self.columns, &self.rows)
         } else {
