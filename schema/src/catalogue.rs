@@ -16,6 +16,10 @@ const CATALOGUE_FILES: &[(&str, &str)] = &[
     ("vrml97.toml", include_str!("../catalogue/vrml97.toml")),
     ("devices.toml", include_str!("../catalogue/devices.toml")),
     ("webots.toml", include_str!("../catalogue/webots.toml")),
+    (
+        "webots_devices.toml",
+        include_str!("../catalogue/webots_devices.toml"),
+    ),
 ];
 
 /// One field of a node type, as the catalogue declares it.

@@ -71,13 +71,12 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         .with_context(|| format!("cannot copy the tests into {}", scratch.display()))?;
     let me = std::env::current_exe().context("cannot find regatta's own executable")?;
     let mut rows = Vec::new();
-    println!("{:<48} {:<8} {:<10} {:>7}  first failure", "test", "physics", "result", "time");
+    println!(
+        "{:<48} {:<8} {:<10} {:>7}  first failure",
+        "test", "physics", "result", "time"
+    );
     for test in &tests {
-        let world = scratch.join(
-            test.world
-                .strip_prefix(&args.webots)
-                .unwrap_or(&test.world),
-        );
+        let world = scratch.join(test.world.strip_prefix(&args.webots).unwrap_or(&test.world));
         let started = Instant::now();
         let output = run_one(&me, &scratch, &args, &world)?;
         let seconds = started.elapsed().as_secs_f64();
@@ -160,7 +159,11 @@ fn list_tests(webots: &Path, api: &Path) -> anyhow::Result<Vec<Test>> {
         let path = entry?.path();
         if path.extension().is_some_and(|e| e == "wbt") {
             tests.push(Test {
-                name: path.file_stem().unwrap_or_default().to_string_lossy().into(),
+                name: path
+                    .file_stem()
+                    .unwrap_or_default()
+                    .to_string_lossy()
+                    .into(),
                 world: path,
                 physics: None,
             });

@@ -65,7 +65,12 @@ pub fn plan_programs(
         }
     }
     let project = regatta_webots::project_of(world);
-    let mut planned = regatta_webots::plan(&loaded.compiled, &project, &overridden)?;
+    let mut planned = regatta_webots::plan(
+        &loaded.compiled,
+        &loaded.checked.scene,
+        &project,
+        &overridden,
+    )?;
     planned.retain(|item| {
         let robot = &names[item.robot];
         match &item.program {
@@ -133,6 +138,8 @@ pub fn start_programs(
             executable,
             folder: item.program.folder().to_path_buf(),
             args: item.args,
+            devices: item.devices,
+            z_up: item.z_up,
         });
     }
     let options = regatta_webots::Options {

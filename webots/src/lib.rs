@@ -94,6 +94,10 @@ pub struct Planned {
     pub program: Program,
     /// The robot's `controllerArgs`, passed to the program as its arguments.
     pub args: Vec<String>,
+    /// Its devices, in tag order (read from the scene, which a run then releases).
+    pub devices: Vec<devices::Device>,
+    /// Whether the world's file is z-up (a GPS answers in the file's axes).
+    pub z_up: bool,
 }
 
 /// The robots of `compiled` whose controller name is a program of `project`
@@ -101,6 +105,7 @@ pub struct Planned {
 /// built-ins; robots in `skip` (driven otherwise) are left alone.
 pub fn plan(
     compiled: &Compiled,
+    scene: &regatta_schema::Scene,
     project: &Path,
     skip: &[usize],
 ) -> Result<Vec<Planned>, WebotsError> {
@@ -114,6 +119,8 @@ pub fn plan(
                 robot,
                 program,
                 args: rig.controller_args.clone(),
+                devices: devices::devices(scene, rig),
+                z_up: scene.up_axis == regatta_schema::UpAxis::Z,
             });
         }
     }

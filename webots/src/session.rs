@@ -19,7 +19,7 @@ use std::time::{Duration, Instant};
 use regatta_runtime::khepera::{Controller, Khepera, KheperaError, Senses};
 use regatta_runtime::sim::Simulation;
 
-use crate::devices::{Device, Side, Source};
+use crate::devices::{with_resolution, Device, Source};
 use crate::protocol::{self, kind, op, status, Command as StepCommand, Writer};
 use crate::WebotsError;
 
@@ -51,6 +51,10 @@ pub struct Start {
     pub executable: PathBuf,
     pub folder: PathBuf,
     pub args: Vec<String>,
+    /// Its devices, in tag order ([`crate::devices::devices`]).
+    pub devices: Vec<Device>,
+    /// Whether the world's file is z-up (positions answer in the file's axes).
+    pub z_up: bool,
 }
 
 /// The sensors a controller enabled, as the runtime's controller interface declares them.
@@ -83,7 +87,7 @@ struct Sampling {
     due: u64,
 }
 
-/// A wheel motor: target position (+∞: velocity control) and velocity (rad/s).
+/// A motor: target position (+∞: velocity control) and velocity (rad/s).
 #[derive(Clone, Copy, Debug)]
 struct Motor {
     target: f64,
@@ -99,8 +103,10 @@ struct Driven {
     stream: UnixStream,
     devices: Vec<Device>,
     sampling: Vec<Sampling>,
-    motors: [Motor; 2],
+    /// One per device (used by the motors).
+    motors: Vec<Motor>,
     leds: Vec<i32>,
+    z_up: bool,
     /// The step at which the controller's `wb_robot_step` returns.
     wake: u64,
     senses: Arc<AtomicU8>,
@@ -171,7 +177,7 @@ impl Controllers {
     ) -> Result<Driven, WebotsError> {
         let rig = &simulation.compiled.rig.robots[start.robot];
         let robot_name = rig.name.clone();
-        let devices = crate::devices::devices(rig);
+        let devices = start.devices;
         let path = self.sockets.join(format!("{}.sock", start.robot));
         let listener =
             UnixListener::bind(&path).map_err(|source| WebotsError::io(&path, source))?;
@@ -260,7 +266,14 @@ impl Controllers {
         simulation.set_controller(start.robot, Box::new(Listening(senses.clone())));
         let rig = &simulation.compiled.rig.robots[start.robot];
         simulation.robots[start.robot].keep_raw_readings(rig);
-        let max_velocity = devices.first().map_or(0.0, |d| d.params[0]);
+        // Webots' motors start in position control at 0, at their largest velocity.
+        let motors = devices
+            .iter()
+            .map(|d| Motor {
+                target: 0.0,
+                velocity: d.params.first().copied().unwrap_or(0.0),
+            })
+            .collect();
         let mut driven = Driven {
             robot: start.robot,
             robot_name,
@@ -270,10 +283,8 @@ impl Controllers {
             sampling: vec![Sampling::default(); devices.len()],
             leds: vec![0; devices.len()],
             devices,
-            motors: [Motor {
-                target: 0.0,
-                velocity: max_velocity,
-            }; 2],
+            motors,
+            z_up: start.z_up,
             wake: 0,
             senses,
             echo,
@@ -372,29 +383,44 @@ impl Controllers {
             while sampling.due <= step {
                 sampling.due += sampling.period;
             }
-            let reading = match driven.devices[d].source {
-                Source::Encoder(side) => {
-                    let travel = match side {
-                        Side::Left => robot.travel.0,
-                        Side::Right => robot.travel.1,
+            let device = &driven.devices[d];
+            let one = |v: f64| Reading::Values(vec![with_resolution(v, device.resolution)]);
+            let reading = match device.source {
+                Source::WheelAngle { left, sign } => {
+                    let travel = if left { robot.travel.0 } else { robot.travel.1 };
+                    let angle = if rig.wheel_radius > 0.0 {
+                        sign * travel / rig.wheel_radius
+                    } else {
+                        0.0
                     };
-                    Reading::Values(vec![travel / rig.wheel_radius])
+                    one(angle)
                 }
-                Source::Distance(i) => Reading::Values(vec![robot
+                Source::Fixed(v) => one(v),
+                Source::Distance(i) => one(robot
                     .raw
                     .as_ref()
                     .and_then(|r| r.distance.get(i).copied())
-                    .unwrap_or(f64::NAN)]),
-                Source::Light(i) => Reading::Values(vec![robot
+                    .unwrap_or(f64::NAN)),
+                Source::Light(i) => one(robot
                     .raw
                     .as_ref()
                     .and_then(|r| r.light.get(i).copied())
-                    .unwrap_or(f64::NAN)]),
+                    .unwrap_or(f64::NAN)),
                 Source::Camera(i) => match robot.cameras.get(i) {
                     Some(camera) => Reading::Bytes(bgra(&camera.image.rgb)),
                     None => continue,
                 },
-                Source::Motor(_) => continue,
+                Source::Gps(offset) => {
+                    let p = robot.pose.to_world(offset, rig.floor_y);
+                    // regatta is y-up; a z-up file's (x, y, z) is regatta's (x, −z, y).
+                    let p = if driven.z_up {
+                        [p.x, -p.z, p.y]
+                    } else {
+                        [p.x, p.y, p.z]
+                    };
+                    Reading::Values(p.map(|v| with_resolution(v, device.resolution)).to_vec())
+                }
+                Source::Wheel { .. } | Source::Inert | Source::Led => continue,
             };
             readings.push((d, reading));
         }
@@ -455,11 +481,11 @@ impl Controllers {
                         sampling.period = 0;
                     }
                 }
-                (op::MOTOR_POSITION, Source::Motor(side)) => {
-                    driven.motors[side as usize].target = command.value;
+                (op::MOTOR_POSITION, Source::Wheel { .. } | Source::Inert) => {
+                    driven.motors[d - 1].target = command.value;
                 }
-                (op::MOTOR_VELOCITY, Source::Motor(side)) => {
-                    driven.motors[side as usize].velocity = command.value;
+                (op::MOTOR_VELOCITY, Source::Wheel { .. } | Source::Inert) => {
+                    driven.motors[d - 1].velocity = command.value;
                 }
                 (op::LED_SET, _) => driven.leds[d - 1] = command.value as i32,
                 (op, _) => {
@@ -558,28 +584,34 @@ fn bgra(rgb: &[u8]) -> Vec<u8> {
 }
 
 /// The wheel speeds a robot's motors give for this step: velocity control, or Webots'
-/// default position control (P = 10, the speed bounded by the motor's velocity).
+/// default position control (P = 10, the speed bounded by the motor's velocity). A side with
+/// several driven wheels (skid steer) rolls at their mean.
 fn drive(driven: &Driven, simulation: &mut Simulation) {
     let rig = &simulation.compiled.rig.robots[driven.robot];
     let radius = rig.wheel_radius;
     let robot = &mut simulation.robots[driven.robot];
-    if driven.finished {
+    if driven.finished || radius <= 0.0 {
         robot.wheel_velocity = Some((0.0, 0.0));
         return;
     }
-    let travel = [robot.travel.0, robot.travel.1];
-    let mut speeds = [0.0; 2];
-    for (side, motor) in driven.motors.iter().enumerate() {
-        let limit = motor.velocity.abs();
-        speeds[side] = if motor.target.is_infinite() {
-            motor.velocity
-        } else if radius > 0.0 {
-            (10.0 * (motor.target - travel[side] / radius)).clamp(-limit, limit)
-        } else {
-            0.0
+    let mut sums = [(0.0, 0usize); 2];
+    for (device, motor) in driven.devices.iter().zip(&driven.motors) {
+        let Source::Wheel { left, sign } = device.source else {
+            continue;
         };
+        let travel = if left { robot.travel.0 } else { robot.travel.1 };
+        let limit = motor.velocity.abs();
+        let velocity = if motor.target.is_infinite() {
+            motor.velocity
+        } else {
+            (10.0 * (motor.target - sign * travel / radius)).clamp(-limit, limit)
+        };
+        let side = &mut sums[usize::from(!left)];
+        side.0 += sign * velocity;
+        side.1 += 1;
     }
-    robot.wheel_velocity = Some((speeds[0] * radius, speeds[1] * radius));
+    let mean = |(sum, n): (f64, usize)| if n == 0 { 0.0 } else { sum / n as f64 };
+    robot.wheel_velocity = Some((mean(sums[0]) * radius, mean(sums[1]) * radius));
 }
 
 fn send(driven: &mut Driven, frame: &[u8], time: f64) -> Result<(), WebotsError> {
