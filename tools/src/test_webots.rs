@@ -21,7 +21,7 @@ pub struct Args {
     #[arg(long)]
     only: Vec<String>,
     /// Simulated time a test may run (s).
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value_t = 30.0)]
     duration: f64,
     /// Wall-clock time a test may take (s).
     #[arg(long, default_value_t = 60.0)]

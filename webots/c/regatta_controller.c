@@ -51,7 +51,9 @@ enum {
   KIND_INERTIAL_UNIT,
   KIND_ACCELEROMETER,
   KIND_GYRO,
-  KIND_TOUCH_SENSOR
+  KIND_TOUCH_SENSOR,
+  KIND_EMITTER,
+  KIND_RECEIVER
 };
 enum { OP_ENABLE = 1, OP_MOTOR_POSITION, OP_MOTOR_VELOCITY, OP_LED_SET };
 enum { STATUS_RUNNING = 0, STATUS_QUIT = 1 };
@@ -598,6 +600,10 @@ static WbNodeType node_type(int kind) {
       return WB_NODE_GYRO;
     case KIND_TOUCH_SENSOR:
       return WB_NODE_TOUCH_SENSOR;
+    case KIND_EMITTER:
+      return WB_NODE_EMITTER;
+    case KIND_RECEIVER:
+      return WB_NODE_RECEIVER;
     default:
       return WB_NODE_NO_NODE;
   }

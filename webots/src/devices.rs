@@ -294,6 +294,33 @@ impl Walk<'_> {
                     source: Source::Gps(offset),
                 });
             }
+            // Devices a controller may name whose readings regatta does not simulate yet:
+            // listed (so tags and indices are Webots'), read as NaN.
+            "Accelerometer" | "Gyro" | "Compass" | "InertialUnit" | "TouchSensor" | "Emitter"
+            | "Receiver" => {
+                let (kind, table) = match scene.type_name(node) {
+                    "Accelerometer" => (kind::ACCELEROMETER, lookup_table(scene, node)),
+                    "Gyro" => (kind::GYRO, lookup_table(scene, node)),
+                    "Compass" => (kind::COMPASS, lookup_table(scene, node)),
+                    "InertialUnit" => (kind::INERTIAL_UNIT, Vec::new()),
+                    "TouchSensor" => (kind::TOUCH_SENSOR, lookup_table(scene, node)),
+                    "Emitter" => (kind::EMITTER, Vec::new()),
+                    _ => (kind::RECEIVER, Vec::new()),
+                };
+                let params = match scene.type_name(node) {
+                    "InertialUnit" => vec![scene.float(node, "noise")],
+                    _ => Vec::new(),
+                };
+                self.devices.push(Device {
+                    kind,
+                    name: scene.string(node, "name").to_owned(),
+                    model: scene.string(node, "model").to_owned(),
+                    params,
+                    table,
+                    resolution: -1.0,
+                    source: Source::Fixed(f64::NAN),
+                });
+            }
             "LED" => {
                 let colors = match scene.field(node, "color") {
                     regatta_schema::Value::Vec3s(c) => c.len(),

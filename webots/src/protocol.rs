@@ -32,6 +32,8 @@ pub mod kind {
     pub const ACCELEROMETER: u8 = 10;
     pub const GYRO: u8 = 11;
     pub const TOUCH_SENSOR: u8 = 12;
+    pub const EMITTER: u8 = 13;
+    pub const RECEIVER: u8 = 14;
 }
 
 /// Commands of a step frame.

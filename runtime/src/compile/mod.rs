@@ -578,8 +578,13 @@ impl Compiler<'_> {
             self.walk(child, &children_frame, Owner::Robot(index), depth + 1);
         }
         self.group = outer;
-        if generic {
+        if generic && self.rig.robots[index].drive.is_some() {
             self.size_generic_body(index, first_part);
+        } else if generic {
+            // A robot that cannot move is no body either: nothing pushes it, and it pushes
+            // nothing (Webots' robots without physics stand where they are written).
+            self.rig.robots[index].body_radius = 0.0;
+            self.rig.robots[index].body_height = 0.0;
         } else if let Some(turret) = scene.child(node, "turret") {
             self.turret(turret, index);
         }
