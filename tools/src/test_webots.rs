@@ -47,7 +47,7 @@ enum Verdict {
     Passed,
     Failed(String),
     /// Neither OK nor FAILURE was printed: the last error regatta gave, if any.
-    NoVerdict(String),
+    Silent(String),
 }
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
@@ -84,7 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         let (result, message) = match &verdict {
             Verdict::Passed => ("passed", String::new()),
             Verdict::Failed(m) => ("failed", m.clone()),
-            Verdict::NoVerdict(m) => ("no verdict", m.clone()),
+            Verdict::Silent(m) => ("no verdict", m.clone()),
         };
         let physics = match test.physics {
             Some(true) => "yes",
@@ -225,10 +225,9 @@ fn verdict(output: &str) -> Verdict {
     }
     let last_error = output
         .lines()
-        .filter(|l| l.starts_with("error") || l.contains("Error"))
-        .next_back()
+        .rfind(|l| l.starts_with("error") || l.contains("Error"))
         .unwrap_or("the controller printed neither OK nor FAILURE");
-    Verdict::NoVerdict(last_error.to_owned())
+    Verdict::Silent(last_error.to_owned())
 }
 
 fn shorten(text: &str, at: usize) -> String {
@@ -270,6 +269,6 @@ mod tests {
             verdict("[r] FAILURE with gps: The X value\n[r] OK: x"),
             Verdict::Failed("FAILURE with gps: The X value".into())
         );
-        assert!(matches!(verdict("error: boom\n"), Verdict::NoVerdict(m) if m == "error: boom"));
+        assert!(matches!(verdict("error: boom\n"), Verdict::Silent(m) if m == "error: boom"));
     }
 }

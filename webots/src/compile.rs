@@ -13,7 +13,7 @@ use std::process::Command;
 
 use sha2::{Digest, Sha256};
 
-use crate::WebotsError;
+use crate::error::WebotsError;
 
 /// regatta's Webots headers, as `(file name under include/webots/, text)`.
 pub const HEADERS: &[(&str, &str)] = &[

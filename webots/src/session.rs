@@ -20,8 +20,8 @@ use regatta_runtime::khepera::{Controller, Khepera, KheperaError, Senses};
 use regatta_runtime::sim::Simulation;
 
 use crate::devices::{with_resolution, Device, Source};
+use crate::error::WebotsError;
 use crate::protocol::{self, kind, op, status, Command as StepCommand, Writer};
-use crate::WebotsError;
 
 /// How controllers are run.
 #[derive(Clone, Debug)]
