@@ -55,9 +55,26 @@ enum {
   KIND_EMITTER,
   KIND_RECEIVER
 };
-enum { OP_ENABLE = 1, OP_MOTOR_POSITION, OP_MOTOR_VELOCITY, OP_LED_SET };
+enum {
+  OP_ENABLE = 1,
+  OP_MOTOR_POSITION,
+  OP_MOTOR_VELOCITY,
+  OP_LED_SET,
+  OP_EMITTER_SEND,
+  OP_EMITTER_CHANNEL,
+  OP_EMITTER_RANGE,
+  OP_RECEIVER_CHANNEL
+};
 enum { STATUS_RUNNING = 0, STATUS_QUIT = 1 };
-enum { READING_VALUES = 0, READING_BYTES = 1 };
+enum { READING_VALUES = 0, READING_BYTES = 1, READING_PACKETS = 2 };
+
+/* A packet a receiver holds. */
+typedef struct {
+  unsigned char *data;
+  int size;
+  double strength;
+  double direction[3];
+} Packet;
 
 typedef struct {
   int kind;
@@ -76,6 +93,12 @@ typedef struct {
   double target, velocity, acceleration;
   /* LEDs */
   int led;
+  /* emitters and receivers */
+  int channel;
+  double range;
+  int sent; /* bytes sent in this step (an emitter's buffer) */
+  Packet *packets;
+  int n_packets, first_packet, packets_capacity;
 } Device;
 
 static struct {
@@ -224,6 +247,12 @@ static void queue(int op, WbDeviceTag tag, double value) {
   R.n_commands++;
 }
 
+/* A command followed by bytes (an emitter's packet). */
+static void queue_bytes(int op, WbDeviceTag tag, const void *data, int size) {
+  queue(op, tag, size);
+  put(data, (size_t)size);
+}
+
 /* ---- devices ---- */
 
 static Device *device(WbDeviceTag tag, int kind, const char *function) {
@@ -341,6 +370,8 @@ int wb_robot_init(void) {
       d->values[v] = NAN;
     d->target = 0.0;
     d->velocity = param(d, 0, 0.0);
+    d->channel = (int)param(d, 1, 0);
+    d->range = param(d, 2, -1);
   }
   R.initialized = 1;
   return 1;
@@ -384,6 +415,38 @@ static void apply_reply(void) {
         if (v < 4)
           d->values[v] = x;
       }
+    } else if (type == READING_PACKETS) {
+      int count = take_u16();
+      for (int k = 0; k < count; k++) {
+        double strength = take_f64();
+        double direction[3];
+        for (int v = 0; v < 3; v++)
+          direction[v] = take_f64();
+        uint32_t size = take_u32();
+        const unsigned char *bytes = take(size);
+        int end = d->first_packet + d->n_packets;
+        if (end >= d->packets_capacity) {
+          /* Compact the queue, then grow it. */
+          memmove(d->packets, d->packets + d->first_packet, (size_t)d->n_packets * sizeof(Packet));
+          d->first_packet = 0;
+          end = d->n_packets;
+          if (end >= d->packets_capacity) {
+            d->packets_capacity = d->packets_capacity ? 2 * d->packets_capacity : 8;
+            d->packets = realloc(d->packets, (size_t)d->packets_capacity * sizeof(Packet));
+            if (!d->packets)
+              fail("out of memory");
+          }
+        }
+        Packet *packet = &d->packets[end];
+        packet->data = malloc(size ? size : 1);
+        if (!packet->data)
+          fail("out of memory");
+        memcpy(packet->data, bytes, size);
+        packet->size = (int)size;
+        packet->strength = strength;
+        memcpy(packet->direction, direction, sizeof direction);
+        d->n_packets++;
+      }
     } else {
       uint32_t size = take_u32();
       const unsigned char *bytes = take(size);
@@ -419,6 +482,8 @@ int wb_robot_step_begin(int duration) {
   write_all(R.out, R.out_length);
   R.out_length = 0;
   R.n_commands = 0;
+  for (int i = 0; i < R.n_devices; i++)
+    R.devices[i].sent = 0;
   return 0;
 }
 
@@ -1153,100 +1218,125 @@ WbTouchSensorType wb_touch_sensor_get_type(WbDeviceTag tag) {
   return (WbTouchSensorType)param(device(tag, KIND_TOUCH_SENSOR, "wb_touch_sensor_get_type"), 0, 0);
 }
 
-/* ---- emitters and receivers: not simulated yet (no robot has one) ---- */
-
-static void no_radio(const char *function) {
-  static int warned;
-  if (!warned++)
-    fprintf(stderr, "Warning: %s(): regatta does not simulate emitters and receivers yet.\n", function);
-}
+/* ---- emitters and receivers ---- */
 
 int wb_emitter_send(WbDeviceTag tag, const void *data, int size) {
-  (void)tag;
-  (void)data;
-  (void)size;
-  no_radio("wb_emitter_send");
-  return 0;
+  Device *d = device(tag, KIND_EMITTER, "wb_emitter_send");
+  if (!d || size < 0 || (size > 0 && !data))
+    return 0;
+  int buffer = (int)param(d, 3, -1);
+  if (buffer >= 0 && d->sent + size > buffer)
+    return 0; /* the buffer is full for this step */
+  d->sent += size;
+  queue_bytes(OP_EMITTER_SEND, tag, data, size);
+  return 1;
 }
 
 int wb_emitter_get_buffer_size(WbDeviceTag tag) {
-  (void)tag;
-  return -1;
+  Device *d = device(tag, KIND_EMITTER, "wb_emitter_get_buffer_size");
+  if (!d)
+    return -1;
+  int buffer = (int)param(d, 3, -1);
+  return buffer < 0 ? -1 : buffer - d->sent;
 }
 
 int wb_emitter_get_channel(WbDeviceTag tag) {
-  (void)tag;
-  return -1;
+  Device *d = device(tag, KIND_EMITTER, "wb_emitter_get_channel");
+  return d ? d->channel : -1;
 }
 
 void wb_emitter_set_channel(WbDeviceTag tag, int channel) {
-  (void)tag;
-  (void)channel;
-  no_radio("wb_emitter_set_channel");
+  Device *d = device(tag, KIND_EMITTER, "wb_emitter_set_channel");
+  if (!d)
+    return;
+  d->channel = channel;
+  queue(OP_EMITTER_CHANNEL, tag, channel);
 }
 
 double wb_emitter_get_range(WbDeviceTag tag) {
-  (void)tag;
-  return NAN;
+  Device *d = device(tag, KIND_EMITTER, "wb_emitter_get_range");
+  return d ? d->range : NAN;
 }
 
 void wb_emitter_set_range(WbDeviceTag tag, double range) {
-  (void)tag;
-  (void)range;
+  Device *d = device(tag, KIND_EMITTER, "wb_emitter_set_range");
+  if (!d)
+    return;
+  double max_range = param(d, 4, -1);
+  if (max_range >= 0 && (range < 0 || range > max_range)) {
+    fprintf(stderr, "Warning: wb_emitter_set_range(): range %g beyond maxRange %g: using maxRange.\n", range, max_range);
+    range = max_range;
+  }
+  d->range = range;
+  queue(OP_EMITTER_RANGE, tag, range);
 }
 
 void wb_receiver_enable(WbDeviceTag tag, int sampling_period) {
-  (void)tag;
-  (void)sampling_period;
-  no_radio("wb_receiver_enable");
+  enable(tag, KIND_RECEIVER, sampling_period, "wb_receiver_enable");
 }
 
 void wb_receiver_disable(WbDeviceTag tag) {
-  (void)tag;
+  enable(tag, KIND_RECEIVER, 0, "wb_receiver_disable");
 }
 
 int wb_receiver_get_sampling_period(WbDeviceTag tag) {
-  (void)tag;
-  return 0;
+  return sampling_period(tag, KIND_RECEIVER, "wb_receiver_get_sampling_period");
 }
 
 void wb_receiver_set_channel(WbDeviceTag tag, int channel) {
-  (void)tag;
-  (void)channel;
+  Device *d = device(tag, KIND_RECEIVER, "wb_receiver_set_channel");
+  if (!d)
+    return;
+  d->channel = channel;
+  queue(OP_RECEIVER_CHANNEL, tag, channel);
 }
 
 int wb_receiver_get_channel(WbDeviceTag tag) {
-  (void)tag;
-  return -1;
+  Device *d = device(tag, KIND_RECEIVER, "wb_receiver_get_channel");
+  return d ? d->channel : -1;
 }
 
 int wb_receiver_get_queue_length(WbDeviceTag tag) {
-  (void)tag;
-  return 0;
+  Device *d = device(tag, KIND_RECEIVER, "wb_receiver_get_queue_length");
+  return d ? d->n_packets : 0;
+}
+
+static Packet *head(WbDeviceTag tag, const char *function) {
+  Device *d = device(tag, KIND_RECEIVER, function);
+  if (!d || d->n_packets == 0)
+    return NULL;
+  return &d->packets[d->first_packet];
 }
 
 void wb_receiver_next_packet(WbDeviceTag tag) {
-  (void)tag;
+  Device *d = device(tag, KIND_RECEIVER, "wb_receiver_next_packet");
+  if (!d || d->n_packets == 0)
+    return;
+  free(d->packets[d->first_packet].data);
+  d->first_packet++;
+  d->n_packets--;
+  if (d->n_packets == 0)
+    d->first_packet = 0;
 }
 
 int wb_receiver_get_data_size(WbDeviceTag tag) {
-  (void)tag;
-  return -1;
+  Packet *p = head(tag, "wb_receiver_get_data_size");
+  return p ? p->size : -1;
 }
 
 const void *wb_receiver_get_data(WbDeviceTag tag) {
-  (void)tag;
-  return NULL;
+  Packet *p = head(tag, "wb_receiver_get_data");
+  return p ? p->data : NULL;
 }
 
 double wb_receiver_get_signal_strength(WbDeviceTag tag) {
-  (void)tag;
-  return NAN;
+  Packet *p = head(tag, "wb_receiver_get_signal_strength");
+  return p ? p->strength : NAN;
 }
 
 const double *wb_receiver_get_emitter_direction(WbDeviceTag tag) {
-  (void)tag;
-  return NULL;
+  Packet *p = head(tag, "wb_receiver_get_emitter_direction");
+  return p ? p->direction : NULL;
 }
 
 /* ---- the keyboard: no window, no key ---- */

@@ -43,6 +43,9 @@ pub enum Source {
     Camera(usize),
     /// The device's position in the robot's frame (regatta's: x forward, y up).
     Gps(DVec3),
+    /// An emitter or a receiver, at its position in the robot's frame.
+    Emitter(DVec3),
+    Receiver(DVec3),
     Led,
 }
 
@@ -59,7 +62,9 @@ pub struct Device {
     /// - distance sensor: type (0 generic, 1 infra-red, 2 sonar, 3 laser), min and max value,
     ///   aperture (rad);
     /// - camera: width, height, field of view (rad), near (m);
-    /// - LED: gradual (0 or 1), number of colours.
+    /// - LED: gradual (0 or 1), number of colours;
+    /// - emitter and receiver: medium (0 radio, 1 serial, 2 infra-red), channel, range (m;
+    ///   −1 unlimited), buffer size (bytes; −1 unlimited), max range, aperture (rad).
     pub params: Vec<f64>,
     /// Lookup table rows (input, value, relative noise), as Webots returns them.
     pub table: Vec<[f64; 3]>,
@@ -296,16 +301,52 @@ impl Walk<'_> {
             }
             // Devices a controller may name whose readings regatta does not simulate yet:
             // listed (so tags and indices are Webots'), read as NaN.
-            "Accelerometer" | "Gyro" | "Compass" | "InertialUnit" | "TouchSensor" | "Emitter"
-            | "Receiver" => {
+            "Emitter" | "Receiver" => {
+                let at = frame.then(&local_frame(scene, node));
+                let offset = self.rig.body_to_robot.then(&at).translation;
+                let medium = match scene.string(node, "type") {
+                    "serial" => 1.0,
+                    "infra-red" => 2.0,
+                    _ => 0.0,
+                };
+                let emitter = scene.type_name(node) == "Emitter";
+                let (range, max_range) = if emitter {
+                    (scene.float(node, "range"), scene.float(node, "maxRange"))
+                } else {
+                    (-1.0, -1.0)
+                };
+                self.devices.push(Device {
+                    kind: if emitter {
+                        kind::EMITTER
+                    } else {
+                        kind::RECEIVER
+                    },
+                    name: scene.string(node, "name").to_owned(),
+                    model: scene.string(node, "model").to_owned(),
+                    params: vec![
+                        medium,
+                        f64::from(scene.int(node, "channel")),
+                        range,
+                        f64::from(scene.int(node, "bufferSize")),
+                        max_range,
+                        scene.float(node, "aperture"),
+                    ],
+                    table: Vec::new(),
+                    resolution: -1.0,
+                    source: if emitter {
+                        Source::Emitter(offset)
+                    } else {
+                        Source::Receiver(offset)
+                    },
+                });
+            }
+            "Accelerometer" | "Gyro" | "Compass" | "InertialUnit" | "TouchSensor" => {
                 let (kind, table) = match scene.type_name(node) {
                     "Accelerometer" => (kind::ACCELEROMETER, lookup_table(scene, node)),
                     "Gyro" => (kind::GYRO, lookup_table(scene, node)),
                     "Compass" => (kind::COMPASS, lookup_table(scene, node)),
                     "InertialUnit" => (kind::INERTIAL_UNIT, Vec::new()),
-                    "TouchSensor" => (kind::TOUCH_SENSOR, lookup_table(scene, node)),
-                    "Emitter" => (kind::EMITTER, Vec::new()),
-                    _ => (kind::RECEIVER, Vec::new()),
+                    _ => (kind::TOUCH_SENSOR, lookup_table(scene, node)),
                 };
                 let params = match scene.type_name(node) {
                     "InertialUnit" => vec![scene.float(node, "noise")],

@@ -9,6 +9,7 @@
 //!   exchange over a Unix socket;
 //! - finding a controller in its project and compiling it into a cache ([`compile`]);
 //! - a robot's devices as Webots names them ([`devices`]);
+//! - emitters and receivers: packets between robots ([`radio`]);
 //! - the processes in lock-step with a simulation ([`session`]).
 //!
 //! Running a world's controllers runs its project's code: [`plan`] finds which robots would,
@@ -18,6 +19,7 @@ pub mod compile;
 pub mod devices;
 mod error;
 pub mod protocol;
+pub mod radio;
 pub mod session;
 
 use std::path::Path;

@@ -46,6 +46,14 @@ pub mod op {
     pub const MOTOR_VELOCITY: u8 = 3;
     /// An LED's value.
     pub const LED_SET: u8 = 4;
+    /// An emitter's packet: the value is its size, its bytes follow the command.
+    pub const EMITTER_SEND: u8 = 5;
+    /// An emitter's channel.
+    pub const EMITTER_CHANNEL: u8 = 6;
+    /// An emitter's range (m; −1: unlimited).
+    pub const EMITTER_RANGE: u8 = 7;
+    /// A receiver's channel.
+    pub const RECEIVER_CHANNEL: u8 = 8;
 }
 
 /// Run states of a reply.
@@ -59,6 +67,9 @@ pub mod status {
 pub mod reading {
     pub const VALUES: u8 = 0;
     pub const BYTES: u8 = 1;
+    /// A receiver's packets: a count, then each one's signal strength, the emitter's
+    /// direction (3 values) and its bytes.
+    pub const PACKETS: u8 = 2;
 }
 
 /// A frame being written.
@@ -160,6 +171,18 @@ impl<'a> Reader<'a> {
         Ok(i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
     }
 
+    /// Where the reader stands in the payload.
+    pub fn position(&self) -> usize {
+        self.at
+    }
+
+    /// Skips `n` bytes, returning where they start.
+    pub fn skip(&mut self, n: usize) -> Result<usize, FrameError> {
+        let start = self.at;
+        self.take(n)?;
+        Ok(start)
+    }
+
     pub fn f64(&mut self) -> Result<f64, FrameError> {
         let b = self.take(8)?;
         let mut word = [0; 8];
@@ -175,6 +198,8 @@ pub struct Command {
     /// The device's tag (its index in the hello, plus one).
     pub tag: u16,
     pub value: f64,
+    /// Where the bytes that follow the command lie in the payload (an emitter's packet).
+    pub data: (usize, usize),
 }
 
 /// A step frame: the duration asked (ms) and the commands.
@@ -187,7 +212,21 @@ pub fn read_step(payload: &[u8], commands: &mut Vec<Command>) -> Result<i32, Fra
         let op = reader.u8()?;
         let tag = reader.u16()?;
         let value = reader.f64()?;
-        commands.push(Command { op, tag, value });
+        let data = if op == op::EMITTER_SEND {
+            if !(value >= 0.0 && value <= u32::MAX as f64) {
+                return Err(FrameError::Short(reader.position()));
+            }
+            let start = reader.skip(value as usize)?;
+            (start, start + value as usize)
+        } else {
+            (0, 0)
+        };
+        commands.push(Command {
+            op,
+            tag,
+            value,
+            data,
+        });
     }
     Ok(duration)
 }

@@ -22,6 +22,7 @@ use regatta_runtime::sim::Simulation;
 use crate::devices::{with_resolution, Device, Source};
 use crate::error::WebotsError;
 use crate::protocol::{self, kind, op, status, Command as StepCommand, Writer};
+use crate::radio::{Delivered, Listener, Packet, Radio};
 
 /// How controllers are run.
 #[derive(Clone, Debug)]
@@ -106,6 +107,8 @@ struct Driven {
     /// One per device (used by the motors).
     motors: Vec<Motor>,
     leds: Vec<i32>,
+    /// One per device (used by emitters and receivers).
+    radios: Vec<Radio>,
     z_up: bool,
     /// The step at which the controller's `wb_robot_step` returns.
     wake: u64,
@@ -125,6 +128,8 @@ pub struct Controllers {
     timeout: Duration,
     writer: Writer,
     commands: Vec<StepCommand>,
+    /// Emitters' packets not yet arrived.
+    in_flight: Vec<Packet>,
 }
 
 /// Webots' steps for `ms` milliseconds at a basic time step of `step_ms`: whole steps,
@@ -155,6 +160,7 @@ impl Controllers {
             timeout: options.timeout,
             writer: Writer::new(),
             commands: Vec::new(),
+            in_flight: Vec::new(),
         };
         for start in starts {
             let driven = controllers.launch(simulation, start, world, project, options)?;
@@ -282,6 +288,14 @@ impl Controllers {
             stream,
             sampling: vec![Sampling::default(); devices.len()],
             leds: vec![0; devices.len()],
+            radios: devices
+                .iter()
+                .map(|d| Radio {
+                    channel: d.params.get(1).copied().unwrap_or(0.0) as i32,
+                    range: d.params.get(2).copied().unwrap_or(-1.0),
+                    pending: Vec::new(),
+                })
+                .collect(),
             devices,
             motors,
             z_up: start.z_up,
@@ -340,6 +354,9 @@ impl Controllers {
     /// and sets every driven robot's wheel speeds for the step.
     pub fn exchange(&mut self, simulation: &mut Simulation) -> Result<(), WebotsError> {
         let step = simulation.steps;
+        if !self.in_flight.is_empty() {
+            self.deliver(simulation);
+        }
         let mut due = Vec::new();
         for index in 0..self.driven.len() {
             if !self.driven[index].finished && self.driven[index].wake <= step {
@@ -359,6 +376,32 @@ impl Controllers {
             drive(driven, simulation);
         }
         Ok(())
+    }
+
+    /// Packets sent before this step arrive at the receivers enabled now.
+    fn deliver(&mut self, simulation: &Simulation) {
+        let mut listeners = Vec::new();
+        for driven in &mut self.driven {
+            let robot = &simulation.robots[driven.robot];
+            let rig = &simulation.compiled.rig.robots[driven.robot];
+            let to_robot = robot.pose.frame(rig.floor_y).linear.transpose();
+            for ((device, sampling), radio) in driven
+                .devices
+                .iter()
+                .zip(&driven.sampling)
+                .zip(&mut driven.radios)
+            {
+                if let (Source::Receiver(offset), true) = (device.source, sampling.period > 0) {
+                    listeners.push(Listener {
+                        medium: device.params[0] as u8,
+                        at: robot.pose.to_world(offset, rig.floor_y),
+                        to_robot,
+                        radio,
+                    });
+                }
+            }
+        }
+        crate::radio::deliver(&mut self.in_flight, simulation.steps, &mut listeners);
     }
 
     fn reply(
@@ -420,7 +463,10 @@ impl Controllers {
                     };
                     Reading::Values(p.map(|v| with_resolution(v, device.resolution)).to_vec())
                 }
-                Source::Wheel { .. } | Source::Inert | Source::Led => continue,
+                Source::Receiver(_) => {
+                    Reading::Packets(std::mem::take(&mut driven.radios[d].pending))
+                }
+                Source::Wheel { .. } | Source::Inert | Source::Led | Source::Emitter(_) => continue,
             };
             readings.push((d, reading));
         }
@@ -438,6 +484,17 @@ impl Controllers {
                 Reading::Bytes(bytes) => {
                     w.u8(protocol::reading::BYTES);
                     w.bytes(bytes);
+                }
+                Reading::Packets(packets) => {
+                    w.u8(protocol::reading::PACKETS);
+                    w.u16(packets.len().min(u16::MAX as usize) as u16);
+                    for packet in packets.iter().take(u16::MAX as usize) {
+                        w.f64(packet.strength);
+                        for &x in &packet.direction {
+                            w.f64(x);
+                        }
+                        w.bytes(&packet.data);
+                    }
                 }
             }
         }
@@ -488,6 +545,26 @@ impl Controllers {
                     driven.motors[d - 1].velocity = command.value;
                 }
                 (op::LED_SET, _) => driven.leds[d - 1] = command.value as i32,
+                (op::EMITTER_SEND, Source::Emitter(offset)) => {
+                    let robot = &simulation.robots[driven.robot];
+                    let rig = &simulation.compiled.rig.robots[driven.robot];
+                    let radio = &driven.radios[d - 1];
+                    self.in_flight.push(Packet {
+                        sent: step,
+                        medium: device.params[0] as u8,
+                        channel: radio.channel,
+                        range: radio.range,
+                        from: robot.pose.to_world(offset, rig.floor_y),
+                        data: driven.frame[command.data.0..command.data.1].to_vec(),
+                    });
+                }
+                (op::EMITTER_CHANNEL, Source::Emitter(_))
+                | (op::RECEIVER_CHANNEL, Source::Receiver(_)) => {
+                    driven.radios[d - 1].channel = command.value as i32;
+                }
+                (op::EMITTER_RANGE, Source::Emitter(_)) => {
+                    driven.radios[d - 1].range = command.value;
+                }
                 (op, _) => {
                     return Err(protocol_error(
                         driven,
@@ -572,6 +649,7 @@ impl Drop for Controllers {
 enum Reading {
     Values(Vec<f64>),
     Bytes(Vec<u8>),
+    Packets(Vec<Delivered>),
 }
 
 /// RGB rows to Webots' BGRA.
