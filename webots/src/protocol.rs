@@ -253,12 +253,14 @@ mod tests {
                 Command {
                     op: op::ENABLE,
                     tag: 3,
-                    value: 64.0
+                    value: 64.0,
+                    data: (0, 0),
                 },
                 Command {
                     op: op::MOTOR_VELOCITY,
                     tag: 1,
-                    value: -2.5
+                    value: -2.5,
+                    data: (0, 0),
                 }
             ]
         );
