@@ -101,7 +101,7 @@ mod tests {
 
     #[test]
     fn packets_reach_the_receivers_tuned_to_them_within_range() {
-        let mut radios = vec![
+        let mut radios = [
             Radio {
                 channel: 1,
                 ..Radio::default()
