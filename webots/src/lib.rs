@@ -10,6 +10,7 @@
 //! - finding a controller in its project and compiling it into a cache ([`compile`]);
 //! - a robot's devices as Webots names them ([`devices`]);
 //! - emitters and receivers: packets between robots ([`radio`]);
+//! - a supervisor's view of the world ([`supervisor`]);
 //! - the processes in lock-step with a simulation ([`session`]).
 //!
 //! Running a world's controllers runs its project's code: [`plan`] finds which robots would,
@@ -21,6 +22,7 @@ mod error;
 pub mod protocol;
 pub mod radio;
 pub mod session;
+pub mod supervisor;
 
 use std::path::Path;
 
@@ -47,6 +49,10 @@ pub struct Planned {
     pub devices: Vec<devices::Device>,
     /// Whether the world's file is z-up (a GPS answers in the file's axes).
     pub z_up: bool,
+    /// Whether the robot is a supervisor (its `supervisor` field).
+    pub supervisor: bool,
+    /// Its `customData`.
+    pub custom_data: String,
 }
 
 /// The robots of `compiled` whose controller name is a program of `project`
@@ -70,6 +76,13 @@ pub fn plan(
                 args: rig.controller_args.clone(),
                 devices: devices::devices(scene, rig),
                 z_up: scene.up_axis == regatta_schema::UpAxis::Z,
+                supervisor: scene.spec(rig.node).field_index("supervisor").is_some()
+                    && scene.bool(rig.node, "supervisor"),
+                custom_data: if scene.spec(rig.node).field_index("customData").is_some() {
+                    scene.string(rig.node, "customData").to_owned()
+                } else {
+                    String::new()
+                },
             });
         }
     }

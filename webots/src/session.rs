@@ -23,6 +23,7 @@ use crate::devices::{with_resolution, Device, Source};
 use crate::error::WebotsError;
 use crate::protocol::{self, kind, op, status, Command as StepCommand, Writer};
 use crate::radio::{Delivered, Listener, Packet, Radio};
+use crate::supervisor::{Supervisor, MODE_REAL_TIME};
 
 /// How controllers are run.
 #[derive(Clone, Debug)]
@@ -56,6 +57,9 @@ pub struct Start {
     pub devices: Vec<Device>,
     /// Whether the world's file is z-up (positions answer in the file's axes).
     pub z_up: bool,
+    /// Whether the robot is a supervisor, and its custom data.
+    pub supervisor: bool,
+    pub custom_data: String,
 }
 
 /// The sensors a controller enabled, as the runtime's controller interface declares them.
@@ -110,6 +114,8 @@ struct Driven {
     /// One per device (used by emitters and receivers).
     radios: Vec<Radio>,
     z_up: bool,
+    supervisor: bool,
+    custom_data: String,
     /// The step at which the controller's `wb_robot_step` returns.
     wake: u64,
     senses: Arc<AtomicU8>,
@@ -130,6 +136,10 @@ pub struct Controllers {
     commands: Vec<StepCommand>,
     /// Emitters' packets not yet arrived.
     in_flight: Vec<Packet>,
+    /// The supervisor's view, when a robot is one.
+    supervisor: Option<Supervisor>,
+    /// Wall clock and simulated time when real-time mode began.
+    real_time: Option<(Instant, f64)>,
 }
 
 /// Webots' steps for `ms` milliseconds at a basic time step of `step_ms`: whole steps,
@@ -147,6 +157,7 @@ impl Controllers {
     pub fn start(
         simulation: &mut Simulation,
         starts: Vec<Start>,
+        scene: Option<regatta_schema::Scene>,
         world: &Path,
         project: &Path,
         options: &Options,
@@ -161,7 +172,14 @@ impl Controllers {
             writer: Writer::new(),
             commands: Vec::new(),
             in_flight: Vec::new(),
+            supervisor: None,
+            real_time: None,
         };
+        if starts.iter().any(|s| s.supervisor) {
+            if let Some(scene) = scene {
+                controllers.supervisor = Some(Supervisor::new(scene, simulation));
+            }
+        }
         for start in starts {
             let driven = controllers.launch(simulation, start, world, project, options)?;
             controllers.driven.push(driven);
@@ -299,6 +317,8 @@ impl Controllers {
             devices,
             motors,
             z_up: start.z_up,
+            supervisor: start.supervisor,
+            custom_data: start.custom_data,
             wake: 0,
             senses,
             echo,
@@ -324,11 +344,11 @@ impl Controllers {
         w.f64(self.time_step_ms);
         w.str(&rig.name);
         w.str("");
-        w.str("");
+        w.str(&driven.custom_data);
         w.str(&absolute(project).to_string_lossy());
         w.str(&absolute(world).to_string_lossy());
         w.u8(1);
-        w.u8(0);
+        w.u8(u8::from(driven.supervisor && self.supervisor.is_some()));
         w.u16(driven.devices.len() as u16);
         for device in &driven.devices {
             w.u8(device.kind);
@@ -375,7 +395,29 @@ impl Controllers {
         for driven in &self.driven {
             drive(driven, simulation);
         }
+        self.pace(simulation.time);
         Ok(())
+    }
+
+    /// In real-time mode (a supervisor's `wb_supervisor_simulation_set_mode`), the run waits
+    /// for the wall clock; the results are the same in every mode.
+    fn pace(&mut self, time: f64) {
+        let real_time = self.supervisor.as_ref().is_some_and(|s| s.mode == MODE_REAL_TIME);
+        match (real_time, self.real_time) {
+            (true, None) => self.real_time = Some((Instant::now(), time)),
+            (true, Some((since, start))) => {
+                let ahead = (time - start) - since.elapsed().as_secs_f64();
+                if ahead > 0.0 {
+                    std::thread::sleep(Duration::from_secs_f64(ahead));
+                }
+            }
+            (false, _) => self.real_time = None,
+        }
+    }
+
+    /// The status a supervisor asked the run to end with (`wb_supervisor_simulation_quit`).
+    pub fn quit_requested(&self) -> Option<i32> {
+        self.supervisor.as_ref().and_then(|s| s.quit)
     }
 
     /// Packets sent before this step arrive at the receivers enabled now.
@@ -470,7 +512,18 @@ impl Controllers {
             };
             readings.push((d, reading));
         }
-        w.u16(readings.len() as u16);
+        // A supervisor's change of this robot's custom data travels as a reading of tag 0.
+        let custom = self.supervisor.as_mut().and_then(|s| {
+            std::mem::take(&mut s.custom_data_changed[driven.robot])
+                .then(|| s.custom_data[driven.robot].clone())
+        });
+        w.u16((readings.len() + usize::from(custom.is_some())) as u16);
+        if let Some(custom) = custom {
+            w.u16(0);
+            w.u8(protocol::reading::CUSTOM_DATA);
+            w.str(&custom);
+            driven.custom_data = custom;
+        }
         for (d, reading) in &readings {
             w.u16(*d as u16 + 1);
             match reading {
@@ -508,9 +561,23 @@ impl Controllers {
         let time = simulation.time;
         let time_step_ms = self.time_step_ms;
         let driven = &mut self.driven[index];
-        if !receive_frame(driven, time, self.timeout)? {
-            driven.finished = true;
-            return Ok(());
+        loop {
+            if !receive_frame(driven, time, self.timeout)? {
+                driven.finished = true;
+                return Ok(());
+            }
+            if driven.frame.first() != Some(&protocol::frame::REQUEST) {
+                break;
+            }
+            // A supervisor's request, answered at once.
+            let Some(supervisor) = self.supervisor.as_mut().filter(|_| driven.supervisor) else {
+                return Err(protocol_error(driven, time, protocol::FrameError::Short(0)));
+            };
+            supervisor
+                .answer(&driven.frame[1..], driven.robot, simulation, &mut self.writer)
+                .map_err(|e| protocol_error(driven, time, e))?;
+            let answer = self.writer.finish().to_vec();
+            send(driven, &answer, time)?;
         }
         let duration = protocol::read_step(&driven.frame, &mut self.commands)
             .map_err(|e| protocol_error(driven, time, e))?;
@@ -520,6 +587,15 @@ impl Controllers {
             return Ok(());
         }
         for command in &self.commands {
+            if command.op == op::CUSTOM_DATA {
+                let text = String::from_utf8_lossy(&driven.frame[command.data.0..command.data.1])
+                    .into_owned();
+                if let Some(supervisor) = &mut self.supervisor {
+                    supervisor.custom_data[driven.robot] = text.clone();
+                }
+                driven.custom_data = text;
+                continue;
+            }
             let d = command.tag as usize;
             let Some(device) = d.checked_sub(1).and_then(|d| driven.devices.get(d)) else {
                 return Err(protocol_error(
