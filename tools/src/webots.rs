@@ -155,6 +155,8 @@ pub fn start_programs(
             z_up: item.z_up,
             supervisor: item.supervisor,
             custom_data: item.custom_data,
+            start_rotation: item.start_rotation,
+            north: item.north,
         });
     }
     let options = regatta_webots::Options {

@@ -54,7 +54,10 @@ pub const HEADERS: &[(&str, &str)] = &[
     ("emitter.h", include_str!("../include/webots/emitter.h")),
     ("receiver.h", include_str!("../include/webots/receiver.h")),
     ("keyboard.h", include_str!("../include/webots/keyboard.h")),
-    ("supervisor.h", include_str!("../include/webots/supervisor.h")),
+    (
+        "supervisor.h",
+        include_str!("../include/webots/supervisor.h"),
+    ),
 ];
 
 /// The controller library's C source, and the supervisor's part it includes.

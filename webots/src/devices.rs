@@ -43,6 +43,10 @@ pub enum Source {
     Camera(usize),
     /// The device's position in the robot's frame (regatta's: x forward, y up).
     Gps(DVec3),
+    /// An inertial unit or a compass: its rotation relative to the robot node, in the file's
+    /// axes.
+    InertialUnit(glam::DMat3),
+    Compass(glam::DMat3),
     /// An emitter or a receiver, at its position in the robot's frame.
     Emitter(DVec3),
     Receiver(DVec3),
@@ -341,12 +345,33 @@ impl Walk<'_> {
                 });
             }
             "Accelerometer" | "Gyro" | "Compass" | "InertialUnit" | "TouchSensor" => {
-                let (kind, table) = match scene.type_name(node) {
-                    "Accelerometer" => (kind::ACCELEROMETER, lookup_table(scene, node)),
-                    "Gyro" => (kind::GYRO, lookup_table(scene, node)),
-                    "Compass" => (kind::COMPASS, lookup_table(scene, node)),
-                    "InertialUnit" => (kind::INERTIAL_UNIT, Vec::new()),
-                    _ => (kind::TOUCH_SENSOR, lookup_table(scene, node)),
+                let relative = frame.then(&local_frame(scene, node)).linear;
+                let (kind, table, source) = match scene.type_name(node) {
+                    "Accelerometer" => (
+                        kind::ACCELEROMETER,
+                        lookup_table(scene, node),
+                        Source::Fixed(f64::NAN),
+                    ),
+                    "Gyro" => (
+                        kind::GYRO,
+                        lookup_table(scene, node),
+                        Source::Fixed(f64::NAN),
+                    ),
+                    "Compass" => (
+                        kind::COMPASS,
+                        lookup_table(scene, node),
+                        Source::Compass(relative),
+                    ),
+                    "InertialUnit" => (
+                        kind::INERTIAL_UNIT,
+                        Vec::new(),
+                        Source::InertialUnit(relative),
+                    ),
+                    _ => (
+                        kind::TOUCH_SENSOR,
+                        lookup_table(scene, node),
+                        Source::Fixed(f64::NAN),
+                    ),
                 };
                 let params = match scene.type_name(node) {
                     "InertialUnit" => vec![scene.float(node, "noise")],
@@ -358,8 +383,8 @@ impl Walk<'_> {
                     model: scene.string(node, "model").to_owned(),
                     params,
                     table,
-                    resolution: -1.0,
-                    source: Source::Fixed(f64::NAN),
+                    resolution: scene.float(node, "resolution"),
+                    source,
                 });
             }
             "LED" => {

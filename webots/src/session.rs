@@ -60,6 +60,9 @@ pub struct Start {
     /// Whether the robot is a supervisor, and its custom data.
     pub supervisor: bool,
     pub custom_data: String,
+    /// Its rotation as written and the world's north, in the file's axes.
+    pub start_rotation: glam::DMat3,
+    pub north: glam::DVec3,
 }
 
 /// The sensors a controller enabled, as the runtime's controller interface declares them.
@@ -116,6 +119,9 @@ struct Driven {
     z_up: bool,
     supervisor: bool,
     custom_data: String,
+    start_rotation: glam::DMat3,
+    start_heading: f64,
+    north: glam::DVec3,
     /// The step at which the controller's `wb_robot_step` returns.
     wake: u64,
     senses: Arc<AtomicU8>,
@@ -319,6 +325,9 @@ impl Controllers {
             z_up: start.z_up,
             supervisor: start.supervisor,
             custom_data: start.custom_data,
+            start_rotation: start.start_rotation,
+            start_heading: simulation.robots[start.robot].pose.heading,
+            north: start.north,
             wake: 0,
             senses,
             echo,
@@ -402,7 +411,10 @@ impl Controllers {
     /// In real-time mode (a supervisor's `wb_supervisor_simulation_set_mode`), the run waits
     /// for the wall clock; the results are the same in every mode.
     fn pace(&mut self, time: f64) {
-        let real_time = self.supervisor.as_ref().is_some_and(|s| s.mode == MODE_REAL_TIME);
+        let real_time = self
+            .supervisor
+            .as_ref()
+            .is_some_and(|s| s.mode == MODE_REAL_TIME);
         match (real_time, self.real_time) {
             (true, None) => self.real_time = Some((Instant::now(), time)),
             (true, Some((since, start))) => {
@@ -461,6 +473,13 @@ impl Controllers {
         let robot = &simulation.robots[driven.robot];
         let rig = &simulation.compiled.rig.robots[driven.robot];
         let mut readings: Vec<(usize, Reading)> = Vec::new();
+        // The robot's orientation and the world's north, for the devices that read them.
+        let rotation = orientation(driven, robot.pose.heading, self.supervisor.as_ref());
+        let north = self
+            .supervisor
+            .as_ref()
+            .and_then(|s| s.north())
+            .unwrap_or(driven.north);
         for (d, sampling) in driven.sampling.iter_mut().enumerate() {
             if sampling.period == 0 || step < sampling.due {
                 continue;
@@ -507,6 +526,23 @@ impl Controllers {
                 }
                 Source::Receiver(_) => {
                     Reading::Packets(std::mem::take(&mut driven.radios[d].pending))
+                }
+                Source::InertialUnit(relative) => {
+                    let m = rotation * relative;
+                    let angles = roll_pitch_yaw(m, driven.z_up);
+                    Reading::Values(
+                        angles
+                            .map(|v| with_resolution(v, device.resolution))
+                            .to_vec(),
+                    )
+                }
+                Source::Compass(relative) => {
+                    let v = (rotation * relative).transpose() * north;
+                    Reading::Values(
+                        v.to_array()
+                            .map(|x| with_resolution(x, device.resolution))
+                            .to_vec(),
+                    )
                 }
                 Source::Wheel { .. } | Source::Inert | Source::Led | Source::Emitter(_) => continue,
             };
@@ -574,7 +610,12 @@ impl Controllers {
                 return Err(protocol_error(driven, time, protocol::FrameError::Short(0)));
             };
             supervisor
-                .answer(&driven.frame[1..], driven.robot, simulation, &mut self.writer)
+                .answer(
+                    &driven.frame[1..],
+                    driven.robot,
+                    simulation,
+                    &mut self.writer,
+                )
                 .map_err(|e| protocol_error(driven, time, e))?;
             let answer = self.writer.finish().to_vec();
             send(driven, &answer, time)?;
@@ -719,6 +760,40 @@ impl Drop for Controllers {
             }
             self.quit(None);
         }
+    }
+}
+
+/// A robot's orientation now, in the file's axes: as a supervisor last set it, or as written,
+/// turned about the vertical by as much as the robot has turned since.
+fn orientation(driven: &Driven, heading: f64, supervisor: Option<&Supervisor>) -> glam::DMat3 {
+    let up = if driven.z_up {
+        glam::DVec3::Z
+    } else {
+        glam::DVec3::Y
+    };
+    let (rotation, since) = supervisor
+        .and_then(|s| s.orientation(driven.robot))
+        .unwrap_or((driven.start_rotation, driven.start_heading));
+    glam::DMat3::from_quat(glam::DQuat::from_axis_angle(up, heading - since)) * rotation
+}
+
+/// Webots' roll, pitch and yaw of a rotation: about x, y and z in a z-up (ENU) world
+/// (`R = Rz(yaw)·Ry(pitch)·Rx(roll)`), about x, z and y in a y-up (NUE) one
+/// (`R = Ry(yaw)·Rz(pitch)·Rx(roll)`).
+fn roll_pitch_yaw(m: glam::DMat3, z_up: bool) -> [f64; 3] {
+    let at = |row: usize, column: usize| m.col(column)[row];
+    if z_up {
+        [
+            libm::atan2(at(2, 1), at(2, 2)),
+            -libm::asin(at(2, 0).clamp(-1.0, 1.0)),
+            libm::atan2(at(1, 0), at(0, 0)),
+        ]
+    } else {
+        [
+            libm::atan2(-at(1, 2), at(1, 1)),
+            libm::asin(at(1, 0).clamp(-1.0, 1.0)),
+            libm::atan2(-at(2, 0), at(0, 0)),
+        ]
     }
 }
 

@@ -45,6 +45,8 @@ pub struct Supervisor {
     pub mode: u32,
     /// Set by `wb_supervisor_simulation_quit`.
     pub quit: Option<i32>,
+    /// Each robot's rotation as a supervisor last set it (file axes), with its heading then.
+    orientations: Vec<Option<(DMat3, f64)>>,
 }
 
 fn local_frame(scene: &Scene, node: NodeId) -> Frame {
@@ -57,8 +59,18 @@ fn local_frame(scene: &Scene, node: NodeId) -> Frame {
     )
 }
 
-fn has_field(scene: &Scene, node: NodeId, name: &str) -> bool {
-    scene.spec(node).field_index(name).is_some()
+/// Whether a node has a field `name` of type `ty`.
+fn typed_field(scene: &Scene, node: NodeId, name: &str, ty: &str) -> bool {
+    let spec = scene.spec(node);
+    spec.field_index(name)
+        .is_some_and(|i| spec.fields[i].type_name == ty)
+}
+
+/// Whether a node has a frame of its own: an SFVec3f `translation` and an SFRotation
+/// `rotation` (a TextureTransform's are two-dimensional).
+fn has_frame(scene: &Scene, node: NodeId) -> bool {
+    typed_field(scene, node, "translation", "SFVec3f")
+        && typed_field(scene, node, "rotation", "SFRotation")
 }
 
 impl Supervisor {
@@ -71,7 +83,11 @@ impl Supervisor {
             .iter()
             .map(|r| r.node)
             .collect();
-        let robots = robot_nodes.iter().enumerate().map(|(i, &n)| (n, i)).collect();
+        let robots = robot_nodes
+            .iter()
+            .enumerate()
+            .map(|(i, &n)| (n, i))
+            .collect();
         let mut supervisor = Supervisor {
             z_up: scene.up_axis == regatta_schema::UpAxis::Z,
             defs: HashMap::new(),
@@ -81,7 +97,7 @@ impl Supervisor {
             custom_data: robot_nodes
                 .iter()
                 .map(|&n| {
-                    if has_field(&scene, n, "customData") {
+                    if typed_field(&scene, n, "customData", "SFString") {
                         scene.string(n, "customData").to_owned()
                     } else {
                         String::new()
@@ -95,6 +111,7 @@ impl Supervisor {
             written: HashMap::new(),
             mode: MODE_FAST,
             quit: None,
+            orientations: vec![None; simulation.robots.len()],
             scene,
         };
         for &root in &supervisor.scene.roots.clone() {
@@ -130,9 +147,7 @@ impl Supervisor {
         let (robot, frame) = match self.robots.get(&id) {
             // A robot's parts are placed relative to it: it moves.
             Some(&index) => (Some(index), Frame::IDENTITY),
-            None if has_field(&self.scene, id, "translation")
-                && has_field(&self.scene, id, "rotation") =>
-            {
+            None if has_frame(&self.scene, id) => {
                 (robot, frame.then(&local_frame(&self.scene, id)))
             }
             None => (robot, *frame),
@@ -144,11 +159,7 @@ impl Supervisor {
         } else {
             Some(node.origin.file)
         };
-        let children: Vec<NodeId> = node
-            .fields
-            .own()
-            .flat_map(|v| v.nodes().to_vec())
-            .collect();
+        let children: Vec<NodeId> = node.fields.own().flat_map(|v| v.nodes().to_vec()).collect();
         for child in children {
             self.visit(child, robot, &frame, body_file, depth + 1);
         }
@@ -160,16 +171,36 @@ impl Supervisor {
         ((index as usize) < self.scene.nodes.len()).then_some(NodeId(index))
     }
 
+    /// A robot's rotation as a supervisor last set it, and its heading then.
+    pub fn orientation(&self, robot: usize) -> Option<(DMat3, f64)> {
+        self.orientations.get(robot).copied().flatten()
+    }
+
+    /// North as a supervisor set `WorldInfo.coordinateSystem`, if it did.
+    pub fn north(&self) -> Option<DVec3> {
+        self.written.iter().find_map(|(&(node, index), value)| {
+            let name = &self.scene.spec(node).fields[index].name;
+            match (self.scene.type_name(node), name.as_str(), value) {
+                ("WorldInfo", "coordinateSystem", Value::String(system)) => {
+                    Some(crate::north_for(system, self.z_up))
+                }
+                _ => None,
+            }
+        })
+    }
+
     /// A robot's frame now, in the file's axes: where it stands, turned as it has turned.
     fn robot_frame(&self, robot: usize, simulation: &Simulation) -> Frame {
         let node = self.robot_nodes[robot];
-        let start = local_frame(&self.scene, node);
         let pose = simulation.robots[robot].pose;
         let floor = simulation.compiled.rig.robots[robot].floor_y;
-        let turn = pose.heading - self.start_headings[robot];
+        let (rotation, since) = self.orientation(robot).unwrap_or((
+            local_frame(&self.scene, node).linear,
+            self.start_headings[robot],
+        ));
         let up = if self.z_up { DVec3::Z } else { DVec3::Y };
         Frame {
-            linear: DMat3::from_quat(DQuat::from_axis_angle(up, turn)) * start.linear,
+            linear: DMat3::from_quat(DQuat::from_axis_angle(up, pose.heading - since)) * rotation,
             translation: self.to_file(DVec3::new(pose.x, floor, pose.z)),
         }
     }
@@ -342,7 +373,12 @@ impl Supervisor {
         None
     }
 
-    fn field_value(&self, node: NodeId, index: usize, simulation: &Simulation) -> (Vec<f64>, String) {
+    fn field_value(
+        &self,
+        node: NodeId,
+        index: usize,
+        simulation: &Simulation,
+    ) -> (Vec<f64>, String) {
         let name = self.scene.spec(node).fields[index].name.as_str();
         if let Some(&robot) = self.robots.get(&node) {
             match name {
@@ -411,6 +447,7 @@ impl Supervisor {
                     };
                     let heading = self.start_headings[robot] + yaw(new) - yaw(start);
                     simulation.robots[robot].pose.heading = heading;
+                    self.orientations[robot] = Some((new, heading));
                     return;
                 }
                 ("customData", _) => {
