@@ -116,12 +116,12 @@ pub struct Programs {
 
 /// Compiles (or finds compiled) and starts the planned controllers, each connected to its
 /// robot; `None` when there are none.
-pub fn start_programs(
-    simulation: &mut regatta_runtime::sim::Simulation,
+pub fn start_programs<'c>(
+    simulation: &mut regatta_runtime::sim::Simulation<'c>,
     programs: Programs,
     world: &std::path::Path,
     overrides: &ControllerOverride,
-) -> anyhow::Result<Option<regatta_webots::Controllers>> {
+) -> anyhow::Result<Option<regatta_webots::Controllers<'c>>> {
     let Programs { planned, scene } = programs;
     if planned.is_empty() {
         return Ok(None);

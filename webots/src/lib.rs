@@ -10,6 +10,7 @@
 //! - finding a controller in its project and compiling it into a cache ([`compile`]);
 //! - a robot's devices as Webots names them ([`devices`]);
 //! - emitters and receivers: packets between robots ([`radio`]);
+//! - a generic robot's distance sensors, cast in 3-D ([`rays`]);
 //! - a supervisor's view of the world ([`supervisor`]);
 //! - the processes in lock-step with a simulation ([`session`]).
 //!
@@ -21,6 +22,7 @@ pub mod devices;
 mod error;
 pub mod protocol;
 pub mod radio;
+pub mod rays;
 pub mod session;
 pub mod supervisor;
 

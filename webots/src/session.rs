@@ -116,6 +116,8 @@ struct Driven {
     leds: Vec<i32>,
     /// One per device (used by emitters and receivers).
     radios: Vec<Radio>,
+    /// One per device (used by the distance sensors cast in 3-D): their noise.
+    streams: Vec<regatta_runtime::sim::noise::Stream>,
     z_up: bool,
     supervisor: bool,
     custom_data: String,
@@ -133,7 +135,7 @@ struct Driven {
 }
 
 /// Every controller process of a run.
-pub struct Controllers {
+pub struct Controllers<'c> {
     driven: Vec<Driven>,
     sockets: PathBuf,
     time_step_ms: f64,
@@ -146,6 +148,8 @@ pub struct Controllers {
     supervisor: Option<Supervisor>,
     /// Wall clock and simulated time when real-time mode began.
     real_time: Option<(Instant, f64)>,
+    /// The ray caster of generic robots' distance sensors, when one has any.
+    rays: Option<crate::rays::Rays<'c>>,
 }
 
 /// Webots' steps for `ms` milliseconds at a basic time step of `step_ms`: whole steps,
@@ -157,17 +161,17 @@ fn steps_for(ms: f64, step_ms: f64) -> u64 {
     libm::ceil(ms / step_ms - 1e-9).max(1.0) as u64
 }
 
-impl Controllers {
+impl<'c> Controllers<'c> {
     /// Starts every controller, sends each its robot, and waits for each one's first step
     /// request (what it commands at time 0).
     pub fn start(
-        simulation: &mut Simulation,
+        simulation: &mut Simulation<'c>,
         starts: Vec<Start>,
         scene: Option<regatta_schema::Scene>,
         world: &Path,
         project: &Path,
         options: &Options,
-    ) -> Result<Controllers, WebotsError> {
+    ) -> Result<Controllers<'c>, WebotsError> {
         let sockets = socket_folder()?;
         let time_step_ms = simulation.time_step * 1000.0;
         let mut controllers = Controllers {
@@ -180,7 +184,15 @@ impl Controllers {
             in_flight: Vec::new(),
             supervisor: None,
             real_time: None,
+            rays: None,
         };
+        let compiled = simulation.compiled;
+        if starts
+            .iter()
+            .any(|s| s.devices.iter().any(|d| matches!(d.source, Source::Ray(_))))
+        {
+            controllers.rays = Some(crate::rays::Rays::new(compiled));
+        }
         if starts.iter().any(|s| s.supervisor) {
             if let Some(scene) = scene {
                 controllers.supervisor = Some(Supervisor::new(scene, simulation));
@@ -312,6 +324,16 @@ impl Controllers {
             stream,
             sampling: vec![Sampling::default(); devices.len()],
             leds: vec![0; devices.len()],
+            streams: (0..devices.len())
+                .map(|d| {
+                    regatta_runtime::sim::noise::Stream::new(
+                        simulation.seed,
+                        start.robot,
+                        crate::rays::STREAM_KIND,
+                        d,
+                    )
+                })
+                .collect(),
             radios: devices
                 .iter()
                 .map(|d| Radio {
@@ -480,6 +502,7 @@ impl Controllers {
             .as_ref()
             .and_then(|s| s.north())
             .unwrap_or(driven.north);
+        let mut prepared = None;
         for (d, sampling) in driven.sampling.iter_mut().enumerate() {
             if sampling.period == 0 || step < sampling.due {
                 continue;
@@ -500,6 +523,21 @@ impl Controllers {
                     one(angle)
                 }
                 Source::Fixed(v) => one(v),
+                Source::Ray(sensor) => match &self.rays {
+                    Some(rays) => {
+                        let prepared =
+                            prepared.get_or_insert_with(|| rays.prepare(simulation, driven.robot));
+                        one(rays.measure(
+                            prepared,
+                            simulation,
+                            driven.robot,
+                            &sensor,
+                            &device.table,
+                            &mut driven.streams[d],
+                        ))
+                    }
+                    None => one(f64::NAN),
+                },
                 Source::Distance(i) => one(robot
                     .raw
                     .as_ref()
@@ -697,10 +735,10 @@ impl Controllers {
         let mut bits = 0;
         for (device, sampling) in driven.devices.iter().zip(&driven.sampling) {
             if sampling.period > 0 {
-                bits |= match device.kind {
-                    kind::DISTANCE_SENSOR => PROXIMITY,
-                    kind::LIGHT_SENSOR => AMBIENT,
-                    kind::CAMERA => CAMERA,
+                bits |= match (device.kind, device.source) {
+                    (_, Source::Distance(_)) => PROXIMITY,
+                    (kind::LIGHT_SENSOR, _) => AMBIENT,
+                    (kind::CAMERA, _) => CAMERA,
                     _ => 0,
                 };
             }
@@ -752,7 +790,7 @@ impl Controllers {
     }
 }
 
-impl Drop for Controllers {
+impl Drop for Controllers<'_> {
     fn drop(&mut self) {
         if !self.driven.is_empty() {
             for driven in &mut self.driven {

@@ -201,12 +201,12 @@ impl Supervisor {
         let up = if self.z_up { DVec3::Z } else { DVec3::Y };
         Frame {
             linear: DMat3::from_quat(DQuat::from_axis_angle(up, pose.heading - since)) * rotation,
-            translation: self.to_file(DVec3::new(pose.x, floor, pose.z)),
+            translation: self.regatta_to_file(DVec3::new(pose.x, floor, pose.z)),
         }
     }
 
     /// regatta's y-up world to the file's axes.
-    fn to_file(&self, p: DVec3) -> DVec3 {
+    fn regatta_to_file(&self, p: DVec3) -> DVec3 {
         if self.z_up {
             DVec3::new(p.x, -p.z, p.y)
         } else {
@@ -215,7 +215,7 @@ impl Supervisor {
     }
 
     /// The file's axes to regatta's y-up world.
-    fn from_file(&self, p: DVec3) -> DVec3 {
+    fn file_to_regatta(&self, p: DVec3) -> DVec3 {
         if self.z_up {
             DVec3::new(p.x, p.z, -p.y)
         } else {
@@ -428,7 +428,7 @@ impl Supervisor {
         if let Some(&robot) = self.robots.get(&node) {
             match (name.as_str(), numbers.len()) {
                 ("translation", 3) => {
-                    let p = self.from_file(DVec3::from_slice(numbers));
+                    let p = self.file_to_regatta(DVec3::from_slice(numbers));
                     let pose = &mut simulation.robots[robot].pose;
                     pose.x = p.x;
                     pose.z = p.z;
@@ -484,7 +484,7 @@ impl Supervisor {
             let state = &simulation.robots[robot];
             let rig = &simulation.compiled.rig.robots[robot];
             let (left, right) = state.wheel_velocity.unwrap_or((0.0, 0.0));
-            let forward = self.to_file(state.pose.forward()) * 0.5 * (left + right);
+            let forward = self.regatta_to_file(state.pose.forward()) * 0.5 * (left + right);
             let up = if self.z_up { DVec3::Z } else { DVec3::Y };
             let turning = if rig.axle_length > 0.0 {
                 up * (right - left) / rig.axle_length
