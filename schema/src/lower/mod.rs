@@ -16,7 +16,7 @@
 //!
 //! This file holds the entry points. The lowerer's state is `state.rs`; each of its jobs is a
 //! file: `nodes.rs` (DEF/USE, built-in nodes), `fields.rs` (field values, IS), `protos.rs`
-//! (PROTO instances), `templates.rs`, `files.rs` (urls, EXTERNPROTO, Inline), `routes.rs`,
+//! (PROTO instances), `declared.rs` (PROTO declarations where they stand), `templates.rs`, `files.rs` (urls, EXTERNPROTO, Inline), `routes.rs`,
 //! `axes.rs`, `limits.rs`, `report.rs` (diagnostics and blame), `finish.rs`; what a check is
 //! given and returns are `options.rs` and `checked.rs`.
 
@@ -26,6 +26,7 @@ use regatta_parser::SourceText;
 
 mod axes;
 mod checked;
+mod declared;
 mod events;
 mod fields;
 mod files;
