@@ -524,7 +524,9 @@ pub mod reference {
             .map(|i| {
                 (1..=reach)
                     .map(|m| {
-                        (1.0 - b) * libm::pow(b, m as f64) * (mirrored(x, i - m) - mirrored(x, i + m))
+                        (1.0 - b)
+                            * libm::pow(b, m as f64)
+                            * (mirrored(x, i - m) - mirrored(x, i + m))
                     })
                     .sum()
             })

@@ -246,12 +246,8 @@ fn stream_status(address: &str, target: &str, headers: &str) -> String {
 
 #[test]
 fn beyond_the_loopback_every_request_needs_the_token_and_a_wrong_one_is_refused_everywhere() {
-    let (child, address, token, _out) = view(&[
-        "worlds/single_buoy.wbt",
-        "--paused",
-        "--bind",
-        "0.0.0.0",
-    ]);
+    let (child, address, token, _out) =
+        view(&["worlds/single_buoy.wbt", "--paused", "--bind", "0.0.0.0"]);
     let _running = Running(child);
     // The token with its last digit changed: the same length, wrong at the end.
     let last = if token.ends_with('0') { '1' } else { '0' };
@@ -290,7 +286,11 @@ fn beyond_the_loopback_every_request_needs_the_token_and_a_wrong_one_is_refused_
         assert!(refused(&response), "{method} {path} (header): {response}");
         // The right one, in the query or the header.
         let right = request(&address, method, &joined(&format!("token={token}")));
-        let expected = if path == "/no-such-page" { "404" } else { "200" };
+        let expected = if path == "/no-such-page" {
+            "404"
+        } else {
+            "200"
+        };
         assert!(
             right.starts_with(&format!("HTTP/1.1 {expected} ")),
             "{method} {path} with the token: {right}"
@@ -313,8 +313,14 @@ fn beyond_the_loopback_every_request_needs_the_token_and_a_wrong_one_is_refused_
         "{page}"
     );
     // The stream: refused without the token or with a wrong one, served with it.
-    for target in ["/events?robot=0".to_owned(), format!("/events?robot=0&token={wrong}")] {
-        assert_eq!(stream_status(&address, &target, ""), "HTTP/1.1 403 Forbidden");
+    for target in [
+        "/events?robot=0".to_owned(),
+        format!("/events?robot=0&token={wrong}"),
+    ] {
+        assert_eq!(
+            stream_status(&address, &target, ""),
+            "HTTP/1.1 403 Forbidden"
+        );
     }
     assert_eq!(
         stream_status(&address, &format!("/events?robot=0&token={token}"), ""),
@@ -355,7 +361,11 @@ fn on_the_loopback_the_token_may_be_left_out_but_a_wrong_one_is_refused() {
         "HTTP/1.1 200 OK"
     );
     assert_eq!(
-        stream_status(&address, &format!("/events?robot=0&token={}", "0".repeat(32)), ""),
+        stream_status(
+            &address,
+            &format!("/events?robot=0&token={}", "0".repeat(32)),
+            ""
+        ),
         "HTTP/1.1 403 Forbidden"
     );
 }
@@ -391,13 +401,8 @@ fn the_page_draws_the_lamps_and_the_robot_where_the_run_says_and_the_robot_moves
     }
     let dir = temp_dir("view-browser");
     // Beyond the loopback, so that the page must carry the token to every request it makes.
-    let (child, address, token, _out) = view(&[
-        "worlds/regatta.wbt",
-        "--speed",
-        "8",
-        "--bind",
-        "0.0.0.0",
-    ]);
+    let (child, address, token, _out) =
+        view(&["worlds/regatta.wbt", "--speed", "8", "--bind", "0.0.0.0"]);
     let running = Running(child);
     assert!(request(&address, "GET", "/").starts_with("HTTP/1.1 403"));
     let script = root().join("tools/tests/browser/view.js");

@@ -1,10 +1,9 @@
 //! PROTO declarations checked where they stand, once each, whether anything instantiates them
 //! or not (ISO/IEC 14772 4.8): the interface (each name declared once, no `set_x` or
 //! `x_changed` beside an exposedField `x`; unknown field types are the parser's), a body with
-//! a node in it, and
-//! in the body every IS (to a field of the interface, of the same type, with an access table
-//! 4.4 joins, for built-in nodes and PROTO instances alike) and no value written for an
-//! eventIn or eventOut; PROTOs nested in a body are declarations too. An instance's checks
+//! a node in it, and in the body every IS (to a field of the interface, of the same type,
+//! with an access table 4.4 joins, for built-in nodes and PROTO instances alike) and no value
+//! written for an eventIn or eventOut; PROTOs nested in a body are declarations too. An instance's checks
 //! say the same words at the same places, so each problem is reported once, at the body's
 //! line, however many instances there are (or none).
 //!
@@ -47,7 +46,11 @@ impl<'c> Lowerer<'c> {
     /// Checks the PROTOs a user's file defines, where they are defined (`table` is the file's
     /// PROTO table, already in `file_scopes`).
     pub(super) fn check_declarations(&mut self, file: FileId, table: &[(String, Rc<ProtoDef>)]) {
-        let authoring = self.file_authoring.get(&file.0).copied().unwrap_or_default();
+        let authoring = self
+            .file_authoring
+            .get(&file.0)
+            .copied()
+            .unwrap_or_default();
         if authoring != crate::webots::Authoring::World {
             return;
         }

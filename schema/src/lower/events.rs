@@ -36,7 +36,8 @@ pub(super) fn implied_event(name: &str) -> Option<(&str, &'static str)> {
     if let Some(field) = name.strip_prefix("set_") {
         return Some((field, "eventIn"));
     }
-    name.strip_suffix("_changed").map(|field| (field, "eventOut"))
+    name.strip_suffix("_changed")
+        .map(|field| (field, "eventOut"))
 }
 
 /// Whether an interface field declared with `interface` (a PROTO keyword) may be IS'd to a
@@ -75,7 +76,10 @@ pub(super) fn is_type_mismatch(
             target.text
         ),
     )
-    .with_label(format!("'{}' is {interface}, '{field_name}' is {ty}", target.text))
+    .with_label(format!(
+        "'{}' is {interface}, '{field_name}' is {ty}",
+        target.text
+    ))
     .with_code("is-type-mismatch")
 }
 
