@@ -68,7 +68,7 @@ impl<'c> Lowerer<'c> {
             return;
         }
         let proto = &def.proto;
-        self.check_interface_once(def);
+        self.check_interface_names(def);
         let mut interface: Interface = HashMap::new();
         for declaration in &proto.interface {
             // An unknown type is the parser's to report (it keeps no such declaration).

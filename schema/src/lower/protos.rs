@@ -482,9 +482,9 @@ impl<'c> Lowerer<'c> {
         )
     }
 
-    /// Once per PROTO definition: Webots' "PROTO parameter 'x' has no matching IS field.",
-    /// and VRML97's name rules (no name declared twice; no `set_x` or `x_changed` beside an
-    /// exposedField `x`, which declares those events itself).
+    /// Once per instantiated PROTO definition: Webots' "PROTO parameter 'x' has no matching
+    /// IS field." (a PROTO no one uses is not nagged about fields no one sets), and VRML97's
+    /// name rules (`check_interface_names`).
     pub(super) fn check_interface_once(&mut self, def: &Rc<ProtoDef>) {
         let key = (def.file.0, def.proto.span.start);
         if !self.checked_protos.insert(key) {
@@ -501,7 +501,6 @@ impl<'c> Lowerer<'c> {
             .skip(1)
             .filter_map(|rest| rest.split('.').next())
             .collect();
-        let mut names: HashMap<&str, &syntax::Declaration> = HashMap::new();
         for declaration in &def.proto.interface {
             let name = declaration.name.text.as_str();
             let is_event = matches!(
@@ -518,6 +517,17 @@ impl<'c> Lowerer<'c> {
                     .with_code("unused-proto-field"),
                 );
             }
+        }
+        self.check_interface_names(def);
+    }
+
+    /// VRML97's name rules of an interface (4.8.2): no name declared twice, no `set_x` or
+    /// `x_changed` beside an exposedField `x`. Where the PROTO is declared, and again (the
+    /// same messages, given once) where it is first instantiated.
+    pub(super) fn check_interface_names(&mut self, def: &Rc<ProtoDef>) {
+        let mut names: HashMap<&str, &syntax::Declaration> = HashMap::new();
+        for declaration in &def.proto.interface {
+            let name = declaration.name.text.as_str();
             if let Some(first) = names.insert(name, declaration) {
                 self.strict_or_warn(
                     def.file,
