@@ -3,7 +3,8 @@
 //! `x_changed` beside an exposedField `x`; unknown field types are the parser's), a body with
 //! a node in it, and in the body every IS (to a field of the interface, of the same type,
 //! with an access table 4.4 joins, for built-in nodes and PROTO instances alike) and no value
-//! written for an eventIn or eventOut; PROTOs nested in a body are declarations too. An instance's checks
+//! written for an eventIn or eventOut; its ROUTEs between its own DEF'd nodes (4.10); PROTOs
+//! nested in a body are declarations too. An instance's checks
 //! say the same words at the same places, so each problem is reported once, at the body's
 //! line, however many instances there are (or none).
 //!
@@ -24,8 +25,8 @@ use crate::scene::FileId;
 use crate::value::FieldType;
 
 use super::events::{
-    access_of, implied_event, is_access_mismatch, is_compatible, is_type_mismatch,
-    node_event_with_value, proto_event_with_value, unknown_is,
+    access_of, implied_event, interface_ends, is_access_mismatch, is_compatible, is_type_mismatch,
+    node_event_with_value, proto_event_with_value, spec_ends, unknown_is,
 };
 use super::state::{has_template, Lowerer, ProtoDef};
 
@@ -33,6 +34,7 @@ use super::state::{has_template, Lowerer, ProtoDef};
 type Interface<'a> = HashMap<&'a str, (FieldType, &'a str)>;
 
 /// What a node in a body is, for its fields' access and types.
+#[derive(Clone)]
 enum NodeType {
     /// A catalogue node: its fields' types and accesses.
     Builtin(crate::catalogue::SpecId),
@@ -84,6 +86,8 @@ impl<'c> Lowerer<'c> {
         }
         let visible = self.visible_protos(def);
         let mut nested: Vec<(String, Rc<ProtoDef>)> = Vec::new();
+        // The body's DEF names so far, for its ROUTEs.
+        let mut defs: HashMap<String, NodeType> = HashMap::new();
         let mut has_node = false;
         for item in &proto.body {
             match item {
@@ -105,8 +109,9 @@ impl<'c> Lowerer<'c> {
                     has_node = true;
                     let scope: Vec<(String, Rc<ProtoDef>)> =
                         visible.iter().chain(nested.iter()).cloned().collect();
-                    self.check_body_node(def.file, node, &interface, &scope);
+                    self.check_body_node(def.file, node, &interface, &scope, &mut defs);
                 }
+                Item::Route(route) => self.check_body_route(def.file, route, &defs),
                 _ => {}
             }
         }
@@ -129,6 +134,7 @@ impl<'c> Lowerer<'c> {
         node: &syntax::Node,
         interface: &Interface,
         protos: &[(String, Rc<ProtoDef>)],
+        defs: &mut HashMap<String, NodeType>,
     ) {
         let NodeKind::Instance {
             type_name,
@@ -232,7 +238,7 @@ impl<'c> Lowerer<'c> {
                     if let Items::Atoms(atoms) = &value.items {
                         for atom in atoms {
                             if let Atom::Node(child) = atom {
-                                self.check_body_node(file, child, interface, protos);
+                                self.check_body_node(file, child, interface, protos, defs);
                             }
                         }
                     }
@@ -240,5 +246,49 @@ impl<'c> Lowerer<'c> {
                 syntax::FieldValue::Missing { .. } => {}
             }
         }
+        // Bound once the node is complete, as an instance binds it.
+        if let Some(def) = node.def.as_ref().filter(|d| !d.text.is_empty()) {
+            defs.insert(def.text.clone(), node_type);
+        }
+    }
+
+    /// A ROUTE of a body (VRML97 4.10): both ends DEF'd before it in the body, events of the
+    /// right access, one type. A sound one says nothing here; each instance says it is not
+    /// simulated.
+    fn check_body_route(
+        &mut self,
+        file: FileId,
+        route: &syntax::Route,
+        defs: &HashMap<String, NodeType>,
+    ) {
+        let from = self.body_route_end(file, &route.from_node, &route.from_field, true, defs);
+        let to = self.body_route_end(file, &route.to_node, &route.to_field, false, defs);
+        self.route_types(route, file, from, to);
+    }
+
+    fn body_route_end(
+        &mut self,
+        file: FileId,
+        node: &syntax::Ident,
+        field: &syntax::Ident,
+        source: bool,
+        defs: &HashMap<String, NodeType>,
+    ) -> Option<FieldType> {
+        let (label, ends) = match defs.get(&node.text) {
+            None => {
+                self.route_without_node(node, file);
+                return None;
+            }
+            Some(NodeType::Unknown) => return None,
+            Some(NodeType::Builtin(spec)) => {
+                let spec = self.catalogue().spec(*spec);
+                (format!("{} node", spec.name), spec_ends(spec))
+            }
+            Some(NodeType::Proto(def)) => (
+                format!("PROTO '{}'", def.proto.name.text),
+                interface_ends(&def.proto.interface),
+            ),
+        };
+        self.route_end_in(node, field, source, file, &label, &ends)
     }
 }

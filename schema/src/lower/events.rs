@@ -4,10 +4,41 @@
 //! a value written for an event), shared by the check of a declaration and of an instance so
 //! that both say the same words at the same place (and the message is given once).
 
-use regatta_parser::syntax::Ident;
+use regatta_parser::syntax::{Declaration, Ident};
 use regatta_parser::Diagnostic;
 
+use crate::catalogue::NodeSpec;
 use crate::value::FieldType;
+
+/// A node type's events and fields, as a ROUTE names them: (name, type, access).
+pub(super) type Ends = [(String, FieldType, String)];
+
+/// The events and fields of a PROTO's interface.
+pub(super) fn interface_ends(interface: &[Declaration]) -> Vec<(String, FieldType, String)> {
+    interface
+        .iter()
+        .filter_map(|declaration| {
+            let ty = FieldType::parse(&declaration.field_type.text)?;
+            let access = access_of(&declaration.keyword.text).to_owned();
+            Some((declaration.name.text.clone(), ty, access))
+        })
+        .collect()
+}
+
+/// The events and fields of a built-in node type (an exposedField when the catalogue says no
+/// access).
+pub(super) fn spec_ends(spec: &NodeSpec) -> Vec<(String, FieldType, String)> {
+    spec.fields
+        .iter()
+        .map(|f| {
+            let access = f
+                .access
+                .clone()
+                .unwrap_or_else(|| "exposedField".to_owned());
+            (f.name.clone(), f.ty(), access)
+        })
+        .collect()
+}
 
 /// "a field", "an exposedField".
 pub(super) fn with_article(word: &str) -> String {
