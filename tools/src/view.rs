@@ -86,6 +86,11 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         eprintln!(
             "note: --bind {bind}: other machines may reach the viewer; it answers only requests with the token in its URL, so whoever has that URL can watch this run and pause, step or reset it (the connection is plain HTTP: use it on networks you trust, or `ssh -L`)"
         );
+        if bind.is_unspecified() {
+            eprintln!(
+                "note: listening on every address: open the URL with this machine's name or address in place of {bind}"
+            );
+        }
     }
     if args.world.extension().is_some_and(|e| e == "mcap") {
         return crate::view_replay::replay(&args.world, &args.options, bind, args.port);
