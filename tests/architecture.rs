@@ -2,7 +2,9 @@
 //! text so that they stay true:
 //!
 //! - within a crate, source files import each other without circles;
-//! - no source file passes [`MAX_LINES`] lines.
+//! - no source file passes [`MAX_LINES`] lines;
+//! - every crate but those that draw, time and check is under the root `clippy.toml`, which
+//!   bans the platform's transcendental functions (logs are the same bytes on every machine).
 //!
 //! "Import" is read as a reader of the code would: a `use` of `crate::`, `super::`, `self::` or
 //! of a child module, or such a path written in the code; a path through a module's
@@ -109,6 +111,56 @@ fn the_checker_finds_circles_and_leaves_tests_out() {
         1,
         "comments and strings do not count"
     );
+}
+
+/// The crates that may use the platform's math: they draw figures, time benchmarks and check
+/// results; nothing of theirs reaches a sensor, a pose or a log.
+const STD_MATH_CRATES: [&str; 3] = ["figures", "tools", "tests"];
+
+#[test]
+fn the_platforms_transcendental_functions_are_banned_where_results_reach_a_log() {
+    let root = regatta_tests::root();
+    // Clippy reads the clippy.toml nearest above a crate's manifest.
+    for krate in workspace_crates() {
+        let name = krate
+            .strip_prefix(&root)
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
+        let used = krate
+            .ancestors()
+            .take_while(|dir| dir.starts_with(&root))
+            .map(|dir| dir.join("clippy.toml"))
+            .find(|file| file.is_file())
+            .unwrap_or_else(|| panic!("no clippy.toml holds for {name}"));
+        if STD_MATH_CRATES.contains(&name.as_str()) {
+            assert_eq!(
+                used,
+                krate.join("clippy.toml"),
+                "{name} opts out in its own"
+            );
+        } else {
+            assert_eq!(
+                used,
+                root.join("clippy.toml"),
+                "{name} is not under the root clippy.toml's ban on the platform's math"
+            );
+        }
+    }
+    let config = std::fs::read_to_string(root.join("clippy.toml")).unwrap();
+    for function in [
+        "sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sin_cos", "sinh", "cosh", "tanh",
+        "asinh", "acosh", "atanh", "exp", "exp2", "exp_m1", "ln", "ln_1p", "log", "log2", "log10",
+        "powf", "powi", "hypot", "cbrt",
+    ] {
+        for float in ["f32", "f64"] {
+            let path = format!("path = \"{float}::{function}\"");
+            assert!(
+                config.contains(&path),
+                "clippy.toml does not ban {float}::{function}"
+            );
+        }
+    }
 }
 
 /// The workspace members' folders that hold a `src/`.

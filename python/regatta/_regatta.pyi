@@ -107,7 +107,7 @@ class World:
     def steps(self) -> int: ...
     @property
     def view_url(self) -> Optional[str]:
-        """The live viewer's address when made with ``view=True`` (127.0.0.1), else None."""
+        """The live viewer's page when made with ``view=True`` (127.0.0.1), with the run's token (``?token=…``), else None."""
     @property
     def time_step(self) -> float: ...
     @property

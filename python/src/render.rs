@@ -77,7 +77,10 @@ pub fn top_view(simulation: &Simulation, size: usize) -> Vec<u8> {
         };
         fill(&body, ROBOT, &mut image);
         // Heading: +x forward; a rotation by θ about +y turns x toward −z.
-        let forward = DVec2::new(robot.pose.heading.cos(), -robot.pose.heading.sin());
+        let forward = DVec2::new(
+            libm::cos(robot.pose.heading),
+            -libm::sin(robot.pose.heading),
+        );
         let steps = (rig.body_radius / metres_per_pixel * 2.0).ceil().max(1.0) as usize;
         for k in 0..=steps {
             let p = to_pixel(center + forward * rig.body_radius * k as f64 / steps as f64);

@@ -406,7 +406,7 @@ impl World {
         self.core().simulation().time
     }
 
-    /// The live viewer's address (`view=True`), or None.
+    /// The live viewer's page (`view=True`), its URL with the run's token, or None.
     #[getter]
     fn view_url(&self) -> Option<String> {
         let viewer = self.viewer.lock().unwrap_or_else(|p| p.into_inner());

@@ -468,7 +468,7 @@ pub mod reference {
     /// with `a + 1/a = 2 + Gv/Gh`. Solves the dense system.
     pub fn lowpass(x: &[f64], lambda: f64) -> Vec<f64> {
         let n = x.len();
-        let a = (-1.0 / lambda).exp();
+        let a = libm::exp(-1.0 / lambda);
         let c = a + 1.0 / a - 2.0; // Gv / Gh
         let mut m = vec![vec![0.0; n + 1]; n];
         for i in 0..n {
@@ -518,13 +518,15 @@ pub mod reference {
 
     /// Dense convolution of the mirrored input with the odd kernel, to where it vanishes.
     pub fn odd(x: &[f64], lambda: f64) -> Vec<f64> {
-        let b = (-1.0 / lambda).exp();
+        let b = libm::exp(-1.0 / lambda);
         let reach = ((lambda * 60.0).ceil() as i64).max(1);
         (0..x.len() as i64)
             .map(|i| {
                 (1..=reach)
                     .map(|m| {
-                        (1.0 - b) * b.powi(m as i32) * (mirrored(x, i - m) - mirrored(x, i + m))
+                        (1.0 - b)
+                            * libm::pow(b, m as f64)
+                            * (mirrored(x, i - m) - mirrored(x, i + m))
                     })
                     .sum()
             })

@@ -80,7 +80,7 @@ pub fn turn(from: Authoring, to: Authoring, objects: Objects) -> Option<[f64; 4]
 /// The product a·b of two axis-angle rotations (b applied first).
 fn compose(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
     let q = |r: [f64; 4]| {
-        let (s, c) = ((r[3] / 2.0).sin(), (r[3] / 2.0).cos());
+        let (s, c) = (libm::sin(r[3] / 2.0), libm::cos(r[3] / 2.0));
         [c, r[0] * s, r[1] * s, r[2] * s]
     };
     let (p, r) = (q(a), q(b));
@@ -92,7 +92,7 @@ fn compose(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
     if s < 1e-12 {
         return [0.0, 1.0, 0.0, 0.0];
     }
-    [x / s, y / s, z / s, 2.0 * s.atan2(w)]
+    [x / s, y / s, z / s, 2.0 * libm::atan2(s, w)]
 }
 
 /// The path inside a Webots installation that a PROTO url names: `webots://projects/…` and

@@ -18,12 +18,14 @@ use crate::outcome::Outcome;
 pub struct Args {
     /// The world file (`-` reads standard input), or a log (`.mcap`) to replay.
     world: PathBuf,
-    /// The port to serve on (0, the default, picks a free one; the URL is printed first).
+    /// The port to serve on (0, the default, picks a free one; the URL, with the run's
+    /// token, is printed first).
     #[arg(long, default_value_t = 0)]
     port: u16,
-    /// The address to listen on: 127.0.0.1 (this machine only) unless another is given;
-    /// `--bind 0.0.0.0` shows the run, and gives its controls, to anyone who can reach this
-    /// machine.
+    /// The address to listen on: 127.0.0.1 (this machine only) unless another is given.
+    /// Beyond the loopback (`--bind 0.0.0.0`) the page, its data and its controls (pause,
+    /// step, reset, speed) answer only requests carrying the run's token, a random one
+    /// printed in the URL (others get 403): whoever has the URL can watch and drive the run.
     #[arg(long, value_name = "ADDR")]
     bind: Option<IpAddr>,
     /// Speed: `1` is real time, `N` N× real time, `fast` as fast as possible.
@@ -82,8 +84,13 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
     let bind = args.bind.unwrap_or(IpAddr::from([127, 0, 0, 1]));
     if !bind.is_loopback() {
         eprintln!(
-            "warning: --bind {bind}: anyone who can reach this machine can watch this run and pause, step or reset it"
+            "note: --bind {bind}: other machines may reach the viewer; it answers only requests with the token in its URL, so whoever has that URL can watch this run and pause, step or reset it (the connection is plain HTTP: use it on networks you trust, or `ssh -L`)"
         );
+        if bind.is_unspecified() {
+            eprintln!(
+                "note: listening on every address: open the URL with this machine's name or address in place of {bind}"
+            );
+        }
     }
     if args.world.extension().is_some_and(|e| e == "mcap") {
         return crate::view_replay::replay(&args.world, &args.options, bind, args.port);

@@ -13,9 +13,9 @@ use std::time::{Duration, Instant};
 
 use common::{ok, regatta, root, temp_dir};
 
-/// Starts `regatta view ARGS`; returns the child, its URL's address (host:port) and the rest
-/// of its standard output.
-fn view(args: &[&str]) -> (Child, String, BufReader<ChildStdout>) {
+/// Starts `regatta view ARGS`; returns the child, its URL's address (host:port, on the
+/// loopback), the run's token and the rest of its standard output.
+fn view(args: &[&str]) -> (Child, String, String, BufReader<ChildStdout>) {
     let mut child = regatta()
         .arg("view")
         .args(args)
@@ -27,14 +27,19 @@ fn view(args: &[&str]) -> (Child, String, BufReader<ChildStdout>) {
     let mut out = BufReader::new(child.stdout.take().unwrap());
     let mut first = String::new();
     out.read_line(&mut first).unwrap();
-    let address = first
+    let (address, token) = first
         .trim()
         .strip_prefix("http://")
-        .and_then(|rest| rest.strip_suffix('/'))
-        .unwrap_or_else(|| panic!("the first line is not the URL: {first:?}"))
-        .to_owned();
+        .and_then(|rest| rest.split_once("/?token="))
+        .unwrap_or_else(|| panic!("the first line is not the URL with its token: {first:?}"));
+    assert!(
+        token.len() == 32 && token.bytes().all(|c| c.is_ascii_hexdigit()),
+        "{token}"
+    );
+    // Listening on every address, the loopback is one of them.
+    let address = address.replace("0.0.0.0:", "127.0.0.1:");
     assert!(address.starts_with("127.0.0.1:"), "{address}");
-    (child, address, out)
+    (child, address, token.to_owned(), out)
 }
 
 /// Kills a viewer left running when a test fails.
@@ -49,13 +54,18 @@ impl Drop for Running {
 
 /// One HTTP request; the whole response as text.
 fn request(address: &str, method: &str, target: &str) -> String {
+    request_with(address, method, target, "")
+}
+
+/// One HTTP request with more header lines (each ending in CRLF); the whole response.
+fn request_with(address: &str, method: &str, target: &str, headers: &str) -> String {
     let mut stream = TcpStream::connect(address).unwrap();
     stream
         .set_read_timeout(Some(Duration::from_secs(10)))
         .unwrap();
     write!(
         stream,
-        "{method} {target} HTTP/1.1\r\nHost: {address}\r\n\r\n"
+        "{method} {target} HTTP/1.1\r\nHost: {address}\r\n{headers}\r\n"
     )
     .unwrap();
     let mut response = String::new();
@@ -102,7 +112,7 @@ fn clients_that_vanish_read_slowly_or_crowd_change_no_byte_of_the_log() {
         .unwrap();
     ok(&run);
 
-    let (child, address, _out) = view(&[
+    let (child, address, _token, _out) = view(&[
         world,
         "--paused",
         "--speed",
@@ -180,7 +190,7 @@ fn a_log_replays_with_every_sample_at_once() {
         .output()
         .unwrap();
     ok(&run);
-    let (child, address, _out) = view(&[log.to_str().unwrap()]);
+    let (child, address, _token, _out) = view(&[log.to_str().unwrap()]);
     let _running = Running(child);
     let state = request(&address, "GET", "/state.json");
     assert!(state.contains("\"replay\":true"), "{state}");
@@ -208,6 +218,155 @@ fn a_log_replays_with_every_sample_at_once() {
     assert!(
         text.contains("\"kind\":\"visit\""),
         "no buoy visit replayed"
+    );
+}
+
+/// The status line of a response, and whether its body holds anything of the run.
+fn refused(response: &str) -> bool {
+    response.starts_with("HTTP/1.1 403 ")
+        && response.ends_with("\r\n\r\nforbidden\n")
+        && !response.contains("robots")
+}
+
+/// The status code of a request whose response is a stream (only its head is read).
+fn stream_status(address: &str, target: &str, headers: &str) -> String {
+    let mut stream = TcpStream::connect(address).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
+    write!(
+        stream,
+        "GET {target} HTTP/1.1\r\nHost: {address}\r\n{headers}\r\n"
+    )
+    .unwrap();
+    let mut line = String::new();
+    BufReader::new(stream).read_line(&mut line).unwrap();
+    line.trim().to_owned()
+}
+
+#[test]
+fn beyond_the_loopback_every_request_needs_the_token_and_a_wrong_one_is_refused_everywhere() {
+    let (child, address, token, _out) =
+        view(&["worlds/single_buoy.wbt", "--paused", "--bind", "0.0.0.0"]);
+    let _running = Running(child);
+    // The token with its last digit changed: the same length, wrong at the end.
+    let last = if token.ends_with('0') { '1' } else { '0' };
+    let wrong = format!("{}{last}", &token[..31]);
+    let targets = [
+        ("GET", "/"),
+        ("GET", "/index.html"),
+        ("GET", "/view.js"),
+        ("GET", "/scene.json"),
+        ("GET", "/state.json"),
+        ("POST", "/control?cmd=step&n=1"),
+        ("GET", "/no-such-page"),
+    ];
+    for (method, path) in targets {
+        let joined = |extra: &str| {
+            let separator = if path.contains('?') { '&' } else { '?' };
+            format!("{path}{separator}{extra}")
+        };
+        // No token, a wrong one of the same length, a short one, an empty one, one in the
+        // header: 403 and nothing else.
+        for target in [
+            path.to_owned(),
+            joined(&format!("token={wrong}")),
+            joined(&format!("token={}", &token[..16])),
+            joined("token="),
+        ] {
+            let response = request(&address, method, &target);
+            assert!(refused(&response), "{method} {target}: {response}");
+        }
+        let response = request_with(
+            &address,
+            method,
+            path,
+            &format!("Authorization: token {wrong}\r\n"),
+        );
+        assert!(refused(&response), "{method} {path} (header): {response}");
+        // The right one, in the query or the header.
+        let right = request(&address, method, &joined(&format!("token={token}")));
+        let expected = if path == "/no-such-page" {
+            "404"
+        } else {
+            "200"
+        };
+        assert!(
+            right.starts_with(&format!("HTTP/1.1 {expected} ")),
+            "{method} {path} with the token: {right}"
+        );
+        let header = request_with(
+            &address,
+            method,
+            path,
+            &format!("Authorization: token {token}\r\n"),
+        );
+        assert!(
+            header.starts_with(&format!("HTTP/1.1 {expected} ")),
+            "{method} {path} with the token in the header: {header}"
+        );
+    }
+    // The page hands the token to its script, which adds it to every request.
+    let page = request(&address, "GET", &format!("/?token={token}"));
+    assert!(
+        page.contains(&format!("src=\"view.js?token={token}\"")),
+        "{page}"
+    );
+    // The stream: refused without the token or with a wrong one, served with it.
+    for target in [
+        "/events?robot=0".to_owned(),
+        format!("/events?robot=0&token={wrong}"),
+    ] {
+        assert_eq!(
+            stream_status(&address, &target, ""),
+            "HTTP/1.1 403 Forbidden"
+        );
+    }
+    assert_eq!(
+        stream_status(&address, &format!("/events?robot=0&token={token}"), ""),
+        "HTTP/1.1 200 OK"
+    );
+    // The controls went through only with the token: two single steps (query and header),
+    // and none of the ten refused ones.
+    let started = Instant::now();
+    loop {
+        let state = request(&address, "GET", &format!("/state.json?token={token}"));
+        if state.contains("\"steps\":2,") {
+            break;
+        }
+        assert!(
+            !state.contains("\"steps\":3,") && started.elapsed() < Duration::from_secs(20),
+            "{state}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    let state = request(&address, "GET", &format!("/state.json?token={token}"));
+    assert!(state.contains("\"steps\":2,"), "{state}");
+}
+
+#[test]
+fn on_the_loopback_the_token_may_be_left_out_but_a_wrong_one_is_refused() {
+    let (child, address, token, _out) = view(&["worlds/single_buoy.wbt", "--paused"]);
+    let _running = Running(child);
+    for path in ["/", "/scene.json", "/state.json"] {
+        assert!(request(&address, "GET", path).starts_with("HTTP/1.1 200 "));
+        let right = request(&address, "GET", &format!("{path}?token={token}"));
+        assert!(right.starts_with("HTTP/1.1 200 "), "{path}: {right}");
+        let wrong = request(&address, "GET", &format!("{path}?token={}", "0".repeat(32)));
+        assert!(refused(&wrong), "{path}: {wrong}");
+    }
+    assert_eq!(
+        stream_status(&address, "/events?robot=0", ""),
+        "HTTP/1.1 200 OK"
+    );
+    assert_eq!(
+        stream_status(
+            &address,
+            &format!("/events?robot=0&token={}", "0".repeat(32)),
+            ""
+        ),
+        "HTTP/1.1 403 Forbidden"
     );
 }
 
@@ -241,12 +400,15 @@ fn the_page_draws_the_lamps_and_the_robot_where_the_run_says_and_the_robot_moves
         return;
     }
     let dir = temp_dir("view-browser");
-    let (child, address, _out) = view(&["worlds/regatta.wbt", "--speed", "8"]);
+    // Beyond the loopback, so that the page must carry the token to every request it makes.
+    let (child, address, token, _out) =
+        view(&["worlds/regatta.wbt", "--speed", "8", "--bind", "0.0.0.0"]);
     let running = Running(child);
+    assert!(request(&address, "GET", "/").starts_with("HTTP/1.1 403"));
     let script = root().join("tools/tests/browser/view.js");
     let output = std::process::Command::new("node")
         .arg(&script)
-        .arg(format!("http://{address}/"))
+        .arg(format!("http://{address}/?token={token}"))
         .arg(&dir)
         .arg("90")
         .output()

@@ -24,6 +24,15 @@ const view = {
 };
 window.regatta = view;
 
+// The run's token, from the page's own URL (regatta view prints it there): every request
+// the page makes carries it, as the server refuses requests without it beyond the loopback.
+const TOKEN = new URLSearchParams(location.search).get("token");
+function api(path) {
+  if (!TOKEN) return path;
+  return `${path}${path.includes("?") ? "&" : "?"}token=${encodeURIComponent(TOKEN)}`;
+}
+view.api = api;
+
 // ---------- geometry ----------
 
 function sub(a, b) { return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]; }
@@ -359,7 +368,7 @@ function frame(now) {
 
 function connect() {
   if (view.source) view.source.close();
-  const source = new EventSource(`events?robot=${view.robot}`);
+  const source = new EventSource(api(`events?robot=${view.robot}`));
   view.source = source;
   source.onmessage = (message) => {
     let data;
@@ -383,7 +392,7 @@ function connect() {
 }
 
 function control(query) {
-  fetch(`control?${query}`, { method: "POST" }).catch(() => {});
+  fetch(api(`control?${query}`), { method: "POST" }).catch(() => {});
 }
 
 function advanceReplay(now) {
@@ -435,7 +444,7 @@ function controls() {
 }
 
 async function main() {
-  const response = await fetch("scene.json");
+  const response = await fetch(api("scene.json"));
   view.scene = await response.json();
   view.fixed = triangles(view.scene.static);
   view.robotTris = view.scene.robots.map((r) => triangles(r.mesh));

@@ -1,7 +1,8 @@
 //! A small HTTP/1.1 server on the standard library: the page, the scene, the state, the
 //! controls, and a Server-Sent Events stream of samples. Every connection gets a thread of
 //! its own and closes after its response (the stream is the response); requests are bounded
-//! in size and time, and nothing a client sends can panic the server.
+//! in size and time, and nothing a client sends can panic the server. A request the run's
+//! token does not allow (`token.rs`) is answered 403 before anything else is looked at.
 
 use std::io::{Read, Write};
 use std::net::{Shutdown, TcpListener, TcpStream};
@@ -11,6 +12,7 @@ use std::time::{Duration, Instant};
 
 use crate::hub::{Control, Hub, Status};
 use crate::sample::num;
+use crate::token::Access;
 
 const PAGE: &str = include_str!("../page/index.html");
 const SCRIPT: &str = include_str!("../page/view.js");
@@ -32,6 +34,7 @@ pub struct Shared {
     pub hub: Arc<Hub>,
     pub scene: String,
     pub stop: AtomicBool,
+    pub access: Access,
 }
 
 pub fn accept_loop(listener: TcpListener, shared: Arc<Shared>) {
@@ -72,6 +75,8 @@ struct Request {
     query: String,
     host: Option<String>,
     origin: Option<String>,
+    /// The token the request carried: `?token=` or `Authorization: token …`.
+    token: Option<String>,
 }
 
 fn read_request(mut stream: &TcpStream) -> Option<Request> {
@@ -101,6 +106,10 @@ fn read_request(mut stream: &TcpStream) -> Option<Request> {
         query: query.to_owned(),
         host: None,
         origin: None,
+        token: query
+            .split('&')
+            .find_map(|p| p.strip_prefix("token="))
+            .map(str::to_owned),
     };
     for line in lines {
         let Some((name, value)) = line.split_once(':') else {
@@ -110,6 +119,9 @@ fn read_request(mut stream: &TcpStream) -> Option<Request> {
         match name.trim().to_ascii_lowercase().as_str() {
             "host" => request.host = Some(value),
             "origin" => request.origin = Some(value),
+            "authorization" if request.token.is_none() => {
+                request.token = value.strip_prefix("token ").map(|t| t.trim().to_owned());
+            }
             _ => {}
         }
     }
@@ -134,12 +146,17 @@ fn serve(stream: &TcpStream, shared: &Shared) {
         return;
     };
     let text = "text/plain; charset=utf-8";
+    // Before anything else, even which paths exist: a stranger gets 403 and nothing more.
+    if !shared.access.allows(request.token.as_deref()) {
+        let _ = respond(stream, "403 Forbidden", text, b"forbidden\n");
+        return;
+    }
     let _ = match (request.method.as_str(), request.path.as_str()) {
         ("GET", "/") | ("GET", "/index.html") => respond(
             stream,
             "200 OK",
             "text/html; charset=utf-8",
-            PAGE.as_bytes(),
+            page(request.token.is_some().then_some(&shared.access.token)).as_bytes(),
         ),
         ("GET", "/view.js") => respond(
             stream,
@@ -183,6 +200,18 @@ fn serve(stream: &TcpStream, shared: &Shared) {
         }
         _ => respond(stream, "404 Not Found", text, b"not found\n"),
     };
+}
+
+/// The page, its script's address carrying the token the page was opened with (the script
+/// then adds it to every request it makes).
+fn page(token: Option<&String>) -> String {
+    match token {
+        Some(token) => PAGE.replace(
+            "<script src=\"view.js\">",
+            &format!("<script src=\"view.js?token={token}\">"),
+        ),
+        None => PAGE.to_owned(),
+    }
 }
 
 /// The latest sample and the status, for scripts and tests.

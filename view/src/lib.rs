@@ -7,11 +7,17 @@
 //! When someone does, a sample is copied out at most every 1/30 s of simulated time and
 //! 4 ms of wall time; clients serialise and send it on their own threads, and one that
 //! cannot keep up loses samples, never steps. The stepping loop never waits on a client.
+//!
+//! Each run has a token (as Jupyter's): 128 random bits from the operating system, printed
+//! in the page's URL. Listening beyond the loopback, every request needs it (`?token=` or an
+//! `Authorization: token …` header) and one without it, or with another, gets 403 and nothing
+//! else; on the loopback it may be left out, and a wrong one is refused all the same.
 
 mod http;
 pub mod hub;
 pub mod sample;
 pub mod scene;
+mod token;
 
 use std::net::{IpAddr, SocketAddr, TcpListener, TcpStream};
 use std::sync::atomic::Ordering;
@@ -36,6 +42,8 @@ pub enum ViewError {
     },
     #[error("cannot start the viewer's server thread")]
     Thread(#[source] std::io::Error),
+    #[error("cannot draw the viewer's token from the operating system's randomness")]
+    Token(#[source] getrandom::Error),
 }
 
 /// Simulated time between samples (about a frame at real time).
@@ -113,6 +121,10 @@ impl Viewer {
             hub,
             scene: scene::scene_json(compiled),
             stop: Default::default(),
+            access: token::Access {
+                token: token::new_token().map_err(ViewError::Token)?,
+                required: !bind.is_loopback(),
+            },
         });
         let server = {
             let shared = Arc::clone(&shared);
@@ -136,12 +148,29 @@ impl Viewer {
         })
     }
 
-    /// The page's address.
+    /// The page's address, with the run's token: what a person opens.
     pub fn url(&self) -> String {
+        format!("{}?token={}", self.base_url(), self.token())
+    }
+
+    /// The server's address without the token (`http://HOST:PORT/`): its paths need the
+    /// token beyond the loopback.
+    pub fn base_url(&self) -> String {
         match self.address.ip() {
             IpAddr::V6(ip) => format!("http://[{ip}]:{}/", self.address.port()),
             IpAddr::V4(ip) => format!("http://{ip}:{}/", self.address.port()),
         }
+    }
+
+    /// The run's token (32 hexadecimal digits), drawn from the operating system when the
+    /// viewer started.
+    pub fn token(&self) -> &str {
+        &self.shared.access.token
+    }
+
+    /// Whether every request needs the token (the viewer listens beyond the loopback).
+    pub fn token_required(&self) -> bool {
+        self.shared.access.required
     }
 
     pub fn address(&self) -> SocketAddr {

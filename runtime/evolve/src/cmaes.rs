@@ -304,7 +304,10 @@ mod tests {
 
     fn rosenbrock(x: &[f64]) -> f64 {
         -x.windows(2)
-            .map(|w| 100.0 * (w[1] - w[0] * w[0]).powi(2) + (1.0 - w[0]).powi(2))
+            .map(|w| {
+                let (a, b) = (w[1] - w[0] * w[0], 1.0 - w[0]);
+                100.0 * a * a + b * b
+            })
             .sum::<f64>()
     }
 

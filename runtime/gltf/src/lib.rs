@@ -802,7 +802,9 @@ impl<'a> Builder<'a> {
             let mut rotations = Vec::with_capacity(times.len() * 4);
             for pose in &track.poses {
                 translations.extend([pose.x as f32, floor_y as f32, pose.z as f32]);
-                let q = DQuat::from_rotation_y(pose.heading).as_quat().normalize();
+                // A turn about +y by the heading, its half angle through libm (as every pose).
+                let (s, c) = (libm::sin(pose.heading / 2.0), libm::cos(pose.heading / 2.0));
+                let q = DQuat::from_xyzw(0.0, s, 0.0, c).as_quat().normalize();
                 rotations.extend(q.to_array());
             }
             let bounds = (vec![times[0]], vec![times[times.len() - 1]]);

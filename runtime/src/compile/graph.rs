@@ -72,9 +72,9 @@ impl Shape {
         let center = frame.translation;
         let round = |radial_x: DVec3, radial_z: DVec3| {
             DVec3::new(
-                radial_x.x.hypot(radial_z.x),
-                radial_x.y.hypot(radial_z.y),
-                radial_x.z.hypot(radial_z.z),
+                libm::hypot(radial_x.x, radial_z.x),
+                libm::hypot(radial_x.y, radial_z.y),
+                libm::hypot(radial_x.z, radial_z.z),
             )
         };
         match self {

@@ -10,7 +10,7 @@ use crate::scene::FileId;
 use crate::typing::{self, Literal, Typing};
 use crate::value::{BaseType, FieldType, Value};
 
-use super::events::{is_compatible, with_article};
+use super::events::{is_access_mismatch, is_compatible, is_type_mismatch, unknown_is};
 use super::state::{Lowerer, Scope};
 
 impl<'c> Lowerer<'c> {
@@ -75,33 +75,18 @@ impl<'c> Lowerer<'c> {
                     return None;
                 };
                 let Some(binding) = interface.get(&target.text) else {
-                    self.error(
-                        file,
-                        Diagnostic::error(
-                            target.span,
-                            format!("'{}' is not a field of this PROTO's interface", target.text),
-                        )
-                        .with_code("unknown-is"),
-                    );
+                    self.error(file, unknown_is(target));
                     return None;
                 };
                 if binding.ty != ty {
-                    self.error(
-                        file,
-                        Diagnostic::error(target.span, format!("Type mismatch between '{}' PROTO parameter and field '{field_name}'.", target.text))
-                            .with_label(format!("'{}' is {}, '{field_name}' is {ty}", target.text, binding.ty))
-                            .with_code("is-type-mismatch"),
-                    );
+                    self.error(file, is_type_mismatch(target, binding.ty, field_name, ty));
                     return None;
                 }
                 if let Some(access) = spec.and_then(|s| s.access.as_deref()) {
                     if !is_compatible(&binding.keyword, access) {
                         self.strict_or_warn(
                             file,
-                            Diagnostic::error(target.span, format!("{} cannot be IS'd to '{field_name}', which is {}", with_article(&binding.keyword), with_article(access)))
-                                .with_label(format!("'{}' is {}", target.text, with_article(&binding.keyword)))
-                                .with_note("VRML97 4.8.3: a field may be IS'd to a field or exposedField, an eventIn to an eventIn or exposedField, an eventOut to an eventOut or exposedField; an exposedField only to an exposedField")
-                                .with_code("is-access-mismatch"),
+                            is_access_mismatch(target, &binding.keyword, field_name, access),
                         );
                         return None;
                     }

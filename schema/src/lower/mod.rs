@@ -13,11 +13,13 @@
 //! - A problem inside a PROTO's body that the instance caused (a value it passed, a template
 //!   over its fields, any problem in a built-in PROTO) is reported at the instance's line, with
 //!   the PROTO's line beside it, as rustc does for macros.
+//! - A PROTO declaration of the user's is checked where it stands, once, used or not (VRML97
+//!   4.8); its instances repeat none of those messages.
 //!
 //! This file holds the entry points. The lowerer's state is `state.rs`; each of its jobs is a
 //! file: `nodes.rs` (DEF/USE, built-in nodes), `fields.rs` (field values, IS), `protos.rs`
-//! (PROTO instances), `templates.rs`, `files.rs` (urls, EXTERNPROTO, Inline), `routes.rs`,
-//! `axes.rs`, `limits.rs`, `report.rs` (diagnostics and blame), `finish.rs`; what a check is
+//! (PROTO instances), `declared.rs` (PROTO declarations where they stand), `templates.rs`,
+//! `files.rs` (urls, EXTERNPROTO, Inline), `routes.rs`, `axes.rs`, `limits.rs`, `report.rs` (diagnostics and blame), `finish.rs`; what a check is
 //! given and returns are `options.rs` and `checked.rs`.
 
 use std::path::{Path, PathBuf};
@@ -26,6 +28,7 @@ use regatta_parser::SourceText;
 
 mod axes;
 mod checked;
+mod declared;
 mod events;
 mod fields;
 mod files;

@@ -12,6 +12,7 @@ use crate::catalogue::{did_you_mean, SpecId};
 use crate::scene::{FieldsBuilder, FileId, NodeId, Origin, SceneNode, Written};
 
 use super::checked::UnbuiltRobot;
+use super::events::{implied_event, node_event_with_value};
 use super::state::{Lowerer, Scope, UrlUse};
 
 impl<'c> Lowerer<'c> {
@@ -327,6 +328,17 @@ impl<'c> Lowerer<'c> {
                         continue;
                     }
                     let Some(index) = spec.field_index(&field.name.text) else {
+                        // `set_children`, `translation_changed`: an exposedField's events take
+                        // no value, and are IS'd only (where the PROTO's declaration was checked).
+                        let event = implied_event(&field.name.text).filter(|(name, _)| {
+                            spec.field_index(name).is_some_and(|i| matches!(spec.fields[i].access.as_deref(), None | Some("exposedField")))
+                        });
+                        if let Some((_, access)) = event {
+                            if !matches!(field.value, syntax::FieldValue::Is(_)) {
+                                self.strict_or_warn(scope.file, node_event_with_value(&field.name, access, &spec.name));
+                            }
+                            continue;
+                        }
                         let mut diagnostic = Diagnostic::error(field.name.span, format!("{} '{}' field in {} node.", self.unknown(), field.name.text, spec.name))
                             .with_label("unknown field")
                             .with_code("unknown-field");
@@ -345,13 +357,12 @@ impl<'c> Lowerer<'c> {
                         );
                     }
                     let field_spec = &spec.fields[index];
-                    if matches!(field_spec.access.as_deref(), Some("eventIn" | "eventOut")) {
-                        self.strict_or_warn(
-                            scope.file,
-                            Diagnostic::error(field.name.span, format!("'{}' is an {} of {}: it receives or sends events and takes no value", field.name.text, field_spec.access.as_deref().unwrap_or_default(), spec.name))
-                                .with_code("event-as-field"),
-                        );
-                        continue;
+                    // An event takes no value; IS joins it to an event of the PROTO (VRML97 4.8.3).
+                    if let Some(access @ ("eventIn" | "eventOut")) = field_spec.access.as_deref() {
+                        if !matches!(field.value, syntax::FieldValue::Is(_)) {
+                            self.strict_or_warn(scope.file, node_event_with_value(&field.name, access, &spec.name));
+                            continue;
+                        }
                     }
                     let site = self.value_site(field, scope);
                     if let Some(value) = self.lower_field_value(&field.value, field_spec.ty(), Some(field_spec), scope, &field.name.text, field.name.span) {

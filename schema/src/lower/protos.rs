@@ -16,7 +16,8 @@ use crate::scene::{FileId, NodeId, Origin};
 use crate::value::{FieldType, Value};
 
 use super::checked::Substitution;
-use super::state::{Frame, Lowerer, ProtoDef, ProtoTable, Scope, UrlBase};
+use super::events::{implied_event, proto_event_with_value};
+use super::state::{has_template, Frame, Lowerer, ProtoDef, ProtoTable, Scope, UrlBase};
 
 impl<'c> Lowerer<'c> {
     /// regatta's own PROTOs (`Khepera`, `Buoy`, `Arena`), parsed once per check: the table
@@ -119,6 +120,8 @@ impl<'c> Lowerer<'c> {
         let list = Rc::new(list);
         // PROTOs of one file see each other: bodies look the file's table up when instantiated.
         self.file_scopes.insert(file.0, list.clone());
+        // Each declaration is checked where it stands, whether or not anything uses it.
+        self.check_declarations(file, &list);
         list
     }
 
@@ -254,6 +257,22 @@ impl<'c> Lowerer<'c> {
                 .iter()
                 .find(|d| d.name.text == field.name.text)
             else {
+                // `set_x`, `x_changed` of an exposedField `x`: events, IS'd only.
+                let event = implied_event(&field.name.text).filter(|(declared, _)| {
+                    proto
+                        .interface
+                        .iter()
+                        .any(|d| d.name.text == *declared && d.keyword.text == "exposedField")
+                });
+                if let Some((_, access)) = event {
+                    if !matches!(field.value, syntax::FieldValue::Is(_)) {
+                        self.strict_or_warn(
+                            scope.file,
+                            proto_event_with_value(&field.name, access, name),
+                        );
+                    }
+                    continue;
+                }
                 let mut diagnostic = Diagnostic::error(
                     field.name.span,
                     format!(
@@ -276,17 +295,13 @@ impl<'c> Lowerer<'c> {
             let Some(ty) = FieldType::parse(&declaration.field_type.text) else {
                 continue;
             };
-            if matches!(declaration.keyword.text.as_str(), "eventIn" | "eventOut") {
+            // An event takes no value; IS joins it to an event of the enclosing PROTO.
+            if matches!(declaration.keyword.text.as_str(), "eventIn" | "eventOut")
+                && !matches!(field.value, syntax::FieldValue::Is(_))
+            {
                 self.strict_or_warn(
                     scope.file,
-                    Diagnostic::error(
-                        field.name.span,
-                        format!(
-                            "'{}' is an {} of PROTO '{name}': it takes no value",
-                            field.name.text, declaration.keyword.text
-                        ),
-                    )
-                    .with_code("event-as-field"),
+                    proto_event_with_value(&field.name, &declaration.keyword.text, name),
                 );
                 continue;
             }
@@ -467,9 +482,9 @@ impl<'c> Lowerer<'c> {
         )
     }
 
-    /// Once per PROTO definition: Webots' "PROTO parameter 'x' has no matching IS field.",
-    /// and VRML97's name rules (no name declared twice; no `set_x` or `x_changed` beside an
-    /// exposedField `x`, which declares those events itself).
+    /// Once per instantiated PROTO definition: Webots' "PROTO parameter 'x' has no matching
+    /// IS field." (a PROTO no one uses is not nagged about fields no one sets), and VRML97's
+    /// name rules (`check_interface_names`).
     pub(super) fn check_interface_once(&mut self, def: &Rc<ProtoDef>) {
         let key = (def.file.0, def.proto.span.start);
         if !self.checked_protos.insert(key) {
@@ -486,7 +501,6 @@ impl<'c> Lowerer<'c> {
             .skip(1)
             .filter_map(|rest| rest.split('.').next())
             .collect();
-        let mut names: HashMap<&str, &syntax::Declaration> = HashMap::new();
         for declaration in &def.proto.interface {
             let name = declaration.name.text.as_str();
             let is_event = matches!(
@@ -503,6 +517,17 @@ impl<'c> Lowerer<'c> {
                     .with_code("unused-proto-field"),
                 );
             }
+        }
+        self.check_interface_names(def);
+    }
+
+    /// VRML97's name rules of an interface (4.8.2): no name declared twice, no `set_x` or
+    /// `x_changed` beside an exposedField `x`. Where the PROTO is declared, and again (the
+    /// same messages, given once) where it is first instantiated.
+    pub(super) fn check_interface_names(&mut self, def: &Rc<ProtoDef>) {
+        let mut names: HashMap<&str, &syntax::Declaration> = HashMap::new();
+        for declaration in &def.proto.interface {
+            let name = declaration.name.text.as_str();
             if let Some(first) = names.insert(name, declaration) {
                 self.strict_or_warn(
                     def.file,
@@ -611,38 +636,6 @@ fn body_item_span(item: &BodyItem) -> Span {
         BodyItem::Declaration(d) => d.span,
         BodyItem::Template(t) => t.span,
     }
-}
-
-fn has_template(proto: &syntax::Proto) -> bool {
-    fn in_value(value: &syntax::Value) -> bool {
-        match &value.items {
-            Items::Numbers(_) => false,
-            Items::Atoms(atoms) => atoms.iter().any(|a| match a {
-                Atom::Template(t) => !t.expression,
-                Atom::Node(n) => in_node(n),
-                _ => false,
-            }),
-        }
-    }
-    fn in_node(node: &syntax::Node) -> bool {
-        match &node.kind {
-            NodeKind::Instance {
-                body: Some(body), ..
-            } => body.items.iter().any(|item| match item {
-                BodyItem::Template(_) => true,
-                BodyItem::Field(f) => {
-                    matches!(&f.value, syntax::FieldValue::Value(v) if in_value(v))
-                }
-                _ => false,
-            }),
-            _ => false,
-        }
-    }
-    proto.body.iter().any(|item| match item {
-        Item::Template(_) => true,
-        Item::Node(node) => in_node(node),
-        _ => false,
-    })
 }
 
 fn collect_is_targets<'a>(items: &'a [Item], out: &mut Vec<&'a syntax::Ident>) {

@@ -1,13 +1,15 @@
 //! ROUTEs, checked as VRML97 says (both ends DEF'd, event access, one type) and reported as
-//! read but not simulated.
+//! read but not simulated. The checks of an end and of the two ends' types are shared with
+//! the check of a PROTO declaration (`declared.rs`), which knows its body's nodes by syntax.
 
 use regatta_parser::syntax::{self};
 use regatta_parser::Diagnostic;
 
 use crate::catalogue::did_you_mean;
+use crate::scene::FileId;
 use crate::value::FieldType;
 
-use super::events::with_article;
+use super::events::{interface_ends, spec_ends, with_article, Ends};
 use super::state::{Lowerer, Scope};
 
 impl<'c> Lowerer<'c> {
@@ -17,12 +19,32 @@ impl<'c> Lowerer<'c> {
     pub(super) fn route(&mut self, route: &syntax::Route, scope: &mut Scope) {
         let from = self.route_end(&route.from_node, &route.from_field, true, scope);
         let to = self.route_end(&route.to_node, &route.to_field, false, scope);
+        if self.route_types(route, scope.file, from, to) {
+            self.error(
+                scope.file,
+                Diagnostic::warning(
+                    route.span,
+                    "ROUTEs are read but not simulated: regatta has no event model",
+                )
+                .with_code("route"),
+            );
+        }
+    }
+
+    /// Whether both ends are known and of one type (after reporting when they are not).
+    pub(super) fn route_types(
+        &mut self,
+        route: &syntax::Route,
+        file: FileId,
+        from: Option<FieldType>,
+        to: Option<FieldType>,
+    ) -> bool {
         let (Some(from), Some(to)) = (from, to) else {
-            return;
+            return false;
         };
         if from != to {
             self.strict_or_warn(
-                scope.file,
+                file,
                 Diagnostic::error(
                     route.span,
                     format!("ROUTE from {from} to {to}: both ends must have the same type"),
@@ -31,16 +53,9 @@ impl<'c> Lowerer<'c> {
                 .with_secondary(route.to_field.span, format!("{to}"))
                 .with_code("route-type"),
             );
-            return;
+            return false;
         }
-        self.error(
-            scope.file,
-            Diagnostic::warning(
-                route.span,
-                "ROUTEs are read but not simulated: regatta has no event model",
-            )
-            .with_code("route"),
-        );
+        true
     }
 
     /// The type of one end of a ROUTE, after reporting what is wrong with it.
@@ -52,46 +67,51 @@ impl<'c> Lowerer<'c> {
         scope: &Scope,
     ) -> Option<FieldType> {
         let Some(&id) = scope.defs.get(&node.text) else {
-            if scope.skipped_defs.contains(&node.text) {
-                return None;
+            if !scope.skipped_defs.contains(&node.text) {
+                self.route_without_node(node, scope.file);
             }
-            let diagnostic = Diagnostic::error(
-                node.span,
-                format!("no node was DEF'd as '{}' before this ROUTE", node.text),
-            )
-            .with_code("route-node");
-            self.strict_or_warn(scope.file, diagnostic);
             return None;
         };
         // Every event and field the node has: (name, type, access).
-        let mut ends: Vec<(String, FieldType, String)> = Vec::new();
-        let node_type;
-        if let Some(def) = self.instance_of.get(&id).cloned() {
-            node_type = format!("PROTO '{}'", def.proto.name.text);
-            for declaration in &def.proto.interface {
-                if let Some(ty) = FieldType::parse(&declaration.field_type.text) {
-                    let access = match declaration.keyword.text.as_str() {
-                        "exposedField" | "eventIn" | "eventOut" => declaration.keyword.text.clone(),
-                        _ => "field".to_owned(),
-                    };
-                    ends.push((declaration.name.text.clone(), ty, access));
-                }
+        let (node_type, ends) = match self.instance_of.get(&id).cloned() {
+            Some(def) => (
+                format!("PROTO '{}'", def.proto.name.text),
+                interface_ends(&def.proto.interface),
+            ),
+            None => {
+                let spec = self.catalogue().spec(self.nodes[id.index()].spec);
+                (format!("{} node", spec.name), spec_ends(spec))
             }
-        } else {
-            let spec = self.catalogue().spec(self.nodes[id.index()].spec);
-            node_type = format!("{} node", spec.name);
-            for f in &spec.fields {
-                let access = f
-                    .access
-                    .clone()
-                    .unwrap_or_else(|| "exposedField".to_owned());
-                ends.push((f.name.clone(), f.ty(), access));
-            }
-        }
+        };
+        self.route_end_in(node, field, source, scope.file, &node_type, &ends)
+    }
+
+    /// A ROUTE's end names no node DEF'd before it.
+    pub(super) fn route_without_node(&mut self, node: &syntax::Ident, file: FileId) {
+        let diagnostic = Diagnostic::error(
+            node.span,
+            format!("no node was DEF'd as '{}' before this ROUTE", node.text),
+        )
+        .with_code("route-node");
+        self.strict_or_warn(file, diagnostic);
+    }
+
+    /// The type of one end of a ROUTE at a node of type `node_type` with events and fields
+    /// `ends`, after reporting an end it does not have or that cannot send (`source`) or
+    /// receive events.
+    pub(super) fn route_end_in(
+        &mut self,
+        node: &syntax::Ident,
+        field: &syntax::Ident,
+        source: bool,
+        file: FileId,
+        node_type: &str,
+        ends: &Ends,
+    ) -> Option<FieldType> {
         let wanted = if source { "eventOut" } else { "eventIn" };
         let name = field.text.as_str();
         let mut found = None;
-        for (end, ty, access) in &ends {
+        for (end, ty, access) in ends {
             let matches = if access == "exposedField" {
                 end == name
                     || (source && name.strip_suffix("_changed") == Some(end.as_str()))
@@ -113,13 +133,13 @@ impl<'c> Lowerer<'c> {
             if let Some(close) = did_you_mean(name, ends.iter().map(|(n, _, _)| n.as_str())) {
                 diagnostic = diagnostic.with_note(format!("did you mean '{close}'?"));
             }
-            self.strict_or_warn(scope.file, diagnostic);
+            self.strict_or_warn(file, diagnostic);
             return None;
         };
         if access != "exposedField" && access != wanted {
             let role = if source { "send" } else { "receive" };
             self.strict_or_warn(
-                scope.file,
+                file,
                 Diagnostic::error(
                     field.span,
                     format!("'{name}' of '{}' is {}: it cannot {role} events", node.text, with_article(&access)),

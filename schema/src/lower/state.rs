@@ -7,7 +7,7 @@ use std::collections::{BTreeSet, HashMap};
 use std::path::PathBuf;
 use std::rc::Rc;
 
-use regatta_parser::syntax::{self};
+use regatta_parser::syntax::{self, Atom, BodyItem, Item, Items, NodeKind};
 use regatta_parser::Span;
 
 use crate::binding::Bindings;
@@ -160,6 +160,8 @@ pub(super) struct Lowerer<'c> {
     pub(super) relocated: BTreeSet<(u32, u32)>,
     /// PROTOs whose interface was already checked for unused fields.
     pub(super) checked_protos: BTreeSet<(u32, u32)>,
+    /// PROTO declarations already checked where they stand (`declared.rs`).
+    pub(super) declared_protos: BTreeSet<(u32, u32)>,
     /// Nodes a PROTO expands to at most, by definition (file, offset).
     pub(super) estimates: HashMap<(u32, u32), u64>,
     /// Files already loaded (EXTERNPROTO, Inline), by canonical path.
@@ -226,6 +228,7 @@ impl<'c> Lowerer<'c> {
             blame: None,
             relocated: BTreeSet::new(),
             checked_protos: BTreeSet::new(),
+            declared_protos: BTreeSet::new(),
             estimates: HashMap::new(),
             loaded: HashMap::new(),
             parsed: HashMap::new(),
@@ -256,4 +259,38 @@ impl<'c> Lowerer<'c> {
             None => Catalogue::get(),
         }
     }
+}
+
+/// Whether a PROTO's body holds template statements (not only `%<= … >%` values): its body is
+/// then the text the template generates for each instance.
+pub(super) fn has_template(proto: &syntax::Proto) -> bool {
+    fn in_value(value: &syntax::Value) -> bool {
+        match &value.items {
+            Items::Numbers(_) => false,
+            Items::Atoms(atoms) => atoms.iter().any(|a| match a {
+                Atom::Template(t) => !t.expression,
+                Atom::Node(n) => in_node(n),
+                _ => false,
+            }),
+        }
+    }
+    fn in_node(node: &syntax::Node) -> bool {
+        match &node.kind {
+            NodeKind::Instance {
+                body: Some(body), ..
+            } => body.items.iter().any(|item| match item {
+                BodyItem::Template(_) => true,
+                BodyItem::Field(f) => {
+                    matches!(&f.value, syntax::FieldValue::Value(v) if in_value(v))
+                }
+                _ => false,
+            }),
+            _ => false,
+        }
+    }
+    proto.body.iter().any(|item| match item {
+        Item::Template(_) => true,
+        Item::Node(node) => in_node(node),
+        _ => false,
+    })
 }

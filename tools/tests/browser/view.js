@@ -2,7 +2,7 @@
 // npm package) against a running `regatta view`: waits for frames of the running world,
 // pauses it, takes a screenshot, steps the world, takes another, and prints as JSON where
 // the page draws each robot (at the poses the run reports in /state.json) and each lamp.
-// The Rust test reads the pixels. Usage: node view.js URL OUTDIR STEPS
+// The Rust test reads the pixels. Usage: node view.js URL OUTDIR STEPS (URL with its ?token=)
 "use strict";
 const { spawn } = require("child_process");
 const fs = require("fs");
@@ -73,13 +73,16 @@ async function main() {
   // The world runs: wait for frames showing it past half a simulated second.
   await until("frames of the running world",
     "window.regatta && window.regatta.frames > 2 && regatta.hist.length > 0 && regatta.hist[regatta.cur].t > 20");
-  await evaluate("fetch('control?cmd=pause', {method: 'POST'}).then(r => r.status)");
+  // The page's own requests carry the URL's token; these carry it the page's way.
+  const paused = await evaluate("fetch(regatta.api('control?cmd=pause'), {method: 'POST'}).then(r => r.status)");
+  if (paused !== 200) throw new Error(`pause answered ${paused}`);
   const shots = [];
   for (const [index, advance] of [[1, 0], [2, steps]]) {
-    if (advance) await evaluate(`fetch('control?cmd=step&n=${advance}', {method: 'POST'}).then(r => r.status)`);
+    const stepped = advance && await evaluate(`fetch(regatta.api('control?cmd=step&n=${advance}'), {method: 'POST'}).then(r => r.status)`);
+    if (advance && stepped !== 200) throw new Error(`step answered ${stepped}`);
     const before = index === 1 ? null : shots[0].state.sample.steps;
     // The run's own report of where it stands, once it has stopped moving.
-    const state = await until("the paused run", `fetch('state.json').then(r => r.json()).then(s =>
+    const state = await until("the paused run", `fetch(regatta.api('state.json')).then(r => r.json()).then(s =>
       s.status.paused && s.sample && (${before === null} || s.sample.steps >= ${before} + ${advance}) ? s : null)`);
     await until("the page showing that step", `(() => { const s = regatta.hist[regatta.cur];
       return s && s.steps === ${state.sample.steps} && !regatta.dirty; })()`);
