@@ -35,6 +35,9 @@ enum What {
     Accuracy(crate::bench_accuracy::Args),
     /// Webots worlds: JavaScript templates against arithmetic ones, and the e-puck's camera.
     Webots(crate::bench_webots::Args),
+    /// A world's project controllers (Webots controllers, processes of their own) beside the
+    /// built-in braitenberg: steps per second and peak memory.
+    Controllers(crate::bench_controllers::Args),
     /// glTF export time on a generated world of about a million triangles.
     Gltf {
         /// Points in the generated IndexedFaceSet (709² gives 1,002,528 triangles).
@@ -64,6 +67,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         What::Crowd(args) => crate::bench_crowd::run(args),
         What::Step(args) => crate::bench_step::run(args),
         What::Webots(args) => crate::bench_webots::run(args),
+        What::Controllers(args) => crate::bench_controllers::run(args),
         What::Accuracy(args) => crate::bench_accuracy::run(args),
         What::Gltf { points, runs } => gltf(points, runs),
         What::Parse {

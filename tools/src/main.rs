@@ -5,6 +5,7 @@
 mod batch;
 mod bench;
 mod bench_accuracy;
+mod bench_controllers;
 mod bench_crowd;
 mod bench_retina;
 mod bench_step;

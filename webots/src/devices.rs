@@ -514,6 +514,29 @@ fn value_range(table: &[[f64; 3]]) -> (f64, f64) {
     }
 }
 
+/// The world's north in its file's axes: +x for NUE (and y-up worlds), +y for ENU (and
+/// z-up worlds), +z for EUN.
+pub fn north_of(scene: &regatta_schema::Scene) -> glam::DVec3 {
+    let written = scene
+        .roots
+        .iter()
+        .find(|&&n| scene.type_name(n) == "WorldInfo")
+        .map(|&n| scene.string(n, "coordinateSystem").to_owned())
+        .unwrap_or_default();
+    north_for(&written, scene.up_axis == regatta_schema::UpAxis::Z)
+}
+
+/// North for a `coordinateSystem` value (empty: by the world's up axis).
+pub fn north_for(system: &str, z_up: bool) -> glam::DVec3 {
+    match system {
+        "NUE" => glam::DVec3::X,
+        "EUN" => glam::DVec3::Z,
+        "ENU" => glam::DVec3::Y,
+        _ if z_up => glam::DVec3::Y,
+        _ => glam::DVec3::X,
+    }
+}
+
 /// A reading with Webots' `resolution`: rounded to a multiple of it (0 or less: as is).
 pub fn with_resolution(value: f64, resolution: f64) -> f64 {
     if resolution > 0.0 {

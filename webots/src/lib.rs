@@ -70,7 +70,7 @@ pub fn plan(
     project: &Path,
     skip: &[usize],
 ) -> Result<Vec<Planned>, WebotsError> {
-    let north = north_of(scene);
+    let north = devices::north_of(scene);
     let mut planned = Vec::new();
     for (robot, rig) in compiled.rig.robots.iter().enumerate() {
         if skip.contains(&robot) {
@@ -103,29 +103,6 @@ pub fn plan(
         }
     }
     Ok(planned)
-}
-
-/// The world's north in its file's axes: +x for NUE (and y-up worlds), +y for ENU (and
-/// z-up worlds), +z for EUN.
-pub fn north_of(scene: &regatta_schema::Scene) -> glam::DVec3 {
-    let written = scene
-        .roots
-        .iter()
-        .find(|&&n| scene.type_name(n) == "WorldInfo")
-        .map(|&n| scene.string(n, "coordinateSystem").to_owned())
-        .unwrap_or_default();
-    north_for(&written, scene.up_axis == regatta_schema::UpAxis::Z)
-}
-
-/// North for a `coordinateSystem` value (empty: by the world's up axis).
-pub fn north_for(system: &str, z_up: bool) -> glam::DVec3 {
-    match system {
-        "NUE" => glam::DVec3::X,
-        "EUN" => glam::DVec3::Z,
-        "ENU" => glam::DVec3::Y,
-        _ if z_up => glam::DVec3::Y,
-        _ => glam::DVec3::X,
-    }
 }
 
 /// Readies the compiled world for the planned robots: their built-in controller is `none`,

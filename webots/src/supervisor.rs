@@ -182,7 +182,7 @@ impl Supervisor {
             let name = &self.scene.spec(node).fields[index].name;
             match (self.scene.type_name(node), name.as_str(), value) {
                 ("WorldInfo", "coordinateSystem", Value::String(system)) => {
-                    Some(crate::north_for(system, self.z_up))
+                    Some(crate::devices::north_for(system, self.z_up))
                 }
                 _ => None,
             }
