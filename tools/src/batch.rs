@@ -43,6 +43,10 @@ pub struct Args {
     /// One CSV row per run, with a header.
     #[arg(long)]
     csv: bool,
+    /// Run no program of the world's project (see `run --builtin-only`): robots whose
+    /// controller is the project's own are refused, or with --lenient run a built-in one.
+    #[arg(long)]
+    builtin_only: bool,
     #[command(flatten)]
     vary: crate::vary::VaryOptions,
     #[command(flatten)]
@@ -108,12 +112,18 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         None => Vec::new(),
     };
     overrides.extend(args.overrides.iter().cloned());
-    let experiment = Experiment::load_with(
-        &args.world,
-        &args.reading.options()?,
-        &overrides,
-        regatta_evolve::Driven::Nobody,
-    )
+    // A batch runs the robots' project controllers as `run` does (each trial its own
+    // processes), unless --builtin-only.
+    let experiment = if args.builtin_only {
+        Experiment::load_with(
+            &args.world,
+            &args.reading.options()?,
+            &overrides,
+            regatta_evolve::Driven::Nobody,
+        )
+    } else {
+        Experiment::load_with_programs(&args.world, &args.reading.options()?, &overrides)
+    }
     .with_context(|| format!("cannot load {}", args.world.display()))?
     .with_variations(args.vary.all()?)
     .with_context(|| format!("cannot vary {}", args.world.display()))?;

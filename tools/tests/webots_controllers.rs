@@ -323,3 +323,35 @@ fn webots_api_tests_pass_against_regatta() {
         assert!(line.contains(" passed "), "{line}");
     }
 }
+
+#[test]
+fn a_batch_of_a_c_controllers_world_reproduces_its_single_runs() {
+    let world = root().join(EPUCK);
+    let batch = regatta()
+        .env("REGATTA_CACHE_DIR", cache())
+        .args(["batch", world.to_str().unwrap()])
+        .args(["--seeds", "1..4", "-j", "2", "--duration", "10", "--json"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&batch.stderr);
+    assert!(batch.status.success(), "{stderr}");
+    let rows: Vec<serde_json::Value> = String::from_utf8_lossy(&batch.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(rows.len(), 4);
+    for row in rows {
+        let seed = row["seed"].as_u64().unwrap().to_string();
+        let single = run(&world, &["--seed", &seed, "--duration", "10", "--json"]);
+        let mut single: serde_json::Value = serde_json::from_slice(&single.stdout).unwrap();
+        let single = single.as_object_mut().unwrap();
+        single.retain(|key, _| row.get(key).is_some());
+        for (key, value) in single.iter() {
+            assert_eq!(&row[key], value, "seed {seed}: {key} differs");
+        }
+        assert!(
+            row["robots"][0]["distance_m"].as_f64().unwrap() > 0.1,
+            "{row}"
+        );
+    }
+}

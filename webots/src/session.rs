@@ -878,7 +878,12 @@ fn drive(driven: &Driven, simulation: &mut Simulation) {
         side.1 += 1;
     }
     let mean = |(sum, n): (f64, usize)| if n == 0 { 0.0 } else { sum / n as f64 };
-    robot.wheel_velocity = Some((mean(sums[0]) * radius, mean(sums[1]) * radius));
+    let (left, right) = (mean(sums[0]) * radius, mean(sums[1]) * radius);
+    robot.wheel_velocity = Some((left, right));
+    // What the log and the fitness meters read: the speeds in the Khepera's pulses per 10 ms
+    // (the motion itself uses the exact speeds above).
+    let pulses = |v: f64| regatta_runtime::khepera::to_command(v * rig.encoder_resolution / 100.0);
+    robot.command = (pulses(left), pulses(right));
 }
 
 fn send(driven: &mut Driven, frame: &[u8], time: f64) -> Result<(), WebotsError> {

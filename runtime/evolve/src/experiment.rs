@@ -83,6 +83,8 @@ pub enum EvalError {
         #[source]
         source: VaryError,
     },
+    #[error("{world}: {message}")]
+    Controller { world: String, message: String },
 }
 
 /// The robots a world's network drives, and its topology.
@@ -115,6 +117,8 @@ pub struct Experiment {
     reading: Arc<Reading>,
     /// The variations each trial draws, if any.
     plan: Option<Arc<Plan>>,
+    /// The robots that run their project's controllers (empty unless loaded with them).
+    programs: crate::programs::Programs,
 }
 
 /// Everything but the text that reading a world took.
@@ -125,6 +129,8 @@ struct Reading {
     driven: DrivenBy,
     /// The file is ENU (z up): variations write positions and headings in its axes.
     z_up: bool,
+    /// Robots run their project's controllers (`regatta batch`).
+    programs: bool,
 }
 
 /// [`Driven`], owned.
@@ -221,6 +227,27 @@ impl Experiment {
         overrides: &[Override],
         driven: Driven<'_>,
     ) -> Result<Experiment, LoadError> {
+        Experiment::load_inner(path, options, overrides, driven, false)
+    }
+
+    /// [`Experiment::load_with`] for a world whose robots may run their project's controllers
+    /// (Webots' `controllers/NAME/`): each is compiled now and started anew for every trial.
+    /// This runs the project's code.
+    pub fn load_with_programs(
+        path: &Path,
+        options: &regatta_schema::Options,
+        overrides: &[Override],
+    ) -> Result<Experiment, LoadError> {
+        Experiment::load_inner(path, options, overrides, Driven::Nobody, true)
+    }
+
+    fn load_inner(
+        path: &Path,
+        options: &regatta_schema::Options,
+        overrides: &[Override],
+        driven: Driven<'_>,
+        programs: bool,
+    ) -> Result<Experiment, LoadError> {
         if path.as_os_str() == "-" {
             // Standard input: a world with no folder, which reads no file.
             let bytes = regatta_parser::source::read_bytes(
@@ -234,13 +261,15 @@ impl Experiment {
                 })
             })?;
             let source = regatta_parser::SourceText::from_bytes("<stdin>".to_owned(), bytes);
-            return Experiment::from_text_with(
+            // A world from standard input has no project: no program of its own.
+            let text = apply_overrides(&source.text, overrides)?;
+            return Experiment::read(
                 &source.name,
-                &source.text,
+                text,
                 None,
                 options,
-                overrides,
-                driven,
+                DrivenBy::of(driven),
+                false,
             );
         }
         let source = regatta_parser::SourceText::read_limited(path, options.limits.file_size)?;
@@ -248,13 +277,14 @@ impl Experiment {
             Some(parent) if !parent.as_os_str().is_empty() => parent.to_owned(),
             _ => PathBuf::from("."),
         };
-        Experiment::from_text_with(
+        let text = apply_overrides(&source.text, overrides)?;
+        Experiment::read(
             &source.name,
-            &source.text,
+            text,
             Some(base),
             options,
-            overrides,
-            driven,
+            DrivenBy::of(driven),
+            programs,
         )
     }
 
@@ -293,7 +323,7 @@ impl Experiment {
         driven: Driven<'_>,
     ) -> Result<Experiment, LoadError> {
         let text = apply_overrides(text, overrides)?;
-        Experiment::read(name, text, base_dir, options, DrivenBy::of(driven))
+        Experiment::read(name, text, base_dir, options, DrivenBy::of(driven), false)
     }
 
     /// Checks and compiles `text`, overrides already applied.
@@ -303,6 +333,7 @@ impl Experiment {
         base_dir: Option<PathBuf>,
         options: &regatta_schema::Options,
         driven: DrivenBy,
+        programs: bool,
     ) -> Result<Experiment, LoadError> {
         let lenient = !options.strict;
         // The world reads files under its project (its folder, or the folder above a
@@ -325,7 +356,13 @@ impl Experiment {
                 ..options.clone()
             },
         );
-        regatta_runtime::check::check_scene(&mut checked);
+        if programs {
+            regatta_runtime::check::check_scene_with(&mut checked, &|controller| {
+                crate::programs::is_program(name, controller)
+            });
+        } else {
+            regatta_runtime::check::check_scene(&mut checked);
+        }
         let render = |errors: bool| -> String {
             checked
                 .diagnostics
@@ -377,6 +414,24 @@ impl Experiment {
             });
         }
         let mut compiled = regatta_runtime::compile(&checked.scene);
+        let found = if programs {
+            let skip: Vec<usize> = compiled
+                .rig
+                .robots
+                .iter()
+                .enumerate()
+                .filter(|(index, robot)| driven.borrow().drives(*index, &robot.name))
+                .map(|(index, _)| index)
+                .collect();
+            crate::programs::Programs::find(&mut compiled, &checked.scene, name, &skip).map_err(
+                |reason| LoadError::Refused {
+                    name: name.to_owned(),
+                    reason,
+                },
+            )?
+        } else {
+            crate::programs::Programs::default()
+        };
         // Webots controller names, as `regatta run` maps them.
         for (index, robot) in compiled.rig.robots.iter_mut().enumerate() {
             use regatta_runtime::controllers::webots::{
@@ -441,8 +496,10 @@ impl Experiment {
                 options: options.clone(),
                 driven,
                 z_up,
+                programs,
             }),
             plan: None,
+            programs: found,
         })
     }
 
@@ -455,6 +512,7 @@ impl Experiment {
             reading.base_dir.clone(),
             &reading.options,
             reading.driven.clone(),
+            reading.programs,
         )?;
         experiment.reading = reading.clone();
         Ok(experiment)
@@ -558,9 +616,36 @@ impl Experiment {
     ) -> Result<RunSummary, EvalError> {
         let mut simulation = self.simulation(seed, weights)?;
         let mut observer = Observer::new(&simulation, fitness);
+        let failed = |message: String| EvalError::Controller {
+            world: self.name.clone(),
+            message,
+        };
+        let mut programs = if self.programs.is_empty() {
+            None
+        } else {
+            Some(self.programs.start(&mut simulation).map_err(failed)?)
+        };
         for _ in 0..steps {
-            simulation.step();
-            observer.after_step(&simulation);
+            match &mut programs {
+                Some(programs) => {
+                    simulation.sense();
+                    programs
+                        .exchange(&mut simulation)
+                        .map_err(|e| failed(e.to_string()))?;
+                    simulation.act();
+                    observer.after_step(&simulation);
+                    if programs.quit_requested().is_some() {
+                        break;
+                    }
+                }
+                None => {
+                    simulation.step();
+                    observer.after_step(&simulation);
+                }
+            }
+        }
+        if let Some(programs) = programs {
+            programs.finish(&simulation);
         }
         if let Some(error) = &simulation.vision_error {
             return Err(EvalError::Vision {

@@ -17,6 +17,7 @@ pub mod evolve;
 pub mod experiment;
 pub mod fitness;
 pub mod ga;
+pub mod programs;
 pub mod record;
 pub mod variations;
 pub mod world;
