@@ -122,8 +122,9 @@ pub fn unsimulated(name: &str) -> Option<&'static str> {
         | "Radio" | "Charger" | "Track" | "Propeller" | "Muscle" | "Skin" => {
             "this Webots device is not simulated; a controller cannot read it"
         }
-        "Fluid" | "ImmersionProperties" | "Damping" | "Fog" | "Capsule" | "Plane" | "Mesh"
-        | "CadShape" | "Extrusion" => "this Webots node is not simulated by regatta",
+        "Fluid" | "ImmersionProperties" | "Damping" | "Fog" => {
+            "this Webots node is not simulated by regatta"
+        }
         "Pi-puck" => "the Pi-puck extension board carries no device regatta simulates",
         _ => return None,
     })

@@ -7,6 +7,8 @@
 //! so no further axis change is made. Conversions that are not one-to-one are listed on
 //! [`export`] and in ARCHITECTURE.md.
 
+mod lines;
+pub mod report;
 pub mod tessellate;
 
 use std::collections::{BTreeSet, HashMap};
@@ -18,6 +20,7 @@ use regatta_runtime::geometry::Frame;
 use regatta_runtime::Compiled;
 use serde_json::{json, Map, Value};
 
+pub use report::{report, Row};
 pub use tessellate::{segments, Triangles};
 
 /// Export settings.
@@ -92,7 +95,7 @@ impl Document {
 /// Exports a compiled world, with an animation when `tracks` is not empty.
 ///
 /// - Nodes: one per render-graph group (named by DEF, PROTO instance or type), per primitive,
-///   per light, for the Viewpoint, and per robot sensor (a child of its robot, with its
+///   per line or point set (glTF modes LINES and POINTS, unlit), per light, for the Viewpoint, and per robot sensor (a child of its robot, with its
 ///   parameters in `extras`). Robots are scene roots so that their animation is in world
 ///   coordinates.
 /// - Transforms that glTF's translation–rotation–scale cannot carry (a shear from
@@ -114,6 +117,7 @@ pub fn export(
     let mut builder = Builder::new(compiled, options);
     builder.groups();
     builder.primitives();
+    builder.lines();
     builder.lights();
     builder.viewpoint();
     builder.sensors();

@@ -2,8 +2,9 @@
 //! renderer, the wgpu backend and the glTF exporter all read it; none of their details live
 //! here.
 //!
-//! Box, Cylinder, Cone and Sphere stay analytic; IndexedFaceSet and ElevationGrid are
-//! triangulated (concave and non-planar faces included). Static parts are kept apart from
+//! Box, Cylinder, Cone and Sphere stay analytic; IndexedFaceSet, ElevationGrid, Extrusion,
+//! Plane, Capsule and mesh files are triangulated (concave and non-planar faces included).
+//! Lines and points, which no renderer draws, are kept apart for exporters. Static parts are kept apart from
 //! robot-attached parts (whose frames are relative to their robot) and indexed by a BVH.
 
 use glam::{DVec2, DVec3};
@@ -211,6 +212,34 @@ impl Material {
     };
 }
 
+/// Lines or points (IndexedLineSet, PointSet): exported, never drawn by the simulator's
+/// renderers (VRML97 lines and points have no area to see).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LineSet {
+    /// In the frame below; for lines, two per segment.
+    pub positions: Vec<DVec3>,
+    /// Whether `positions` are segment ends in pairs (else points).
+    pub lines: bool,
+    /// One colour per position, when the file gives colours.
+    pub colors: Option<Vec<[f64; 3]>>,
+    pub frame: Frame,
+    pub material: usize,
+    pub owner: Owner,
+    /// The Shape node it comes from.
+    pub node: NodeId,
+    pub group: Option<GroupId>,
+}
+
+/// A Shape whose geometry is not in the graph, and why (for `regatta gltf --report`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Skipped {
+    /// The Shape (or CadShape) node.
+    pub node: NodeId,
+    /// Its geometry's type, or "" when it has none.
+    pub geometry: String,
+    pub reason: String,
+}
+
 /// Who a primitive or light moves with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Owner {
@@ -314,6 +343,10 @@ pub struct RenderGraph {
     pub meshes: Vec<Mesh>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    /// Lines and points, for exporters.
+    pub lines: Vec<LineSet>,
+    /// Shapes left out, with the reason, for exporters' reports.
+    pub skipped: Vec<Skipped>,
     pub groups: Vec<Group>,
     pub viewpoint: Option<Viewpoint>,
     pub background: Background,

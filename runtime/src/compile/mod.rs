@@ -6,10 +6,12 @@
 //! frames relative to it, and its devices go to the rig.
 
 pub mod graph;
+pub mod meshfile;
 pub mod network;
 pub mod plan;
 pub mod rig;
 pub mod shapes;
+pub mod solids;
 pub mod triangulate;
 
 use std::sync::Arc;
@@ -28,7 +30,7 @@ use rig::{
     filter_set, CameraRenderer, CameraRig, DistanceSensorRig, LightSensorRig, LinearCameraRig,
     Optics, PanoramicRig, Pose2, RobotRig, SensorRig, TurretRig,
 };
-use shapes::{background_of, material_of, shape_of};
+use shapes::{background_of, material_of, shape_of, Geometry};
 
 /// World-wide settings the runtime needs.
 #[derive(Clone, Debug, PartialEq)]
@@ -78,6 +80,8 @@ pub fn compile(scene: &Scene) -> Compiled {
             meshes: Vec::new(),
             materials: Vec::new(),
             lights: Vec::new(),
+            lines: Vec::new(),
+            skipped: Vec::new(),
             groups: Vec::new(),
             viewpoint: None,
             background: background_of(scene),
@@ -234,11 +238,16 @@ impl Compiler<'_> {
         let scene = self.scene;
         let axes = scene.node(node).axes;
         match scene.type_name(node) {
-            "Transform" | "Solid" => {
+            "Transform" | "Solid" | "Pose" => {
+                let spec = scene.spec(node);
                 let local = Frame::vrml(
                     DVec3::from_array(scene.vec3(node, "translation")),
                     scene.rotation(node, "rotation"),
-                    DVec3::from_array(scene.vec3(node, "scale")),
+                    if spec.field_index("scale").is_some() {
+                        DVec3::from_array(scene.vec3(node, "scale"))
+                    } else {
+                        DVec3::ONE
+                    },
                     if scene.spec(node).field_index("scaleOrientation").is_some() {
                         scene.rotation(node, "scaleOrientation")
                     } else {
@@ -300,13 +309,14 @@ impl Compiler<'_> {
             "Shape" => {
                 // Webots' FLU geometry: cylinders, cones and elevation grids along z.
                 let frame = match scene.child(node, "geometry").map(|g| scene.type_name(g)) {
-                    Some("Cylinder" | "Cone" | "ElevationGrid") => {
+                    Some("Cylinder" | "Cone" | "ElevationGrid" | "Capsule" | "Plane") => {
                         turned(frame, flu_to_regatta(scene, axes.body))
                     }
                     _ => *frame,
                 };
                 self.shape(node, &frame, owner)
             }
+            "CadShape" => self.cad_shape(node, frame, owner),
             "PointLight" | "DirectionalLight" | "SpotLight" => self.light(node, frame, owner),
             "Viewpoint" if owner == Owner::Static && self.graph.viewpoint.is_none() => {
                 let mut local = Frame::vrml(
@@ -391,17 +401,85 @@ impl Compiler<'_> {
     fn shape(&mut self, node: NodeId, frame: &Frame, owner: Owner) {
         let scene = self.scene;
         let Some(geometry) = scene.child(node, "geometry") else {
+            self.skip(node, "", "the Shape has no geometry".to_owned());
             return;
         };
-        let Some(shape) = shape_of(scene, geometry, &mut self.graph.meshes) else {
-            return;
+        let shape = match shape_of(scene, geometry, &mut self.graph.meshes) {
+            Ok(Geometry::Shape(shape)) => shape,
+            Ok(Geometry::Lines(mut lines)) => {
+                lines.frame = *frame;
+                lines.material = self.material(scene.child(node, "appearance"));
+                lines.owner = owner;
+                lines.node = node;
+                lines.group = self.group;
+                self.graph.lines.push(lines);
+                return;
+            }
+            Err(reason) => {
+                self.skip(node, scene.type_name(geometry), reason);
+                return;
+            }
         };
+        let material = self.material(scene.child(node, "appearance"));
+        self.place(node, shape, material, frame, owner);
+    }
+
+    /// A shape left out of the graph, with why (the export's report lists it; a file that
+    /// could not be decoded is also a warning).
+    fn skip(&mut self, node: NodeId, geometry: &str, reason: String) {
+        if reason.starts_with('\'') {
+            self.warnings.push(reason.clone());
+        }
+        self.graph.skipped.push(graph::Skipped {
+            node,
+            geometry: geometry.to_owned(),
+            reason,
+        });
+    }
+
+    /// Webots' CadShape: a mesh file with its own colours.
+    fn cad_shape(&mut self, node: NodeId, frame: &Frame, owner: Owner) {
+        let scene = self.scene;
+        match shapes::cad_shape(scene, node, &mut self.graph.meshes) {
+            Ok(shape) => {
+                // The file's colours replace the diffuse colour, as a Color node does: a
+                // white VRML97 Material otherwise at its defaults.
+                self.graph.materials.push(Material {
+                    diffuse: [1.0; 3],
+                    ambient_intensity: 0.2,
+                    specular: [0.0; 3],
+                    emissive: [0.0; 3],
+                    shininess: 0.2,
+                    transparency: 0.0,
+                    ir_reflectance: 1.0,
+                    unlit: false,
+                });
+                let material = self.graph.materials.len() - 1;
+                self.place(node, shape, material, frame, owner);
+            }
+            Err(reason) => self.skip(node, "CadShape", reason),
+        }
+    }
+
+    /// Adds a primitive for `shape` at `frame`.
+    fn place(
+        &mut self,
+        node: NodeId,
+        shape: graph::Shape,
+        material: usize,
+        frame: &Frame,
+        owner: Owner,
+    ) {
         let Some(inverse) = frame.inverse() else {
             self.warnings
                 .push("a shape with a degenerate (zero-scale) transform is ignored".to_owned());
+            self.skip(
+                node,
+                shape.name(),
+                "its transform has a zero scale".to_owned(),
+            );
             return;
         };
-        let material = self.material(scene.child(node, "appearance"));
         let bounds = shape.bounds_under(frame, &self.graph.meshes);
         let upright = is_upright(&shape, frame);
         self.graph.primitives.push(Primitive {

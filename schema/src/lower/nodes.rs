@@ -395,14 +395,28 @@ impl<'c> Lowerer<'c> {
         if spec.name == "Inline" {
             return self.inline(&urls, node, scope, origin);
         }
-        // Other files are named, not read (textures): each must still lie inside the root.
+        // Meshes and images are read for the exporters (the first url that can be); other
+        // files are named, not read: each must still lie inside the root.
+        let reads = super::assets::reads_asset(&spec.name);
+        let mut asset = None;
         for (_, url, file, span) in &urls {
-            if let Err(refusal) = self.resolve_url(*file, url) {
-                self.refuse(*file, *span, url, refusal, UrlUse::Image(&spec.name));
+            match self.resolve_url(*file, url) {
+                Ok(path) if reads && asset.is_none() => {
+                    asset = self.read_asset(&path, url, *file, *span);
+                }
+                Ok(_) => {}
+                Err(refusal) => {
+                    let user = if reads {
+                        UrlUse::Asset(&spec.name)
+                    } else {
+                        UrlUse::Image(&spec.name)
+                    };
+                    self.refuse(*file, *span, url, refusal, user);
+                }
             }
         }
         let fields = fields.finish(origin, &mut self.shared_fields);
-        self.alloc(
+        let id = self.alloc(
             SceneNode {
                 spec: spec_id,
                 fields,
@@ -414,7 +428,12 @@ impl<'c> Lowerer<'c> {
             },
             scope.file,
             node.span,
-        )
+        )?;
+        if let Some(mut asset) = asset {
+            asset.node = id;
+            self.assets.push(asset);
+        }
+        Some(id)
     }
 
     /// Where a field's value was written: the file, each string's span, and the field's span.
