@@ -112,6 +112,7 @@ impl UrlUse<'_> {
             UrlUse::Inline => "the Inline stays empty",
             UrlUse::ExternProto => "its PROTO stays unknown",
             UrlUse::Image(_) => "the image is not used",
+            UrlUse::Asset("ImageTexture") => "the texture is not exported",
             UrlUse::Asset(_) => "the shape is not exported",
         }
     }
