@@ -200,3 +200,57 @@ Shape { geometry Mesh { url "meshes/box.dae" } }
         regatta_parser::diagnostic::line_col(source, missing.diagnostic.span.start as usize);
     assert_eq!(line, 4);
 }
+
+/// Nodes regatta does not simulate keep the shapes they hold: a top-level Supervisor (R2018),
+/// a joint's endPoint, a solid device's and a Servo's children, each at its transform.
+#[test]
+fn shapes_inside_unsimulated_nodes_are_exported_in_place() {
+    let dir = project("unsimulated");
+    let body = r#"
+Supervisor { translation 1 0 0 controller "human" children [
+  Transform { translation 0 1 0 children [ Shape { geometry Box { size 0.1 0.1 0.1 } } ] }
+] }
+Robot { children [
+  HingeJoint {
+    jointParameters HingeJointParameters { axis 0 0 1 }
+    device [ RotationalMotor { name "m" } DEF SENSOR PositionSensor { } ]
+    endPoint Solid { translation 0 0 2 children [ Shape { geometry Sphere { radius 0.1 } } ] }
+  }
+  LED { translation 0 3 0 color [1 0 0] children [ Shape { geometry Box { size 0.1 0.1 0.1 } } ] }
+  Servo { translation 0 0 -2 maxVelocity 2 children [ Shape { geometry Capsule { } } ] }
+] }
+"#;
+    let world = write_world(&dir, body);
+    let checked = check(&world, false, Limits::default());
+    assert!(!checked.has_errors(), "{}", checked.render(false));
+    let text = checked.render(false);
+    assert!(
+        text.contains("'HingeJoint' is read but not simulated"),
+        "{text}"
+    );
+    assert!(
+        !text.contains("RotationalMotor"),
+        "fields of open nodes are skipped quietly:\n{text}"
+    );
+    // The Supervisor's controller is a robot regatta does not build.
+    assert!(checked.unbuilt_refusal().is_some());
+    let compiled = regatta_runtime::compile(&checked.scene);
+    let rows = report(&compiled, 16);
+    assert_eq!(rows.len(), 4, "{rows:#?}");
+    let centre =
+        |p: &regatta_runtime::compile::graph::Primitive| (p.bounds.min + p.bounds.max) / 2.0;
+    let centres: Vec<glam::DVec3> = compiled.graph.primitives.iter().map(centre).collect();
+    for want in [
+        glam::DVec3::new(1.0, 1.0, 0.0),
+        glam::DVec3::new(0.0, 0.0, 2.0),
+        glam::DVec3::new(0.0, 3.0, 0.0),
+        glam::DVec3::new(0.0, 0.0, -2.0),
+    ] {
+        assert!(
+            centres.iter().any(|c| c.distance(want) < 1e-9),
+            "no shape at {want}: {centres:?}"
+        );
+    }
+    // Strict mode refuses what it does not simulate, at its line.
+    assert!(check(&world, true, Limits::default()).has_errors());
+}

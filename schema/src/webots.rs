@@ -113,8 +113,9 @@ pub fn webots_path(url: &str) -> Option<&str> {
 pub fn unsimulated(name: &str) -> Option<&'static str> {
     Some(match name {
         "HingeJoint" | "Hinge2Joint" | "SliderJoint" | "BallJoint" | "HingeJointParameters"
-        | "JointParameters" | "RotationalMotor" | "LinearMotor" | "PositionSensor" | "Brake" => {
-            "joints and motors other than a differential drive are not simulated (regatta's robots are kinematic); the parts they carry are left out"
+        | "JointParameters" | "RotationalMotor" | "LinearMotor" | "PositionSensor" | "Brake"
+        | "Servo" => {
+            "joints and motors other than a differential drive are not simulated (regatta's robots are kinematic); the parts they carry stay where the file puts them"
         }
         "Emitter" | "Receiver" | "Speaker" | "Microphone" | "LED" | "Display" | "Pen"
         | "Connector" | "VacuumGripper" | "Accelerometer" | "Gyro" | "InertialUnit"
@@ -126,6 +127,7 @@ pub fn unsimulated(name: &str) -> Option<&'static str> {
             "this Webots node is not simulated by regatta"
         }
         "Pi-puck" => "the Pi-puck extension board carries no device regatta simulates",
+        "Supervisor" => "a supervisor's controller is not run (regatta has no supervisor API)",
         _ => return None,
     })
 }

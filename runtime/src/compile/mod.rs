@@ -357,9 +357,44 @@ impl Compiler<'_> {
                         scene.type_name(node)
                     )),
                 }
+                // The shapes a device carries (a Webots camera's housing) are seen.
+                if scene.spec(node).field_index("children").is_some() {
+                    self.open_node(node, frame, owner, depth);
+                }
             }
+            _ if scene.spec(node).open => self.open_node(node, frame, owner, depth),
             _ => {}
         }
+    }
+
+    /// A Webots node regatta does not simulate (a joint, a solid device, a Servo), or a
+    /// device's children: the shapes it holds, at its transform (a joint's endPoint Solid
+    /// places itself).
+    fn open_node(&mut self, node: NodeId, frame: &Frame, owner: Owner, depth: usize) {
+        let scene = self.scene;
+        let axes = scene.node(node).axes;
+        let spec = scene.spec(node);
+        let local = if spec.field_index("translation").is_some() {
+            Frame::vrml(
+                DVec3::from_array(scene.vec3(node, "translation")),
+                scene.rotation(node, "rotation"),
+                DVec3::ONE,
+                [0.0, 0.0, 1.0, 0.0],
+                DVec3::ZERO,
+            )
+        } else {
+            Frame::IDENTITY
+        };
+        let frame = turned(&frame.then(&local), scene.turn(axes.own, axes.body));
+        let outer = self.enter_group(node, &frame, owner, None);
+        for field in ["children", "endPoint"] {
+            if spec.field_index(field).is_some() {
+                for &child in scene.children(node, field) {
+                    self.walk(child, &frame, owner, depth + 1);
+                }
+            }
+        }
+        self.group = outer;
     }
 
     /// Opens a group for `node` (its children are placed in `frame`); returns the group to

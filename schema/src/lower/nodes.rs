@@ -179,6 +179,9 @@ impl<'c> Lowerer<'c> {
                 let id = if let Some(proto) = proto {
                     self.instantiate(&proto, node, items, scope)?
                 } else if let Some(spec) = self.catalogue().lookup(&type_name.text) {
+                    if self.catalogue().spec(spec).open {
+                        self.unsimulated_node(type_name, items, place, scope);
+                    }
                     self.lower_builtin(spec, node, items, scope)?
                 } else {
                     let url = self.unresolved.get(&type_name.text).cloned();
@@ -306,6 +309,44 @@ impl<'c> Lowerer<'c> {
         self.strict_or_warn(scope.file, diagnostic.with_code("unknown-node"));
     }
 
+    /// A Webots node the catalogue keeps only for what it holds (`open`): said to be not
+    /// simulated (an error in strict mode, as an unknown node is); at the top of a world, one
+    /// that names a controller is a robot regatta does not build.
+    fn unsimulated_node(
+        &mut self,
+        type_name: &syntax::Ident,
+        items: &[BodyItem],
+        place: &str,
+        scope: &Scope,
+    ) {
+        let name = &type_name.text;
+        let sets_controller = items
+            .iter()
+            .any(|item| matches!(item, BodyItem::Field(f) if f.name.text == "controller"));
+        if place == "the world" && sets_controller {
+            self.unbuilt_robots.push(UnbuiltRobot {
+                type_name: name.clone(),
+                url: None,
+                file: scope.file,
+                span: type_name.span,
+            });
+        }
+        let mut diagnostic = Diagnostic::error(
+            type_name.span,
+            format!("'{name}' is read but not simulated by regatta"),
+        )
+        .with_label("not simulated")
+        .with_code("unsimulated-node");
+        if let Some(reason) = crate::webots::unsimulated(name) {
+            diagnostic = diagnostic.with_note(format!("{name}: {reason}"));
+        }
+        self.strict_or_warn(
+            scope.file,
+            diagnostic
+                .with_note("the shapes it holds are kept in place (the glTF export shows them)"),
+        );
+    }
+
     pub(super) fn lower_builtin(
         &mut self,
         spec_id: SpecId,
@@ -327,6 +368,11 @@ impl<'c> Lowerer<'c> {
                         continue;
                     }
                     let Some(index) = spec.field_index(&field.name.text) else {
+                        if spec.open {
+                            // Read, not typed: DEFs inside are skipped, as an unknown node's.
+                            skip_defs(&field.value, scope);
+                            continue;
+                        }
                         let mut diagnostic = Diagnostic::error(field.name.span, format!("{} '{}' field in {} node.", self.unknown(), field.name.text, spec.name))
                             .with_label("unknown field")
                             .with_code("unknown-field");
@@ -477,5 +523,25 @@ fn string_spans(value: &syntax::FieldValue) -> Vec<Span> {
             })
             .collect(),
         _ => Vec::new(),
+    }
+}
+
+/// Records the DEFs of the nodes inside a value that is not typed, so that a USE of them says
+/// they were skipped.
+fn skip_defs(value: &syntax::FieldValue, scope: &mut Scope) {
+    if let syntax::FieldValue::Value(syntax::Value {
+        items: Items::Atoms(atoms),
+        ..
+    }) = value
+    {
+        for atom in atoms {
+            if let Atom::Node(child) = atom {
+                syntax::walk_node(child, &mut |inner| {
+                    if let Some(def) = &inner.def {
+                        scope.skipped_defs.insert(def.text.clone());
+                    }
+                });
+            }
+        }
     }
 }
