@@ -107,12 +107,11 @@ fn report(loaded: &crate::world::Loaded, quality: u32) -> String {
             None => "?".to_owned(),
         };
         // The geometry node's own type (the graph calls every triangulated one "Mesh").
-        let geometry = match scene.child(row.node, "geometry") {
-            Some(g) if scene.spec(row.node).field_index("geometry").is_some() => {
-                scene.type_name(g).to_owned()
-            }
-            _ if row.geometry.is_empty() => scene.type_name(row.node).to_owned(),
-            _ => row.geometry.clone(),
+        let own = scene.spec(row.node).field_index("geometry").is_some();
+        let geometry = match own.then(|| scene.child(row.node, "geometry")).flatten() {
+            Some(g) => scene.type_name(g).to_owned(),
+            None if !own || row.geometry.is_empty() => scene.type_name(row.node).to_owned(),
+            None => row.geometry.clone(),
         };
         match &row.status {
             Ok(n) => {
