@@ -10,6 +10,7 @@
 mod lines;
 pub mod report;
 pub mod tessellate;
+mod textures;
 
 use std::collections::{BTreeSet, HashMap};
 
@@ -208,6 +209,10 @@ struct Builder<'a> {
     extensions_used: BTreeSet<&'static str>,
     animations: Vec<Value>,
     triangle_count: usize,
+    /// Images, samplers and textures written so far.
+    written: textures::Written,
+    /// glTF materials that map an image: their meshes carry TEXCOORD_0.
+    textured: std::collections::HashSet<usize>,
 }
 
 impl<'a> Builder<'a> {
@@ -234,6 +239,8 @@ impl<'a> Builder<'a> {
             extensions_used: BTreeSet::new(),
             animations: Vec::new(),
             triangle_count: 0,
+            written: Default::default(),
+            textured: Default::default(),
         }
     }
 
@@ -441,6 +448,16 @@ impl<'a> Builder<'a> {
             let color = self.accessor(&flat(colors), "VEC3", Some(34962), None);
             attributes.insert("COLOR_0".into(), json!(color));
         }
+        if self.textured.contains(&material) && triangles.uvs.len() == triangles.positions.len() {
+            // glTF's v runs down the image, VRML's t up it.
+            let uvs: Vec<f32> = triangles
+                .uvs
+                .iter()
+                .flat_map(|uv| [uv.x, 1.0 - uv.y])
+                .collect();
+            let uv = self.accessor(&uvs, "VEC2", Some(34962), None);
+            attributes.insert("TEXCOORD_0".into(), json!(uv));
+        }
         let indices = self.index_accessor(&triangles.indices);
         self.meshes.push(json!({
             "name": name,
@@ -481,6 +498,7 @@ impl<'a> Builder<'a> {
     ) -> usize {
         let width = match kind {
             "SCALAR" => 1,
+            "VEC2" => 2,
             "VEC3" => 3,
             _ => 4,
         };
@@ -534,7 +552,10 @@ impl<'a> Builder<'a> {
         if let Some(&m) = self.material_cache.get(&key) {
             return m;
         }
-        let base = if colored {
+        // VRML replaces the diffuse colour by a Color node's or an image's (glTF multiplies);
+        // Webots' PBRAppearance multiplies its map by its base colour, as glTF does.
+        let replaced = material.maps.base_color.is_some() && material.maps.pbr.is_none();
+        let base = if colored || replaced {
             [1.0; 3]
         } else {
             clamp01(material.diffuse)
@@ -584,8 +605,12 @@ impl<'a> Builder<'a> {
         if !extensions.is_empty() {
             out["extensions"] = Value::Object(extensions);
         }
+        self.maps(material, &mut out);
         self.materials.push(out);
         let m = self.materials.len() - 1;
+        if material.maps.textured() {
+            self.textured.insert(m);
+        }
         self.material_cache.insert(key, m);
         m
     }
@@ -879,6 +904,9 @@ impl<'a> Builder<'a> {
         put("accessors", self.accessors);
         put("bufferViews", self.buffer_views);
         put("cameras", self.cameras);
+        put("images", self.written.images);
+        put("samplers", self.written.samplers);
+        put("textures", self.written.textures);
         put("animations", self.animations);
         if !self.bin.is_empty() {
             root["buffers"] = json!([{ "byteLength": self.bin.len() }]);

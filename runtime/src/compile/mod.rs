@@ -12,6 +12,7 @@ pub mod plan;
 pub mod rig;
 pub mod shapes;
 pub mod solids;
+mod textures;
 pub mod triangulate;
 
 use std::sync::Arc;
@@ -81,6 +82,7 @@ pub fn compile(scene: &Scene) -> Compiled {
             materials: Vec::new(),
             lights: Vec::new(),
             lines: Vec::new(),
+            textures: Vec::new(),
             skipped: Vec::new(),
             groups: Vec::new(),
             viewpoint: None,
@@ -91,6 +93,7 @@ pub fn compile(scene: &Scene) -> Compiled {
         rig: SensorRig::default(),
         warnings: Vec::new(),
         materials: Vec::new(),
+        texture_cache: Default::default(),
         landmarks: Vec::new(),
         group: None,
         tables: Shared::default(),
@@ -149,6 +152,8 @@ struct Compiler<'s> {
     warnings: Vec<String>,
     /// Material nodes already converted, to share entries.
     materials: Vec<(Option<NodeId>, usize)>,
+    /// Texture nodes already read.
+    texture_cache: textures::TextureCache,
     landmarks: Vec<Landmark>,
     /// The group the walk is inside.
     group: Option<GroupId>,
@@ -418,15 +423,41 @@ impl Compiler<'_> {
     }
 
     fn material(&mut self, appearance: Option<NodeId>) -> usize {
-        // A VRML Appearance shares its Material; a PBRAppearance is its own material.
+        // A VRML Appearance shares its Material, unless it maps an image; a PBRAppearance is
+        // its own material.
         let key = appearance.and_then(|a| match self.scene.type_name(a) {
             "PBRAppearance" => Some(a),
+            _ if textures::has_texture(self.scene, a) => Some(a),
             _ => self.scene.child(a, "material"),
         });
         if let Some(&(_, index)) = self.materials.iter().find(|(k, _)| *k == key) {
             return index;
         }
-        let material: Material = material_of(self.scene, appearance);
+        let mut material: Material = material_of(self.scene, appearance);
+        if let Some(appearance) = appearance {
+            let mut maps = textures::maps_of(
+                self.scene,
+                appearance,
+                &mut self.texture_cache,
+                &mut self.graph.textures,
+                &mut self.warnings,
+            );
+            // A texture without a Material is lit as a white one is (VRML97 6.4).
+            if maps.base_color.is_some() && material.unlit {
+                material = Material {
+                    diffuse: [1.0; 3],
+                    ambient_intensity: 0.2,
+                    specular: [0.0; 3],
+                    emissive: [0.0; 3],
+                    shininess: 0.2,
+                    transparency: 0.0,
+                    ir_reflectance: 1.0,
+                    unlit: false,
+                    maps: graph::Maps::NONE,
+                };
+            }
+            std::mem::swap(&mut material.maps, &mut maps);
+        }
         self.graph.materials.push(material);
         let index = self.graph.materials.len() - 1;
         self.materials.push((key, index));
@@ -488,6 +519,7 @@ impl Compiler<'_> {
                     transparency: 0.0,
                     ir_reflectance: 1.0,
                     unlit: false,
+                    maps: graph::Maps::NONE,
                 });
                 let material = self.graph.materials.len() - 1;
                 self.place(node, shape, material, frame, owner);

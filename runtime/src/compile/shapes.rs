@@ -28,6 +28,7 @@ pub(crate) fn material_of(scene: &Scene, appearance: Option<NodeId>) -> Material
         transparency: scene.float(material, "transparency"),
         ir_reflectance: scene.float(material, "irReflectance"),
         unlit: false,
+        maps: super::graph::Maps::NONE,
     }
 }
 
@@ -48,6 +49,7 @@ fn pbr_material(scene: &Scene, pbr: NodeId) -> Material {
         transparency: scene.float(pbr, "transparency"),
         ir_reflectance: base[0],
         unlit: false,
+        maps: super::graph::Maps::NONE,
     }
 }
 

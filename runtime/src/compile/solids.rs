@@ -22,6 +22,11 @@ pub fn plane(scene: &Scene, node: NodeId) -> Mesh {
         // Counter-clockwise seen from +y.
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         solid: true,
+        // The image upright seen from above with −z up, as on a Box's top.
+        tex_coords: Some(vec![
+            [[0.0, 1.0], [0.0, 0.0], [1.0, 0.0]],
+            [[0.0, 1.0], [1.0, 0.0], [1.0, 1.0]],
+        ]),
         ..Mesh::default()
     }
 }
@@ -145,6 +150,7 @@ pub fn webots_elevation_grid(scene: &Scene, node: NodeId) -> Mesh {
             }
         }
     }
+    mesh.tex_coords_per_point(&super::triangulate::grid_tex_coords(scene, node, nx, ny));
     mesh
 }
 
