@@ -105,7 +105,13 @@ fn render_viewpoint(args: &Args, compiled: &regatta_runtime::Compiled) -> anyhow
     } else {
         graph
     };
-    let raster = regatta_runtime::render::raster::Rasterizer::new(graph, &compiled.plan);
+    // The robots' plan leaves out what no vision device can see (a floor under a linear
+    // camera): a viewer sees everything, and every light.
+    let mut plan = compiled.plan.clone();
+    plan.visible = (0..graph.primitives.len()).collect();
+    plan.lights = (0..graph.lights.len()).collect();
+    let plan = &plan;
+    let raster = regatta_runtime::render::raster::Rasterizer::new(graph, plan);
     let poses = Poses {
         poses: compiled.rig.robots.iter().map(|r| r.start).collect(),
         floor_y: compiled.rig.robots.iter().map(|r| r.floor_y).collect(),
@@ -113,7 +119,7 @@ fn render_viewpoint(args: &Args, compiled: &regatta_runtime::Compiled) -> anyhow
     let mut camera = regatta_runtime::camera::Camera::new(&rig);
     let mut image = regatta_runtime::camera::CameraImage::default();
     let mut unused = regatta_runtime::sim::noise::Stream::new(0, 0, 0, 0);
-    camera.update_raster_world(&raster, &compiled.plan, &poses, &mut unused, &mut image);
+    camera.update_raster_world(&raster, plan, &poses, &mut unused, &mut image);
     let picture = RgbImage::from_raw(width as u32, height as u32, image.rgb)
         .context("the rasteriser gave no picture")?;
     std::fs::create_dir_all(&args.out)
