@@ -210,7 +210,7 @@ struct Builder<'a> {
     animations: Vec<Value>,
     triangle_count: usize,
     /// Images, samplers and textures written so far.
-    written: textures::Written,
+    written: Written,
     /// glTF materials that map an image: their meshes carry TEXCOORD_0.
     textured: std::collections::HashSet<usize>,
 }
@@ -924,6 +924,18 @@ impl<'a> Builder<'a> {
             triangle_count: self.triangle_count,
         })
     }
+}
+
+/// What the builder keeps of the textures it wrote.
+#[derive(Default)]
+pub(crate) struct Written {
+    pub(crate) images: Vec<Value>,
+    pub(crate) samplers: Vec<Value>,
+    pub(crate) textures: Vec<Value>,
+    /// Graph texture → glTF texture.
+    pub(crate) by_texture: HashMap<usize, usize>,
+    /// (repeatS, repeatT) → sampler.
+    pub(crate) by_wrap: HashMap<(bool, bool), usize>,
 }
 
 /// Blinn–Phong shininess (VRML's 0…1, exponent 128·s) to glTF perceptual roughness.

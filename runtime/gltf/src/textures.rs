@@ -8,8 +8,6 @@
 //! exactly when the rotation is 0 or the scale uniform (otherwise the scale is applied after
 //! the rotation instead of before, which glTF cannot say).
 
-use std::collections::HashMap;
-
 use glam::{DMat2, DVec2};
 use regatta_runtime::compile::graph::{Material, TextureTransform};
 use serde_json::{json, Map, Value};
@@ -17,18 +15,6 @@ use serde_json::{json, Map, Value};
 use super::Builder;
 
 const TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
-
-/// What the builder keeps of the textures it wrote.
-#[derive(Default)]
-pub(super) struct Written {
-    pub(super) images: Vec<Value>,
-    pub(super) samplers: Vec<Value>,
-    pub(super) textures: Vec<Value>,
-    /// Graph texture → glTF texture.
-    by_texture: HashMap<usize, usize>,
-    /// (repeatS, repeatT) → sampler.
-    by_wrap: HashMap<(bool, bool), usize>,
-}
 
 impl Builder<'_> {
     /// Adds a material's maps to its glTF material `out`.

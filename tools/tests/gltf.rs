@@ -1,4 +1,5 @@
-//! glTF exports seen in a browser: each world is exported with `regatta gltf`, loaded in
+//! `regatta gltf` end to end: `--report` on the geometry test world, and exports seen in a
+//! browser: each world is exported with `regatta gltf`, loaded in
 //! headless Chromium by three.js' GLTFLoader (`tests/browser/gltf.js`) and rendered from the
 //! world's Viewpoint. The loader reports no error; a textured floor shows its image (not one
 //! flat colour); and the browser's silhouette of each of regatta's worlds overlaps regatta's
@@ -164,5 +165,64 @@ fn exports_load_in_three_js_and_look_like_regatta_s_own_render() {
     assert!(
         reddish > 50 && light > 50,
         "the textured floor is not a checkerboard: {reddish} red and {light} light pixels"
+    );
+}
+
+#[test]
+fn the_report_lists_every_shape_with_what_became_of_it() {
+    let dir = temp_dir("gltf-report");
+    let output = regatta()
+        .args(["gltf", "--report", "--lenient"])
+        .arg(root().join("tests/data/gltf/worlds/geometry.wbt"))
+        .arg("-o")
+        .arg(dir.join("geometry.glb"))
+        .output()
+        .unwrap();
+    let report = ok(&output);
+    for geometry in [
+        "Plane",
+        "Capsule",
+        "Extrusion",
+        "ElevationGrid",
+        "IndexedLineSet",
+        "PointSet",
+        "Mesh",
+        "CadShape",
+        "Box",
+        "Sphere",
+        "Cylinder",
+        "IndexedFaceSet",
+    ] {
+        assert!(
+            report
+                .lines()
+                .any(|l| l.starts_with("exported ") && l.contains(&format!(" {geometry}: "))),
+            "{geometry} not reported exported:\n{report}"
+        );
+    }
+    assert!(report.contains("geometry.wbt:"), "{report}");
+    assert!(report.contains(" 0 skipped;"), "{report}");
+    // A mesh whose file is missing is reported skipped, naming the file.
+    let world = dir.join("missing.wbt");
+    std::fs::write(
+        &world,
+        "#VRML_SIM R2023b utf8\nShape { geometry Mesh { url \"gone.obj\" } }\n",
+    )
+    .unwrap();
+    let output = regatta()
+        .args(["gltf", "--report", "--lenient"])
+        .arg(&world)
+        .arg("-o")
+        .arg(dir.join("missing.glb"))
+        .output()
+        .unwrap();
+    let report = ok(&output);
+    assert!(
+        report.contains("skipped ") && report.contains("gone.obj"),
+        "{report}"
+    );
+    assert!(
+        report.contains("1 shapes: 0 exported, 1 skipped"),
+        "{report}"
     );
 }
