@@ -57,7 +57,7 @@ fn the_geometry_world_embeds_its_images_with_coordinates_and_transforms() {
     let textured: Vec<usize> = (0..materials.len())
         .filter(|&m| materials[m]["pbrMetallicRoughness"]["baseColorTexture"].is_object())
         .collect();
-    assert_eq!(textured.len(), 4);
+    assert_eq!(textured.len(), 5);
     // Every mesh of a textured material has texture coordinates.
     for mesh in json["meshes"].as_array().unwrap() {
         let primitive = &mesh["primitives"][0];
