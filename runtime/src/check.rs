@@ -16,7 +16,14 @@ const GAUSSIAN_BOUND: f64 = 8.6;
 
 /// Adds every runtime diagnostic to `checked`.
 pub fn check_scene(checked: &mut Checked) {
-    crate::controllers::check::check_scene(checked);
+    check_scene_with(checked, &|_| false);
+}
+
+/// [`check_scene`] for a world whose project has controller programs of its own:
+/// `is_program(name)` says whether `name` is one (Webots' `controllers/NAME/`), which a robot
+/// may then name whatever its arguments.
+pub fn check_scene_with(checked: &mut Checked, is_program: &dyn Fn(&str) -> bool) {
+    crate::controllers::check::check_scene(checked, is_program);
     let networks = check_networks(&checked.scene);
     checked.diagnostics.extend(networks);
     check_time_step(checked);

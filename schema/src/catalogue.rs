@@ -17,6 +17,10 @@ const CATALOGUE_FILES: &[(&str, &str)] = &[
     ("devices.toml", include_str!("../catalogue/devices.toml")),
     ("webots.toml", include_str!("../catalogue/webots.toml")),
     (
+        "webots_devices.toml",
+        include_str!("../catalogue/webots_devices.toml"),
+    ),
+    (
         "unsimulated.toml",
         include_str!("../catalogue/unsimulated.toml"),
     ),

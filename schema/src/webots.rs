@@ -112,15 +112,13 @@ pub fn webots_path(url: &str) -> Option<&str> {
 /// Webots nodes and PROTOs that regatta reads but does not simulate, with the reason.
 pub fn unsimulated(name: &str) -> Option<&'static str> {
     Some(match name {
-        "HingeJoint" | "Hinge2Joint" | "SliderJoint" | "BallJoint" | "HingeJointParameters"
-        | "JointParameters" | "RotationalMotor" | "LinearMotor" | "PositionSensor" | "Brake"
-        | "Servo" => {
+        "Hinge2Joint" | "SliderJoint" | "BallJoint" | "JointParameters" | "LinearMotor"
+        | "Brake" | "Servo" => {
             "joints and motors other than a differential drive are not simulated (regatta's robots are kinematic); the parts they carry stay where the file puts them"
         }
-        "Emitter" | "Receiver" | "Speaker" | "Microphone" | "LED" | "Display" | "Pen"
-        | "Connector" | "VacuumGripper" | "Accelerometer" | "Gyro" | "InertialUnit"
-        | "Compass" | "GPS" | "Altimeter" | "TouchSensor" | "Lidar" | "RangeFinder" | "Radar"
-        | "Radio" | "Charger" | "Track" | "Propeller" | "Muscle" | "Skin" => {
+        "Speaker" | "Microphone" | "Display" | "Pen" | "Connector" | "VacuumGripper"
+        | "Altimeter" | "Lidar" | "RangeFinder" | "Radar" | "Radio" | "Charger" | "Track"
+        | "Propeller" | "Muscle" | "Skin" => {
             "this Webots device is not simulated; a controller cannot read it"
         }
         "Fluid" | "ImmersionProperties" | "Damping" | "Fog" => {

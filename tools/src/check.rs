@@ -36,7 +36,7 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 continue;
             }
         };
-        regatta_runtime::check::check_scene(&mut checked);
+        regatta_runtime::check::check_scene_with(&mut checked, &regatta_webots::programs_of(path));
         crate::world::warn_about_cost(&mut checked);
         for diagnostic in &checked.diagnostics {
             if diagnostic.diagnostic.is_error() {

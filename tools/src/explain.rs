@@ -295,6 +295,9 @@ fn robot_description(robot: &regatta_runtime::compile::rig::RobotRig) -> String 
             format!(" {:?}", robot.controller_args)
         }
     );
+    if let Some(drive) = &robot.drive {
+        let _ = writeln!(out, "    {}", drive.summary);
+    }
     if let Some(ir) = robot.distance_sensors.first() {
         let _ = writeln!(
             out,

@@ -24,6 +24,7 @@ mod run;
 mod schema;
 mod serial;
 mod signals;
+mod test_webots;
 mod transfer;
 mod vary;
 mod view;
@@ -98,6 +99,9 @@ enum Command {
     Plot(plot::PlotArgs),
     /// Step a world and watch it live in the browser (or replay a .mcap log with a timeline).
     View(view::Args),
+    /// Run Webots' own API tests (a Webots installation's tests/api) against regatta and print
+    /// a table: test, result, first failure, time.
+    TestWebots(test_webots::Args),
 }
 
 /// Piping into `head` closes our standard output early: like other Unix tools, end quietly
@@ -191,6 +195,7 @@ fn run() -> ExitCode {
         Command::Log(args) => logs::log(args),
         Command::Plot(args) => plot::plot(args),
         Command::View(args) => view::run(args, color),
+        Command::TestWebots(args) => test_webots::run(args),
     };
     match result {
         Ok(Outcome::Clean) => ExitCode::SUCCESS,

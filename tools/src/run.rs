@@ -73,11 +73,19 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
     } else {
         crate::vary::load_varied(&args.world, &args.options, args.seed, variations, color)?
     };
+    let programs = crate::webots::plan_programs(
+        &mut loaded,
+        &args.world,
+        &args.controllers,
+        args.options.lenient,
+    )?;
     crate::webots::prepare_run(&mut loaded, &args.controllers, args.options.lenient)?;
     let compiled = &loaded.compiled;
     let name = crate::world::world_name(&args.world);
     let mut simulation =
         Simulation::new(compiled, args.seed).with_context(|| format!("cannot run {name}"))?;
+    let mut programs =
+        crate::webots::start_programs(&mut simulation, programs, &args.world, &args.controllers)?;
     let backend = crate::vision::backend(args.renderer, compiled, &args.world)?;
     let vision = backend.as_ref().map(|b| b.describe());
     if let Some(backend) = backend {
@@ -119,7 +127,15 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
         if stop.requested() {
             break;
         }
-        simulation.step();
+        simulation.sense();
+        if let Some(programs) = &mut programs {
+            // A project's controller that fails ends the run; the log keeps the steps before.
+            if let Err(error) = programs.exchange(&mut simulation) {
+                failure = Some(error.to_string());
+                break;
+            }
+        }
+        simulation.act();
         if let Some(error) = &simulation.vision_error {
             anyhow::bail!("step {}: {error}", simulation.steps);
         }
@@ -165,6 +181,10 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
     }
     if let Some(bar) = progress {
         bar.finish_and_clear();
+    }
+    // The controllers end as in Webots: their last wb_robot_step returns -1.
+    if let Some(programs) = programs.take() {
+        programs.finish(&simulation);
     }
     let was_interrupted = stop.requested();
     let log_line = match (recorder, args.log.as_deref()) {

@@ -20,6 +20,136 @@ pub struct ControllerOverride {
     /// --controller is not given); repeatable.
     #[arg(long = "controller-args", value_name = "ARGS")]
     pub args: Vec<String>,
+    /// Run no program of the world's project: a robot whose controller is the project's own
+    /// (controllers/NAME/) is refused, or with --lenient runs a built-in one. For worlds from
+    /// people you do not trust: running a project's controllers runs its code.
+    #[arg(long)]
+    pub builtin_only: bool,
+    /// How long a project's controller may take to start or to ask for its next step before
+    /// the run ends with an error (wall-clock seconds).
+    #[arg(long, value_name = "SECONDS", default_value_t = 10.0)]
+    pub controller_timeout: f64,
+}
+
+/// The robots whose controller is a program of the world's project (Webots' `controllers/NAME/`
+/// beside `worlds/`), readied to be run by it: their built-in controller becomes `none`. Says
+/// that the project's code will run. Robots that `--controller` sets are left to it; with
+/// `--builtin-only`, or a world read from standard input, there are none.
+pub fn plan_programs(
+    loaded: &mut Loaded,
+    world: &std::path::Path,
+    overrides: &ControllerOverride,
+    lenient: bool,
+) -> anyhow::Result<Vec<regatta_webots::Planned>> {
+    if overrides.builtin_only || world == std::path::Path::new("-") {
+        return Ok(Vec::new());
+    }
+    if !(overrides.controller_timeout > 0.0 && overrides.controller_timeout.is_finite()) {
+        bail!(
+            "--controller-timeout must be a positive number of seconds, not {}",
+            overrides.controller_timeout
+        );
+    }
+    let names: Vec<String> = loaded
+        .compiled
+        .rig
+        .robots
+        .iter()
+        .map(|r| r.name.clone())
+        .collect();
+    let mut overridden = Vec::new();
+    for spec in &overrides.controllers {
+        match spec.split_once('=') {
+            Some((robot, _)) => overridden.extend(names.iter().position(|n| n == robot)),
+            None => overridden.extend(0..names.len()),
+        }
+    }
+    let project = regatta_webots::project_of(world);
+    let mut planned = regatta_webots::plan(
+        &loaded.compiled,
+        &loaded.checked.scene,
+        &project,
+        &overridden,
+    )?;
+    planned.retain(|item| {
+        let robot = &names[item.robot];
+        match &item.program {
+            regatta_webots::Program::C { .. } => true,
+            other => {
+                let message = format!(
+                    "robot '{robot}': its controller \"{}\" is written in {}, which this version of regatta does not run yet (C controllers run)",
+                    loaded.compiled.rig.robots[item.robot].controller,
+                    other.language()
+                );
+                if lenient {
+                    eprintln!("warning: {message}");
+                } else {
+                    eprintln!("error: {message}");
+                }
+                false
+            }
+        }
+    });
+    regatta_webots::prepare(&mut loaded.compiled, &planned);
+    for item in &planned {
+        eprintln!(
+            "note: robot '{}' runs its project's controller {} ({}): this runs the project's code (--builtin-only runs none)",
+            names[item.robot],
+            item.program.folder().display(),
+            item.program.language(),
+        );
+    }
+    Ok(planned)
+}
+
+/// Compiles (or finds compiled) and starts the planned controllers, each connected to its
+/// robot; `None` when there are none.
+pub fn start_programs(
+    simulation: &mut regatta_runtime::sim::Simulation,
+    planned: Vec<regatta_webots::Planned>,
+    world: &std::path::Path,
+    overrides: &ControllerOverride,
+) -> anyhow::Result<Option<regatta_webots::Controllers>> {
+    if planned.is_empty() {
+        return Ok(None);
+    }
+    let cache = regatta_webots::compile::cache_dir();
+    let mut starts = Vec::new();
+    for item in planned {
+        let robot = simulation.compiled.rig.robots[item.robot].name.clone();
+        let name = item
+            .program
+            .folder()
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let started = std::time::Instant::now();
+        let (executable, built) = regatta_webots::compile::compile(&item.program, &cache)
+            .map_err(|e| anyhow::anyhow!("robot '{robot}': {e}"))?;
+        if built {
+            eprintln!(
+                "note: compiled controller \"{name}\" in {:.2} s",
+                started.elapsed().as_secs_f64()
+            );
+        }
+        starts.push(regatta_webots::Start {
+            robot: item.robot,
+            controller: name,
+            executable,
+            folder: item.program.folder().to_path_buf(),
+            args: item.args,
+            devices: item.devices,
+            z_up: item.z_up,
+        });
+    }
+    let options = regatta_webots::Options {
+        timeout: std::time::Duration::from_secs_f64(overrides.controller_timeout),
+        echo: true,
+    };
+    let project = regatta_webots::project_of(world);
+    let controllers =
+        regatta_webots::Controllers::start(simulation, starts, world, &project, &options)?;
+    Ok(Some(controllers))
 }
 
 /// Fails when the world has robots regatta could not build (their PROTO has no stand-in and

@@ -209,7 +209,7 @@ fn finish_load(
     color: bool,
 ) -> anyhow::Result<Loaded> {
     print_substitutions(&checked);
-    regatta_runtime::check::check_scene(&mut checked);
+    regatta_runtime::check::check_scene_with(&mut checked, &regatta_webots::programs_of(path));
     eprint!(
         "{}",
         checked.render_where(|d| d.diagnostic.is_error() || world.lenient, color)

@@ -5,6 +5,7 @@
 //! `DifferentialWheels` starts a robot: everything below it is attached to the robot, with
 //! frames relative to it, and its devices go to the rig.
 
+pub mod drive;
 mod exported;
 pub mod graph;
 pub mod meshfile;
@@ -169,6 +170,11 @@ struct Compiler<'s> {
 }
 
 /// A frame turned by an axis-angle rotation (`None`: unchanged).
+/// A generic Webots robot without a drive stands still; its wheel and body stand-ins (m) are
+/// what its kinematics and collisions use when its shapes say nothing.
+const GENERIC_WHEEL_RADIUS: f64 = 0.02;
+const GENERIC_BODY_RADIUS: f64 = 0.05;
+
 fn turned(frame: &Frame, turn: Option<[f64; 4]>) -> Frame {
     match turn {
         Some(r) => frame.then(&Frame {
@@ -280,27 +286,7 @@ impl Compiler<'_> {
                 }
                 self.group = outer;
             }
-            "Robot" => {
-                // A generic Webots robot: no drive regatta simulates, so its parts stay where
-                // they are, as obstacles.
-                self.warnings.push(format!(
-                    "robot '{}' is a generic Webots Robot with no drive regatta simulates (only the DifferentialWheels robots and the Khepera1, Khepera2 and E-puck stand-ins move); its shapes stay in place",
-                    scene.string(node, "name")
-                ));
-                let local = Frame::vrml(
-                    DVec3::from_array(scene.vec3(node, "translation")),
-                    scene.rotation(node, "rotation"),
-                    DVec3::from_array(scene.vec3(node, "scale")),
-                    [0.0, 0.0, 1.0, 0.0],
-                    DVec3::ZERO,
-                );
-                let frame = turned(&frame.then(&local), scene.turn(axes.own, axes.body));
-                let outer = self.enter_group(node, &frame, owner, None);
-                for &child in scene.children(node, "children") {
-                    self.walk(child, &frame, owner, depth + 1);
-                }
-                self.group = outer;
-            }
+            "Robot" => self.robot(node, frame, owner, depth),
             "Switch" => {
                 let which = scene.int(node, "whichChoice");
                 if let Some(&child) = usize::try_from(which)
@@ -355,6 +341,12 @@ impl Compiler<'_> {
                 });
             }
             "DifferentialWheels" => self.robot(node, frame, owner, depth),
+            // A hinge is rigid here (a wheel's turning is not drawn): its solid stays in place.
+            "HingeJoint" => {
+                if let Some(end) = scene.child(node, "endPoint") {
+                    self.walk(end, frame, owner, depth + 1);
+                }
+            }
             "DistanceSensor" | "LightSensor" | "PanoramicTurret" | "LinearCamera" | "Camera" => {
                 match owner {
                     Owner::Robot(robot) => self.device(node, frame, robot),
@@ -368,7 +360,13 @@ impl Compiler<'_> {
                     self.open_node(node, frame, owner, depth);
                 }
             }
-            _ if scene.spec(node).open => self.open_node(node, frame, owner, depth),
+            // Nodes kept only for what they hold, and the other devices' shapes (an LED's).
+            _ if scene.spec(node).open
+                || (scene.spec(node).classes.iter().any(|c| c == "device")
+                    && scene.spec(node).field_index("children").is_some()) =>
+            {
+                self.open_node(node, frame, owner, depth)
+            }
             _ => {}
         }
     }
@@ -552,11 +550,25 @@ impl Compiler<'_> {
         ));
         let body = turned(&own, scene.turn(axes.own, axes.body));
         let to_regatta = flu_to_regatta(scene, axes.body);
-        let robot_frame = turned(&body, to_regatta);
-        let children_frame = turned(
-            &Frame::IDENTITY,
-            to_regatta.map(|[x, y, z, a]| [x, y, z, -a]),
-        );
+        // A generic Webots robot moves when its wheels make a drive; it looks where they roll.
+        let generic = scene.type_name(node) == "Robot";
+        let drive = generic
+            .then(|| {
+                let up = if to_regatta.is_some() {
+                    DVec3::Z
+                } else {
+                    DVec3::Y
+                };
+                drive::infer(scene, node, up)
+                    .map(|drive| (drive::body_rotation(drive.forward, up), drive))
+            })
+            .flatten();
+        let rotation = match &drive {
+            Some((rotation, _)) => *rotation,
+            None => turned(&Frame::IDENTITY, to_regatta),
+        };
+        let robot_frame = body.then(&rotation);
+        let children_frame = rotation.inverse().unwrap_or(Frame::IDENTITY);
         let forward = robot_frame.apply_vector(DVec3::X);
         let up = robot_frame.apply_vector(DVec3::Y).normalize_or_zero();
         if up.y < 0.999 {
@@ -572,7 +584,12 @@ impl Compiler<'_> {
         let time_step = self.time_step;
         // `check` refuses a period that is not a whole number of steps; compiled unchecked,
         // it is rounded to the nearest (at least one).
-        let control_steps = rig::control_steps(scene.float(node, "controlPeriod"), time_step)
+        let period = if generic {
+            0.0
+        } else {
+            scene.float(node, "controlPeriod")
+        };
+        let control_steps = rig::control_steps(period, time_step)
             .unwrap_or_else(|ratio| (libm::round(ratio).clamp(1.0, u32::MAX as f64) as u64).max(1));
         let index = self.rig.robots.len();
         if !self.robot_names.insert(name.clone()) {
@@ -580,35 +597,57 @@ impl Compiler<'_> {
                 "two robots are named '{name}'; --robot picks the first"
             ));
         }
+        // A generic robot's body is sized from its shapes once they are placed (below).
+        let (wheel_radius, axle_length, max_speed) = match (&drive, generic) {
+            (Some((_, drive)), _) => (drive.wheel_radius, drive.axle_length, drive.max_speed),
+            (None, true) => (GENERIC_WHEEL_RADIUS, GENERIC_WHEEL_RADIUS, 0.0),
+            (None, false) => (
+                scene.float(node, "wheelRadius"),
+                scene.float(node, "axleLength"),
+                scene.float(node, "maxSpeed"),
+            ),
+        };
+        let field = |name: &str, generic_value: f64| {
+            if generic {
+                generic_value
+            } else {
+                scene.float(node, name)
+            }
+        };
         self.rig.robots.push(RobotRig {
             name,
             node,
             start,
             floor_y: robot_frame.translation.y,
-            wheel_radius: scene.float(node, "wheelRadius"),
-            axle_length: scene.float(node, "axleLength"),
-            encoder_resolution: scene.float(node, "encoderResolution"),
-            max_speed: scene.float(node, "maxSpeed"),
-            wheel_speed_noise: scene.float(node, "wheelSpeedNoise"),
+            wheel_radius,
+            axle_length,
+            encoder_resolution: field("encoderResolution", 12000.0),
+            max_speed,
+            wheel_speed_noise: field("wheelSpeedNoise", 0.0),
             control_steps,
             control_period: control_steps as f64 * time_step,
-            body_radius: scene.float(node, "bodyRadius"),
-            body_height: scene.float(node, "bodyHeight"),
+            body_radius: field("bodyRadius", GENERIC_BODY_RADIUS),
+            body_height: field("bodyHeight", GENERIC_BODY_RADIUS),
             controller: scene.string(node, "controller").to_owned(),
             controller_args: scene.strings(node, "controllerArgs").to_vec(),
             floors: Vec::new(),
-            network: scene.child(node, "network").map(|network| {
-                let panoramic = scene
-                    .child(node, "turret")
-                    .is_some_and(|t| scene.type_name(t) == "PanoramicTurret");
-                // A CTRNN integrates once per controller call.
-                network::network_from_scene(
-                    scene,
-                    network,
-                    panoramic,
-                    control_steps as f64 * time_step,
-                )
-            }),
+            drive: drive.map(|(_, drive)| drive),
+            body_to_robot: children_frame,
+            network: (!generic)
+                .then(|| scene.child(node, "network"))
+                .flatten()
+                .map(|network| {
+                    let panoramic = scene
+                        .child(node, "turret")
+                        .is_some_and(|t| scene.type_name(t) == "PanoramicTurret");
+                    // A CTRNN integrates once per controller call.
+                    network::network_from_scene(
+                        scene,
+                        network,
+                        panoramic,
+                        control_steps as f64 * time_step,
+                    )
+                }),
             distance_sensors: Vec::new(),
             light_sensors: Vec::new(),
             turret: None,
@@ -617,13 +656,44 @@ impl Compiler<'_> {
         // The robot's group sits where the simulation puts the robot: upright on the floor.
         let start_frame = start.frame(robot_frame.translation.y);
         let outer = self.enter_group(node, &start_frame, Owner::Static, Some(index));
+        let first_part = self.graph.primitives.len();
         // Attached parts: frames relative to the robot.
         for &child in scene.children(node, "children") {
             self.walk(child, &children_frame, Owner::Robot(index), depth + 1);
         }
         self.group = outer;
-        if let Some(turret) = scene.child(node, "turret") {
+        if generic && self.rig.robots[index].drive.is_some() {
+            self.size_generic_body(index, first_part);
+        } else if generic {
+            // A robot that cannot move is no body either: nothing pushes it, and it pushes
+            // nothing (Webots' robots without physics stand where they are written).
+            self.rig.robots[index].body_radius = 0.0;
+            self.rig.robots[index].body_height = 0.0;
+        } else if let Some(turret) = scene.child(node, "turret") {
             self.turret(turret, index);
+        }
+    }
+
+    /// A generic robot's round body: the largest horizontal half-extent and the height of its
+    /// own shapes (its devices' and wheels' included), or a 5 cm stand-in when it has none.
+    fn size_generic_body(&mut self, index: usize, first_part: usize) {
+        let (mut radius, mut height) = (0.0f64, 0.0f64);
+        for primitive in &self.graph.primitives[first_part..] {
+            if primitive.owner != Owner::Robot(index) {
+                continue;
+            }
+            // The largest horizontal half-extent: a round body's radius (a box's corners
+            // reach further, a documented approximation).
+            let (lo, hi) = (primitive.bounds.min, primitive.bounds.max);
+            for extent in [lo.x, hi.x, lo.z, hi.z] {
+                radius = radius.max(extent.abs());
+            }
+            height = height.max(hi.y);
+        }
+        if radius > 0.0 && radius.is_finite() {
+            let robot = &mut self.rig.robots[index];
+            robot.body_radius = radius;
+            robot.body_height = height.max(1e-3);
         }
     }
 
@@ -640,14 +710,22 @@ impl Compiler<'_> {
                 if direction.y < -std::f64::consts::FRAC_1_SQRT_2 {
                     return;
                 }
+                let table = lookup_table(scene, node);
+                // Webots has no `range`: on a generic Webots robot, the table's farthest row is
+                // where the sensor stops seeing.
+                let generic = scene.type_name(self.rig.robots[robot].node) == "Robot";
+                let range = match table.last() {
+                    Some(last) if generic && last[0] > 0.0 => last[0],
+                    _ => scene.float(node, "range"),
+                };
                 let rig = DistanceSensorRig {
                     name: scene.string(node, "name").to_owned(),
                     position,
                     direction,
-                    lookup: self.tables.share(lookup_table(scene, node)),
+                    lookup: self.tables.share(table),
                     rays: scene.int(node, "numberOfRays").max(1) as usize,
                     aperture: scene.float(node, "aperture"),
-                    range: scene.float(node, "range"),
+                    range,
                     period: scene.float(node, "samplingPeriod"),
                     ray_turns: self.turns.share(DistanceSensorRig::turns(
                         scene.int(node, "numberOfRays").max(1) as usize,

@@ -314,6 +314,12 @@ pub struct RobotRig {
     /// Horizontal extents (x0, z0, x1, z1) of the floors the robot starts on; leaving all of
     /// them is falling off the world. Empty: no floor under it, nothing is checked.
     pub floors: Vec<[f64; 4]>,
+    /// A generic Webots robot's drive, inferred from its wheel hinges (`None` for a
+    /// DifferentialWheels robot, whose fields give it, and for a robot without one).
+    pub drive: Option<super::drive::Drive>,
+    /// The rotation from the robot node's own (body) frame to regatta's robot frame (x
+    /// forward, y up): where a room of its own places the robot's parts.
+    pub body_to_robot: crate::geometry::Frame,
     /// The `network` field's NeuralNetwork, read and checked (`None`: the field is NULL).
     pub network: Option<Result<NetworkSpec, NetworkError>>,
     pub distance_sensors: Vec<DistanceSensorRig>,

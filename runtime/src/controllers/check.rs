@@ -12,8 +12,9 @@ use super::{argument, find, items, known_names, CONTROLLERS};
 /// diagnostic per problem at the line that wrote the value (the user's line, through PROTOs).
 /// An unknown controller or argument is an error; in a check whose scene was read leniently
 /// (every error a warning), it is a warning and the robot runs `none`, or without that
-/// argument.
-pub fn check_scene(checked: &mut Checked) {
+/// argument. A name for which `is_program` holds is a program of the world's project (run as
+/// Webots runs it, its arguments its own), checked no further.
+pub fn check_scene(checked: &mut Checked, is_program: &dyn Fn(&str) -> bool) {
     let lenient = !checked.strict;
     let catalogue = regatta_schema::Catalogue::get();
     let mut found = Vec::new();
@@ -41,6 +42,9 @@ pub fn check_scene(checked: &mut Checked) {
         let mut problems: Vec<(regatta_schema::scene::Origin, Diagnostic)> = Vec::new();
         let mut kept_args = Vec::new();
         let mut replacement = None;
+        if is_program(&name) {
+            continue;
+        }
         match resolve(&name) {
             Resolution::Unknown => {
                 let candidates = CONTROLLERS

@@ -51,6 +51,11 @@ pub const MAPPED: &[(&str, &str, &str)] = &[
         "Webots' empty controller: the robot stands still",
     ),
     ("<none>", "none", "no controller: the robot stands still"),
+    (
+        "<generic>",
+        "none",
+        "Webots' default for a Robot (a generic robot window): the robot stands still",
+    ),
 ];
 
 /// (Webots name, how the robot is driven from outside).

@@ -50,7 +50,13 @@ impl Motion<'_> {
             let to_metres = 100.0 / rig.encoder_resolution;
             let clamp =
                 |command: i32| (command as f64 * to_metres).clamp(-rig.max_speed, rig.max_speed);
-            let (mut left, mut right) = (clamp(robot.command.0), clamp(robot.command.1));
+            let (mut left, mut right) = match robot.wheel_velocity {
+                Some((left, right)) => (
+                    left.clamp(-rig.max_speed, rig.max_speed),
+                    right.clamp(-rig.max_speed, rig.max_speed),
+                ),
+                None => (clamp(robot.command.0), clamp(robot.command.1)),
+            };
             if rig.wheel_speed_noise > 0.0 {
                 // Drawn with each control command and held for its period, so that the
                 // noise a robot's path integrates is the same at any physics step.

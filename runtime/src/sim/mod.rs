@@ -23,7 +23,7 @@ pub mod world2d;
 pub use contacts::{MAX_SUB_STEPS, PENETRATION_TOLERANCE};
 pub use robot::SimulatedKhepera;
 pub use state::{
-    CameraState, Contacts, Fall, LinearCameraState, PanoramicState, PhaseTimes, RobotState,
-    Updated, Visits,
+    CameraState, Contacts, Fall, LinearCameraState, PanoramicState, PhaseTimes, RawReadings,
+    RobotState, Updated, Visits,
 };
 pub use step::{SimError, Simulation};

@@ -41,7 +41,12 @@ impl SenseShared<'_, '_> {
         let rig = &compiled.rig.robots[index];
         let senses = robot.senses;
         robot.vision_requested = false;
-        let proximity_sensors = if senses.proximity { 8 } else { 0 };
+        // The Khepera API reads eight; a robot whose raw readings are kept reads them all.
+        let proximity_sensors = match (senses.proximity, robot.raw.is_some()) {
+            (false, _) => 0,
+            (true, false) => 8,
+            (true, true) => usize::MAX,
+        };
         let mut nearby_found = false;
         // Sensors that share a period and a due time are due alike: one division for all.
         let mut last_due: Option<(u64, f64, bool, f64)> = None;
@@ -99,27 +104,36 @@ impl SenseShared<'_, '_> {
                 nearby_found = true;
             }
             robot.updated.proximity = true;
-            if robot.nearby.is_empty() && robot.nearby_robots.is_empty() {
-                robot.proximity[s] =
-                    sensors::proximity_of_nothing(robot.ir_nothing[s], &mut robot.ir_streams[s]);
-                continue;
+            let value = if robot.nearby.is_empty() && robot.nearby_robots.is_empty() {
+                sensors::value_of_nothing(robot.ir_nothing[s], &mut robot.ir_streams[s])
+            } else {
+                sensors::proximity_value(
+                    self.slab,
+                    &robot.nearby,
+                    &robot.nearby_robots,
+                    self.placements,
+                    index,
+                    &compiled.rig.robots,
+                    sensor,
+                    &mut robot.ir_streams[s],
+                )
+            };
+            if let Some(slot) = robot.proximity.get_mut(s) {
+                *slot = sensors::to_reading(value);
             }
-            robot.proximity[s] = sensors::proximity(
-                self.slab,
-                &robot.nearby,
-                &robot.nearby_robots,
-                self.placements,
-                index,
-                &compiled.rig.robots,
-                sensor,
-                &mut robot.ir_streams[s],
-            );
+            if let Some(raw) = &mut robot.raw {
+                raw.distance[s] = value;
+            }
         }
-        let ambient_sensors = if senses.ambient { 8 } else { 0 };
+        let ambient_sensors = match (senses.ambient, robot.raw.is_some()) {
+            (false, _) => 0,
+            (true, false) => 8,
+            (true, true) => usize::MAX,
+        };
         for (s, sensor) in rig.light_sensors.iter().enumerate().take(ambient_sensors) {
             if due(&mut robot.ambient_due[s], t, sensor.period) {
                 robot.updated.ambient = true;
-                robot.ambient[s] = sensors::ambient(
+                let value = sensors::ambient_value(
                     self.lights,
                     self.slab,
                     &self.broad.statics,
@@ -128,6 +142,12 @@ impl SenseShared<'_, '_> {
                     sensor,
                     &mut robot.ambient_streams[s],
                 );
+                if let Some(slot) = robot.ambient.get_mut(s) {
+                    *slot = sensors::to_reading(value);
+                }
+                if let Some(raw) = &mut robot.raw {
+                    raw.light[s] = value;
+                }
             }
         }
         // 2-D cameras render on the CPU: rasterised, or ray cast where the rig asks for it.

@@ -83,6 +83,7 @@ pub fn nearby_obstacles(
 /// [`nearby_obstacles`]) and `robots` the other robots that may be within reach, ascending (a
 /// superset of those within [`ir_reach`] plus their body radius).
 #[allow(clippy::too_many_arguments)]
+#[inline]
 pub fn proximity(
     slab: &Slab,
     nearby: &[u32],
@@ -93,6 +94,25 @@ pub fn proximity(
     sensor: &DistanceSensorRig,
     stream: &mut Stream,
 ) -> u16 {
+    to_reading(proximity_value(
+        slab, nearby, robots, placements, robot, rigs, sensor, stream,
+    ))
+}
+
+/// One proximity reading as the lookup table and the noise give it, before the Khepera's
+/// rounding and clamping to 0…1023 (what a Webots controller reads); [`proximity`] is this,
+/// rounded.
+#[allow(clippy::too_many_arguments)]
+pub fn proximity_value(
+    slab: &Slab,
+    nearby: &[u32],
+    robots: &[u32],
+    placements: &[Placement],
+    robot: usize,
+    rigs: &[RobotRig],
+    sensor: &DistanceSensorRig,
+    stream: &mut Stream,
+) -> f64 {
     let placement = &placements[robot];
     let origin = placement.to_world(sensor.position);
     let height = origin.y;
@@ -181,8 +201,14 @@ pub fn nothing_in_range(sensor: &DistanceSensorRig) -> (f64, f64) {
 /// One proximity reading when nothing at all is within the robot's IR reach, from the
 /// sensor's [`nothing_in_range`] (the same reading [`proximity`] gives with empty lists).
 #[inline]
-pub fn proximity_of_nothing((mean, spread): (f64, f64), stream: &mut Stream) -> u16 {
-    reading(mean, spread, stream)
+pub fn proximity_of_nothing(nothing: (f64, f64), stream: &mut Stream) -> u16 {
+    to_reading(value_of_nothing(nothing, stream))
+}
+
+/// [`proximity_of_nothing`] before rounding and clamping.
+#[inline]
+pub fn value_of_nothing((mean, spread): (f64, f64), stream: &mut Stream) -> f64 {
+    value(mean, spread, stream)
 }
 
 /// One reading from the rays' hits: `hit(cos, sin)` of each ray's turn gives its nearest hit
@@ -192,9 +218,9 @@ fn sample(
     sensor: &DistanceSensorRig,
     stream: &mut Stream,
     hit: impl FnMut((f64, f64)) -> Option<(f64, f64)>,
-) -> u16 {
+) -> f64 {
     let (mean, spread) = sums(sensor, hit);
-    reading(mean, spread, stream)
+    value(mean, spread, stream)
 }
 
 /// The weighted mean and relative spread of the rays' responses. Each ray is weighted by its
@@ -223,20 +249,21 @@ fn sums(
     (value_sum / weight_sum, noise_sum / weight_sum)
 }
 
-/// The reading, noise drawn from the sensor's stream.
+/// The value, noise drawn from the sensor's stream.
 #[inline]
-fn reading(mean: f64, spread: f64, stream: &mut Stream) -> u16 {
+fn value(mean: f64, spread: f64, stream: &mut Stream) -> f64 {
     if spread == 0.0 {
         // `mean + 0 · g` is `mean` whatever g is (the table's far row has no noise): the
         // stream moves on as if it had been drawn.
         stream.skip_gaussian();
-        return to_reading(mean);
+        return mean;
     }
-    to_reading(mean + spread * stream.gaussian())
+    mean + spread * stream.gaussian()
 }
 
 /// One ambient light reading, 0…1023; `grid` files the slab's obstacles.
 #[allow(clippy::too_many_arguments)]
+#[inline]
 pub fn ambient(
     lights: &[WorldLight],
     slab: &Slab,
@@ -246,6 +273,23 @@ pub fn ambient(
     sensor: &LightSensorRig,
     stream: &mut Stream,
 ) -> u16 {
+    to_reading(ambient_value(
+        lights, slab, grid, placements, robot, sensor, stream,
+    ))
+}
+
+/// One ambient light reading before the Khepera's rounding and clamping (what a Webots
+/// controller's light sensor reads).
+#[allow(clippy::too_many_arguments)]
+pub fn ambient_value(
+    lights: &[WorldLight],
+    slab: &Slab,
+    grid: &Grid,
+    placements: &[Placement],
+    robot: usize,
+    sensor: &LightSensorRig,
+    stream: &mut Stream,
+) -> f64 {
     let placement = &placements[robot];
     let position = placement.to_world(sensor.position);
     let normal = placement
@@ -272,16 +316,15 @@ pub fn ambient(
     if noise == 0.0 {
         // `value · (1 + 0 · g)` is `value`: the stream moves on as if it had been drawn.
         stream.skip_gaussian();
-        return to_reading(value);
+        return value;
     }
-    let reading = value * (1.0 + noise * stream.gaussian());
-    to_reading(reading)
+    value * (1.0 + noise * stream.gaussian())
 }
 
 /// `round(x)` clamped to 0…1023 (NaN reads 0); halves round up, as `round` does for the
 /// non-negative values that remain.
 #[inline]
-fn to_reading(x: f64) -> u16 {
+pub fn to_reading(x: f64) -> u16 {
     let clamped = x.clamp(0.0, 1023.0);
     let whole = clamped as u16;
     whole + (clamped - whole as f64 >= 0.5) as u16

@@ -122,6 +122,18 @@ pub struct CameraState {
     pub(super) sensed: bool,
 }
 
+/// A robot's readings before the Khepera's rounding and clamping to 0…1023, for every
+/// distance and light sensor it carries (not only the first eight): what a Webots controller
+/// reads through its sensors' lookup tables. Kept only for robots that ask
+/// ([`RobotState::keep_raw_readings`]), so that no other robot pays for them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RawReadings {
+    /// One per distance sensor, in the rig's order.
+    pub distance: Vec<f64>,
+    /// One per light sensor, in the rig's order.
+    pub light: Vec<f64>,
+}
+
 /// One simulated robot.
 pub struct RobotState {
     pub name: String,
@@ -134,6 +146,11 @@ pub struct RobotState {
     pub travel: (f64, f64),
     pub(super) counter_offset: (i64, i64),
     pub leds: [bool; 2],
+    /// Wheel rim speeds (m/s) that replace `command` when set: a robot driven in SI units
+    /// (a Webots controller's motors) rather than in the Khepera's pulses.
+    pub wheel_velocity: Option<(f64, f64)>,
+    /// Readings before rounding, when kept ([`RawReadings`]).
+    pub raw: Option<RawReadings>,
     /// The sensors refreshed in the last step: those the controller reads, or all.
     pub senses: Senses,
     pub proximity: [u16; 8],
@@ -183,6 +200,15 @@ pub struct Fall {
 }
 
 impl RobotState {
+    /// Keeps this robot's [`RawReadings`] from the next step on (all its distance and light
+    /// sensors, before rounding), `NaN` until first read.
+    pub fn keep_raw_readings(&mut self, rig: &RobotRig) {
+        self.raw = Some(RawReadings {
+            distance: vec![f64::NAN; rig.distance_sensors.len()],
+            light: vec![f64::NAN; rig.light_sensors.len()],
+        });
+    }
+
     /// Whether its vision device is read and due at `t` (without moving its due time).
     #[inline]
     pub(super) fn vision_due(&self, t: f64) -> bool {

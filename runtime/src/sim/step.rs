@@ -103,6 +103,8 @@ impl<'c> Simulation<'c> {
                 travel: (0.0, 0.0),
                 counter_offset: (0, 0),
                 leds: [false; 2],
+                wheel_velocity: None,
+                raw: None,
                 senses: Senses::ALL,
                 proximity: [0; 8],
                 ambient: [0; 8],

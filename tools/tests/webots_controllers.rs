@@ -1,0 +1,325 @@
+//! Webots controllers run by `regatta run`: a C controller compiled and stepped in lock-step
+//! (the e-puck project of webots/tests/projects), the same log on any thread count, a robot
+//! built from hinge joints driving the arc its wheel speeds imply, controllers that crash,
+//! hang, fail to compile or exit early (one clear error each), `--builtin-only`, and Webots'
+//! own API tests from ../shared/webots.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::{regatta, root, temp_dir};
+
+/// A cache of compiled controllers shared by these tests.
+fn cache() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("regatta-controller-cache-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A project with one world and one C controller `name`.
+fn project(world: &str, name: &str, source: &str) -> PathBuf {
+    let dir = temp_dir("webots-project");
+    std::fs::create_dir_all(dir.join("worlds")).unwrap();
+    std::fs::create_dir_all(dir.join("controllers").join(name)).unwrap();
+    std::fs::write(dir.join("worlds").join("w.wbt"), world).unwrap();
+    std::fs::write(
+        dir.join("controllers").join(name).join(format!("{name}.c")),
+        source,
+    )
+    .unwrap();
+    dir
+}
+
+fn run(world: &Path, args: &[&str]) -> std::process::Output {
+    regatta()
+        .env("REGATTA_CACHE_DIR", cache())
+        .arg("run")
+        .arg(world)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// The `NAME: at x X z Z heading H°` line of a run's summary.
+fn pose(stdout: &str, robot: &str) -> (f64, f64, f64) {
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with(&format!("{robot}: at x ")))
+        .unwrap_or_else(|| panic!("no pose of {robot} in:\n{stdout}"));
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let number = |w: &str| w.trim_end_matches(['°', ';']).parse::<f64>().unwrap();
+    (number(words[3]), number(words[5]), number(words[7]))
+}
+
+const EPUCK: &str = "webots/tests/projects/avoid/worlds/epuck_avoid.wbt";
+
+#[test]
+fn a_c_controller_drives_the_e_puck_and_its_log_is_the_same_on_any_thread_count() {
+    let dir = temp_dir("webots-threads");
+    let world = root().join(EPUCK);
+    let mut logs = Vec::new();
+    for threads in ["1", "2"] {
+        let log = dir.join(format!("run{threads}.mcap"));
+        let output = run(
+            &world,
+            &[
+                "--duration",
+                "30",
+                "--threads",
+                threads,
+                "--log",
+                log.to_str().unwrap(),
+            ],
+        );
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(output.status.success(), "{stderr}");
+        assert!(
+            stderr.contains("runs its project's controller"),
+            "the run says it runs the project's code: {stderr}"
+        );
+        // The controller's own output, behind the robot's name.
+        assert!(stderr.contains("[e-puck] t = "), "{stderr}");
+        let (x, z, _) = pose(&stdout, "e-puck");
+        assert!(
+            (x + 0.1).abs() + (z + 0.1).abs() > 0.1,
+            "the e-puck moved from its start: {stdout}"
+        );
+        logs.push(std::fs::read(&log).unwrap());
+    }
+    assert!(logs[0] == logs[1], "the logs of 1 and 2 threads differ");
+}
+
+/// A robot built as Webots' tutorials build them: a body and two wheel hinges.
+const HINGE_WORLD: &str = r#"#VRML_SIM R2023b utf8
+WorldInfo {
+  basicTimeStep 16
+}
+Robot {
+  children [
+    HingeJoint {
+      jointParameters HingeJointParameters {
+        axis 0 1 0
+        anchor 0 0 0.025
+      }
+      device [
+        RotationalMotor {
+          name "left wheel motor"
+        }
+        PositionSensor {
+          name "left wheel sensor"
+        }
+      ]
+      endPoint Solid {
+        translation 0 0.045 0.025
+        rotation 1 0 0 1.5708
+        children [
+          Shape {
+            geometry Cylinder {
+              height 0.01
+              radius 0.025
+            }
+          }
+        ]
+      }
+    }
+    HingeJoint {
+      jointParameters HingeJointParameters {
+        axis 0 1 0
+        anchor 0 0 0.025
+      }
+      device [
+        RotationalMotor {
+          name "right wheel motor"
+        }
+        PositionSensor {
+          name "right wheel sensor"
+        }
+      ]
+      endPoint Solid {
+        translation 0 -0.045 0.025
+        rotation 1 0 0 1.5708
+        children [
+          Shape {
+            geometry Cylinder {
+              height 0.01
+              radius 0.025
+            }
+          }
+        ]
+      }
+    }
+  ]
+  name "hinged"
+  controller "arc"
+}
+"#;
+
+const ARC: &str = r#"
+#include <stdio.h>
+#include <webots/motor.h>
+#include <webots/position_sensor.h>
+#include <webots/robot.h>
+
+int main() {
+  wb_robot_init();
+  WbDeviceTag left = wb_robot_get_device("left wheel motor");
+  WbDeviceTag right = wb_robot_get_device("right wheel motor");
+  WbDeviceTag sensor = wb_robot_get_device("left wheel sensor");
+  wb_position_sensor_enable(sensor, 16);
+  wb_motor_set_position(left, INFINITY);
+  wb_motor_set_position(right, INFINITY);
+  wb_motor_set_velocity(left, 2.0);
+  wb_motor_set_velocity(right, 4.0);
+  while (wb_robot_step(16) != -1) {
+    if (wb_robot_get_time() > 0.9599 && wb_robot_get_time() < 0.9601)
+      printf("left wheel at %.6f rad\n", wb_position_sensor_get_value(sensor));
+  }
+  wb_robot_cleanup();
+  return 0;
+}
+"#;
+
+#[test]
+fn a_robot_built_from_hinge_joints_drives_the_arc_its_wheel_speeds_imply() {
+    let dir = project(HINGE_WORLD, "arc", ARC);
+    let world = dir.join("worlds").join("w.wbt");
+    let explain = regatta().arg("explain").arg(&world).output().unwrap();
+    let text = String::from_utf8_lossy(&explain.stdout);
+    assert!(
+        text.contains("differential drive inferred from 2 wheel hinges"),
+        "{text}"
+    );
+    let output = run(&world, &["--duration", "2"]);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    // 2 and 4 rad/s on 25 mm wheels, 90 mm apart: an arc of radius 0.135 m at 0.075 m/s.
+    let (v, omega): (f64, f64) = (0.075, 0.05 / 0.09);
+    let theta = omega * 2.0;
+    let radius = v / omega;
+    // The file is z-up: its (x, y) is regatta's (x, −z).
+    let (x, z, heading) = pose(&stdout, "hinged");
+    assert!((x - radius * theta.sin()).abs() < 2e-3, "{stdout}");
+    assert!((-z - radius * (1.0 - theta.cos())).abs() < 2e-3, "{stdout}");
+    assert!((heading - theta.to_degrees()).abs() < 0.2, "{stdout}");
+    // Its position sensor: 2 rad/s for 0.96 s.
+    assert!(stderr.contains("left wheel at 1.920000 rad"), "{stderr}");
+}
+
+const STILL_WORLD: &str = r#"#VRML_SIM R2023b utf8
+WorldInfo {
+}
+Robot {
+  name "r"
+  controller "c"
+}
+"#;
+
+fn fails_with(source: &str, args: &[&str], expected: &[&str]) {
+    let dir = project(STILL_WORLD, "c", source);
+    let log = dir.join("run.mcap");
+    let mut args = args.to_vec();
+    args.extend(["--log", log.to_str().unwrap()]);
+    let output = run(&dir.join("worlds").join("w.wbt"), &args);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    for text in expected {
+        assert!(stderr.contains(text), "{text:?} not in:\n{stderr}");
+    }
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn a_controller_that_crashes_ends_the_run_with_one_clear_error() {
+    fails_with(
+        "#include <webots/robot.h>\nint main() { wb_robot_init(); wb_robot_step(32); int *p = 0; *p = 1; return 0; }\n",
+        &["--duration", "5"],
+        &["robot 'r': controller \"c\" failed", "SIGSEGV"],
+    );
+}
+
+#[test]
+fn a_controller_that_hangs_ends_the_run_after_its_timeout() {
+    fails_with(
+        "#include <webots/robot.h>\nint main() { wb_robot_init(); wb_robot_step(32); for (;;) {} }\n",
+        &["--duration", "5", "--controller-timeout", "0.5"],
+        &["robot 'r': controller \"c\"", "stopped answering"],
+    );
+}
+
+#[test]
+fn a_controller_that_does_not_compile_is_named_with_the_compilers_message() {
+    fails_with(
+        "int main( {\n",
+        &["--duration", "1"],
+        &["controller \"c\" does not compile", "c.c:1"],
+    );
+}
+
+#[test]
+fn a_controller_that_exits_early_with_an_error_ends_the_run() {
+    fails_with(
+        "#include <webots/robot.h>\nint main() { wb_robot_init(); wb_robot_step(32); return 3; }\n",
+        &["--duration", "5"],
+        &[
+            "exited with status 3",
+            "the log is complete up to the failed step",
+        ],
+    );
+}
+
+#[test]
+fn builtin_only_runs_no_code_of_the_project() {
+    let dir = project(
+        STILL_WORLD,
+        "c",
+        "#include <stdio.h>\nint main() { printf(\"ran\\n\"); return 0; }\n",
+    );
+    let world = dir.join("worlds").join("w.wbt");
+    let output = run(&world, &["--duration", "1", "--builtin-only"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("controller \"c\""), "{stderr}");
+    assert!(!stderr.contains("ran"), "{stderr}");
+    // Lenient: a built-in one runs instead, still no code of the project.
+    let output = run(&world, &["--duration", "1", "--builtin-only", "--lenient"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(!stderr.contains("[r] ran"), "{stderr}");
+    // `check` accepts the project's controller without running it.
+    let output = regatta().arg("check").arg(&world).output().unwrap();
+    assert!(output.status.success());
+}
+
+#[test]
+fn webots_api_tests_pass_against_regatta() {
+    let webots = root().join("../shared/webots");
+    if !webots.join("tests/api").is_dir() {
+        eprintln!("skipped: ../shared/webots is not there");
+        return;
+    }
+    let output = regatta()
+        .env("REGATTA_CACHE_DIR", cache())
+        .arg("test-webots")
+        .arg(&webots)
+        .args(["--expect", "5"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{stdout}");
+    for test in [
+        "gps",
+        "device",
+        "robot_synchronous_time",
+        "distance_sensor_resolution",
+        "light_sensor_point_spot_light_no_occlusion",
+    ] {
+        let line = stdout
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(test))
+            .unwrap_or_else(|| panic!("{test} not run:\n{stdout}"));
+        assert!(line.contains(" passed "), "{line}");
+    }
+}

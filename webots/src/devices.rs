@@ -1,0 +1,513 @@
+//! A robot's devices as a Webots controller sees them: names, kinds, Webots' parameters, and
+//! where in regatta's simulation each reads or acts.
+//!
+//! A generic Webots `Robot` lists its device nodes in the order of the tree, as Webots does
+//! (`wb_robot_get_device_by_index`): distance and light sensors and cameras read what the
+//! runtime senses for them (by name), the motors and position sensors of its wheel hinges
+//! drive and measure the wheels of the drive the compiler inferred, and the GPS and LEDs are
+//! this room's own. A `DifferentialWheels` robot (regatta's stand-ins for the E-puck, the
+//! Kheperas, the Thymio) has no motor nodes: its drive appears as Webots' two wheel motors with
+//! their position sensors (`left wheel motor`, `right wheel motor`, `left wheel sensor`,
+//! `right wheel sensor`, the names of Webots' own models), then its sensors.
+
+use glam::DVec3;
+use regatta_runtime::compile::rig::RobotRig;
+use regatta_runtime::geometry::Frame;
+use regatta_schema::{NodeId, Scene};
+
+use crate::protocol::kind;
+
+/// Where a device reads or acts in the simulation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Source {
+    /// A wheel's motor: on the left side or the right, and the sign that makes a positive
+    /// velocity roll forward.
+    Wheel {
+        left: bool,
+        sign: f64,
+    },
+    /// A wheel's position sensor (its angle from the distance the side rolled).
+    WheelAngle {
+        left: bool,
+        sign: f64,
+    },
+    /// A motor regatta does not simulate (an arm's, a gripper's): commands are accepted.
+    Inert,
+    /// A reading that never changes (the angle of a rigid hinge).
+    Fixed(f64),
+    /// Index into the rig's distance sensors.
+    Distance(usize),
+    /// Index into the rig's light sensors.
+    Light(usize),
+    /// Index into the rig's cameras.
+    Camera(usize),
+    /// The device's position in the robot's frame (regatta's: x forward, y up).
+    Gps(DVec3),
+    /// An emitter or a receiver, at its position in the robot's frame.
+    Emitter(DVec3),
+    Receiver(DVec3),
+    Led,
+}
+
+/// One device.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Device {
+    pub kind: u8,
+    pub name: String,
+    pub model: String,
+    /// Kind-specific parameters, in the order the C library reads them:
+    /// - rotational motor: max velocity (rad/s), min and max position (rad; 0 and 0: none),
+    ///   max torque, the tag of its position sensor (0: none);
+    /// - position sensor: the tag of its motor (0: none);
+    /// - distance sensor: type (0 generic, 1 infra-red, 2 sonar, 3 laser), min and max value,
+    ///   aperture (rad);
+    /// - camera: width, height, field of view (rad), near (m);
+    /// - LED: gradual (0 or 1), number of colours;
+    /// - emitter and receiver: medium (0 radio, 1 serial, 2 infra-red), channel, range (m;
+    ///   −1 unlimited), buffer size (bytes; −1 unlimited), max range, aperture (rad).
+    pub params: Vec<f64>,
+    /// Lookup table rows (input, value, relative noise), as Webots returns them.
+    pub table: Vec<[f64; 3]>,
+    /// Webots' `resolution` of the readings (≤ 0: infinite).
+    pub resolution: f64,
+    pub source: Source,
+}
+
+/// Every device of a robot, in tag order; `scene` is the typed world the rig was compiled
+/// from (its device nodes beyond what the runtime senses are read there).
+pub fn devices(scene: &Scene, rig: &RobotRig) -> Vec<Device> {
+    let mut devices = Vec::new();
+    if scene.type_name(rig.node) != "Robot" {
+        drive_devices(rig, &mut devices);
+        sensor_devices(rig, &mut devices);
+    }
+    let mut walk = Walk {
+        scene,
+        rig,
+        devices: &mut devices,
+        generic: scene.type_name(rig.node) == "Robot",
+    };
+    for &child in scene.children(rig.node, "children") {
+        walk.node(child, &Frame::IDENTITY, None, 0);
+    }
+    devices
+}
+
+/// The devices of a stand-in's drive (tags 1–4).
+fn drive_devices(rig: &RobotRig, devices: &mut Vec<Device>) {
+    let max_velocity = if rig.wheel_radius > 0.0 {
+        rig.max_speed / rig.wheel_radius
+    } else {
+        0.0
+    };
+    for (index, (name, left)) in [("left wheel motor", true), ("right wheel motor", false)]
+        .into_iter()
+        .enumerate()
+    {
+        devices.push(Device {
+            kind: kind::ROTATIONAL_MOTOR,
+            name: name.to_owned(),
+            model: String::new(),
+            params: vec![max_velocity, 0.0, 0.0, 10.0, (index + 3) as f64],
+            table: Vec::new(),
+            resolution: -1.0,
+            source: Source::Wheel { left, sign: 1.0 },
+        });
+    }
+    for (index, (name, left)) in [("left wheel sensor", true), ("right wheel sensor", false)]
+        .into_iter()
+        .enumerate()
+    {
+        devices.push(Device {
+            kind: kind::POSITION_SENSOR,
+            name: name.to_owned(),
+            model: String::new(),
+            params: vec![(index + 1) as f64],
+            table: Vec::new(),
+            resolution: -1.0,
+            source: Source::WheelAngle { left, sign: 1.0 },
+        });
+    }
+}
+
+/// A stand-in's sensors, as the rig has them.
+fn sensor_devices(rig: &RobotRig, devices: &mut Vec<Device>) {
+    for index in 0..rig.distance_sensors.len() {
+        devices.push(distance_device(rig, index, -1.0, None));
+    }
+    for (index, sensor) in rig.light_sensors.iter().enumerate() {
+        devices.push(Device {
+            kind: kind::LIGHT_SENSOR,
+            name: sensor.name.clone(),
+            model: String::new(),
+            params: Vec::new(),
+            table: sensor.lookup.to_vec(),
+            resolution: -1.0,
+            source: Source::Light(index),
+        });
+    }
+    for index in 0..rig.cameras.len() {
+        devices.push(camera_device(rig, index));
+    }
+}
+
+fn distance_device(
+    rig: &RobotRig,
+    index: usize,
+    resolution: f64,
+    kind_name: Option<&str>,
+) -> Device {
+    let sensor = &rig.distance_sensors[index];
+    let (low, high) = value_range(&sensor.lookup);
+    let type_code = match kind_name {
+        Some("infra-red") => 1.0,
+        Some("sonar") => 2.0,
+        Some("laser") => 3.0,
+        Some(_) => 0.0,
+        None if sensor.rays > 1 => 1.0,
+        None => 0.0,
+    };
+    Device {
+        kind: kind::DISTANCE_SENSOR,
+        name: sensor.name.clone(),
+        model: String::new(),
+        params: vec![type_code, low, high, sensor.aperture],
+        table: sensor.lookup.to_vec(),
+        resolution,
+        source: Source::Distance(index),
+    }
+}
+
+fn camera_device(rig: &RobotRig, index: usize) -> Device {
+    let camera = &rig.cameras[index];
+    Device {
+        kind: kind::CAMERA,
+        name: camera.name.clone(),
+        model: String::new(),
+        params: vec![
+            camera.width as f64,
+            camera.height as f64,
+            camera.field_of_view,
+            camera.near,
+        ],
+        table: Vec::new(),
+        resolution: -1.0,
+        source: Source::Camera(index),
+    }
+}
+
+/// The walk of a robot's tree for its device nodes.
+struct Walk<'a> {
+    scene: &'a Scene,
+    rig: &'a RobotRig,
+    devices: &'a mut Vec<Device>,
+    /// A generic Robot lists every device here; a stand-in only those its rig lacks.
+    generic: bool,
+}
+
+impl Walk<'_> {
+    fn node(&mut self, node: NodeId, frame: &Frame, hinge: Option<NodeId>, depth: usize) {
+        if depth > 64 {
+            return;
+        }
+        let scene = self.scene;
+        match scene.type_name(node) {
+            "Transform" | "Solid" => {
+                let frame = frame.then(&local_frame(scene, node));
+                for &child in scene.children(node, "children") {
+                    self.node(child, &frame, None, depth + 1);
+                }
+            }
+            "Group" => {
+                for &child in scene.children(node, "children") {
+                    self.node(child, frame, None, depth + 1);
+                }
+            }
+            "HingeJoint" => {
+                let first = self.devices.len();
+                for &device in scene.children(node, "device") {
+                    self.node(device, frame, Some(node), depth + 1);
+                }
+                self.pair(first);
+                if let Some(end) = scene.child(node, "endPoint") {
+                    self.node(end, frame, None, depth + 1);
+                }
+            }
+            "RotationalMotor" if self.generic => self.motor(node, hinge),
+            "PositionSensor" if self.generic => self.position_sensor(node),
+            "DistanceSensor" if self.generic => {
+                let name = scene.string(node, "name");
+                let device = match self
+                    .rig
+                    .distance_sensors
+                    .iter()
+                    .position(|s| s.name == name)
+                {
+                    Some(index) => distance_device(
+                        self.rig,
+                        index,
+                        scene.float(node, "resolution"),
+                        Some(scene.string(node, "type")),
+                    ),
+                    // A sensor looking down: the uniform floor, as far as the table goes.
+                    None => {
+                        let table = lookup_table(scene, node);
+                        let (low, high) = value_range(&table);
+                        let far = table.last().map_or(0.0, |row| row[1]);
+                        Device {
+                            kind: kind::DISTANCE_SENSOR,
+                            name: name.to_owned(),
+                            model: scene.string(node, "model").to_owned(),
+                            params: vec![0.0, low, high, scene.float(node, "aperture")],
+                            table,
+                            resolution: -1.0,
+                            source: Source::Fixed(far),
+                        }
+                    }
+                };
+                self.devices.push(device);
+            }
+            "LightSensor" if self.generic => {
+                let name = scene.string(node, "name");
+                let index = self.rig.light_sensors.iter().position(|s| s.name == name);
+                self.devices.push(Device {
+                    kind: kind::LIGHT_SENSOR,
+                    name: name.to_owned(),
+                    model: scene.string(node, "model").to_owned(),
+                    params: Vec::new(),
+                    table: lookup_table(scene, node),
+                    resolution: scene.float(node, "resolution"),
+                    source: index.map_or(Source::Fixed(f64::NAN), Source::Light),
+                });
+            }
+            "Camera" if self.generic => {
+                let name = scene.string(node, "name");
+                if let Some(index) = self.rig.cameras.iter().position(|c| c.name == name) {
+                    self.devices.push(camera_device(self.rig, index));
+                }
+            }
+            "GPS" => {
+                let at = frame.then(&local_frame(scene, node));
+                let offset = self.rig.body_to_robot.then(&at).translation;
+                self.devices.push(Device {
+                    kind: kind::GPS,
+                    name: scene.string(node, "name").to_owned(),
+                    model: scene.string(node, "model").to_owned(),
+                    params: Vec::new(),
+                    table: Vec::new(),
+                    resolution: scene.float(node, "resolution"),
+                    source: Source::Gps(offset),
+                });
+            }
+            // Devices a controller may name whose readings regatta does not simulate yet:
+            // listed (so tags and indices are Webots'), read as NaN.
+            "Emitter" | "Receiver" => {
+                let at = frame.then(&local_frame(scene, node));
+                let offset = self.rig.body_to_robot.then(&at).translation;
+                let medium = match scene.string(node, "type") {
+                    "serial" => 1.0,
+                    "infra-red" => 2.0,
+                    _ => 0.0,
+                };
+                let emitter = scene.type_name(node) == "Emitter";
+                let (range, max_range) = if emitter {
+                    (scene.float(node, "range"), scene.float(node, "maxRange"))
+                } else {
+                    (-1.0, -1.0)
+                };
+                self.devices.push(Device {
+                    kind: if emitter {
+                        kind::EMITTER
+                    } else {
+                        kind::RECEIVER
+                    },
+                    name: scene.string(node, "name").to_owned(),
+                    model: scene.string(node, "model").to_owned(),
+                    params: vec![
+                        medium,
+                        f64::from(scene.int(node, "channel")),
+                        range,
+                        f64::from(scene.int(node, "bufferSize")),
+                        max_range,
+                        scene.float(node, "aperture"),
+                    ],
+                    table: Vec::new(),
+                    resolution: -1.0,
+                    source: if emitter {
+                        Source::Emitter(offset)
+                    } else {
+                        Source::Receiver(offset)
+                    },
+                });
+            }
+            "Accelerometer" | "Gyro" | "Compass" | "InertialUnit" | "TouchSensor" => {
+                let (kind, table) = match scene.type_name(node) {
+                    "Accelerometer" => (kind::ACCELEROMETER, lookup_table(scene, node)),
+                    "Gyro" => (kind::GYRO, lookup_table(scene, node)),
+                    "Compass" => (kind::COMPASS, lookup_table(scene, node)),
+                    "InertialUnit" => (kind::INERTIAL_UNIT, Vec::new()),
+                    _ => (kind::TOUCH_SENSOR, lookup_table(scene, node)),
+                };
+                let params = match scene.type_name(node) {
+                    "InertialUnit" => vec![scene.float(node, "noise")],
+                    _ => Vec::new(),
+                };
+                self.devices.push(Device {
+                    kind,
+                    name: scene.string(node, "name").to_owned(),
+                    model: scene.string(node, "model").to_owned(),
+                    params,
+                    table,
+                    resolution: -1.0,
+                    source: Source::Fixed(f64::NAN),
+                });
+            }
+            "LED" => {
+                let colors = match scene.field(node, "color") {
+                    regatta_schema::Value::Vec3s(c) => c.len(),
+                    _ => 1,
+                };
+                self.devices.push(Device {
+                    kind: kind::LED,
+                    name: scene.string(node, "name").to_owned(),
+                    model: scene.string(node, "model").to_owned(),
+                    params: vec![
+                        f64::from(u8::from(scene.bool(node, "gradual"))),
+                        colors as f64,
+                    ],
+                    table: Vec::new(),
+                    resolution: -1.0,
+                    source: Source::Led,
+                });
+            }
+            _ => {}
+        }
+    }
+
+    fn motor(&mut self, node: NodeId, hinge: Option<NodeId>) {
+        let scene = self.scene;
+        let name = scene.string(node, "name");
+        let wheel = self
+            .rig
+            .drive
+            .as_ref()
+            .and_then(|d| d.wheels.iter().find(|w| hinge.is_some() && w.motor == name));
+        self.devices.push(Device {
+            kind: kind::ROTATIONAL_MOTOR,
+            name: name.to_owned(),
+            model: scene.string(node, "model").to_owned(),
+            params: vec![
+                scene.float(node, "maxVelocity"),
+                scene.float(node, "minPosition"),
+                scene.float(node, "maxPosition"),
+                scene.float(node, "maxTorque"),
+                0.0,
+            ],
+            table: Vec::new(),
+            resolution: -1.0,
+            source: match wheel {
+                Some(w) => Source::Wheel {
+                    left: w.left,
+                    sign: w.sign,
+                },
+                None => Source::Inert,
+            },
+        });
+    }
+
+    fn position_sensor(&mut self, node: NodeId) {
+        let scene = self.scene;
+        let name = scene.string(node, "name");
+        let wheel = self.rig.drive.as_ref().and_then(|d| {
+            d.wheels
+                .iter()
+                .find(|w| !w.sensor.is_empty() && w.sensor == name)
+        });
+        self.devices.push(Device {
+            kind: kind::POSITION_SENSOR,
+            name: name.to_owned(),
+            model: scene.string(node, "model").to_owned(),
+            params: vec![0.0],
+            table: Vec::new(),
+            resolution: scene.float(node, "resolution"),
+            source: match wheel {
+                Some(w) => Source::WheelAngle {
+                    left: w.left,
+                    sign: w.sign,
+                },
+                None => Source::Fixed(0.0),
+            },
+        });
+    }
+
+    /// A hinge's motor and position sensor name each other.
+    fn pair(&mut self, first: usize) {
+        let slice = &self.devices[first..];
+        let motor = slice.iter().position(|d| d.kind == kind::ROTATIONAL_MOTOR);
+        let sensor = slice.iter().position(|d| d.kind == kind::POSITION_SENSOR);
+        if let (Some(m), Some(s)) = (motor, sensor) {
+            self.devices[first + m].params[4] = (first + s + 1) as f64;
+            self.devices[first + s].params[0] = (first + m + 1) as f64;
+        }
+    }
+}
+
+fn local_frame(scene: &Scene, node: NodeId) -> Frame {
+    Frame::vrml(
+        DVec3::from_array(scene.vec3(node, "translation")),
+        scene.rotation(node, "rotation"),
+        DVec3::ONE,
+        [0.0, 0.0, 1.0, 0.0],
+        DVec3::ZERO,
+    )
+}
+
+fn lookup_table(scene: &Scene, node: NodeId) -> Vec<[f64; 3]> {
+    match scene.field(node, "lookupTable") {
+        regatta_schema::Value::Vec3s(rows) => rows.clone(),
+        _ => Vec::new(),
+    }
+}
+
+/// The smallest and largest value a lookup table gives.
+fn value_range(table: &[[f64; 3]]) -> (f64, f64) {
+    let values = table.iter().map(|row| row[1]);
+    let low = values.clone().fold(f64::INFINITY, f64::min);
+    let high = values.fold(f64::NEG_INFINITY, f64::max);
+    if low.is_finite() {
+        (low, high)
+    } else {
+        (0.0, 0.0)
+    }
+}
+
+/// A reading with Webots' `resolution`: rounded to a multiple of it (0 or less: as is).
+pub fn with_resolution(value: f64, resolution: f64) -> f64 {
+    if resolution > 0.0 {
+        libm::round(value / resolution) * resolution
+    } else {
+        value
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resolution_rounds_to_its_multiples() {
+        assert_eq!(with_resolution(0.0987654, 0.0), 0.0987654);
+        assert_eq!(with_resolution(0.0987654, -1.0), 0.0987654);
+        assert_eq!(with_resolution(123.4, 15.0), 120.0);
+        assert_eq!(with_resolution(127.6, 15.0), 135.0);
+    }
+
+    #[test]
+    fn a_table_gives_its_value_range() {
+        assert_eq!(
+            value_range(&[[0.0, 4095.0, 0.0], [0.07, 67.0, 0.0]]),
+            (67.0, 4095.0)
+        );
+        assert_eq!(value_range(&[]), (0.0, 0.0));
+    }
+}

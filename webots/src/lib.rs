@@ -1,0 +1,97 @@
+//! Webots controllers against regatta: a world's robots run the controllers of its project,
+//! unchanged, as Webots runs them.
+//!
+//! This room stands on the runtime's public API only. It owns:
+//! - the C API's headers (`include/webots/`) and the controller library (`c/`), written from
+//!   Webots' published reference, embedded in the binary ([`compile::HEADERS`],
+//!   [`compile::LIBRARY`]);
+//! - the controller protocol ([`protocol`]): the frames a controller process and regatta
+//!   exchange over a Unix socket;
+//! - finding a controller in its project and compiling it into a cache ([`compile`]);
+//! - a robot's devices as Webots names them ([`devices`]);
+//! - emitters and receivers: packets between robots ([`radio`]);
+//! - the processes in lock-step with a simulation ([`session`]).
+//!
+//! Running a world's controllers runs its project's code: [`plan`] finds which robots would,
+//! and the command line says so before it starts them.
+
+pub mod compile;
+pub mod devices;
+mod error;
+pub mod protocol;
+pub mod radio;
+pub mod session;
+
+use std::path::Path;
+
+use regatta_runtime::compile::Compiled;
+
+pub use compile::{is_program, project_of, Program};
+pub use error::WebotsError;
+
+/// `is_program` for the world at `world` (`-`, standard input, has no project).
+pub fn programs_of(world: &Path) -> impl Fn(&str) -> bool {
+    let project = (world != Path::new("-")).then(|| project_of(world));
+    move |name: &str| project.as_deref().is_some_and(|p| is_program(p, name))
+}
+pub use session::{Controllers, Options, Start};
+
+/// A robot whose controller is its project's own program.
+#[derive(Clone, Debug)]
+pub struct Planned {
+    pub robot: usize,
+    pub program: Program,
+    /// The robot's `controllerArgs`, passed to the program as its arguments.
+    pub args: Vec<String>,
+    /// Its devices, in tag order (read from the scene, which a run then releases).
+    pub devices: Vec<devices::Device>,
+    /// Whether the world's file is z-up (a GPS answers in the file's axes).
+    pub z_up: bool,
+}
+
+/// The robots of `compiled` whose controller name is a program of `project`
+/// (`controllers/NAME/`), in robot order. Names regatta has built in are left to the
+/// built-ins; robots in `skip` (driven otherwise) are left alone.
+pub fn plan(
+    compiled: &Compiled,
+    scene: &regatta_schema::Scene,
+    project: &Path,
+    skip: &[usize],
+) -> Result<Vec<Planned>, WebotsError> {
+    let mut planned = Vec::new();
+    for (robot, rig) in compiled.rig.robots.iter().enumerate() {
+        if skip.contains(&robot) {
+            continue;
+        }
+        if let Some(program) = compile::find(project, &rig.controller)? {
+            planned.push(Planned {
+                robot,
+                program,
+                args: rig.controller_args.clone(),
+                devices: devices::devices(scene, rig),
+                z_up: scene.up_axis == regatta_schema::UpAxis::Z,
+            });
+        }
+    }
+    Ok(planned)
+}
+
+/// Readies the compiled world for the planned robots: their built-in controller is `none`,
+/// and their distance and light sensors and cameras refresh every step, so that each
+/// controller's own sampling periods decide what it reads.
+pub fn prepare(compiled: &mut Compiled, planned: &[Planned]) {
+    for item in planned {
+        let rig = &mut compiled.rig.robots[item.robot];
+        rig.controller = "none".to_owned();
+        rig.controller_args.clear();
+        for sensor in &mut rig.distance_sensors {
+            sensor.period = 0.0;
+        }
+        for sensor in &mut rig.light_sensors {
+            sensor.period = 0.0;
+        }
+        for camera in &mut rig.cameras {
+            camera.period = 0.0;
+        }
+    }
+}

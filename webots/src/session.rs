@@ -1,0 +1,865 @@
+//! Controller processes in lock-step with a simulation: started with a socket to talk over,
+//! answered with their robot's readings when the time they asked of `wb_robot_step` has
+//! passed, and their commands applied to the robot before it moves.
+//!
+//! Between [`Simulation::sense`] and [`Simulation::act`] of every step, [`Controllers::exchange`]
+//! first sends a reply to every controller whose step is due, then reads each one's next
+//! request, in robot order: the controllers compute side by side, and each sees only its own
+//! robot, so a run is the same whatever the machine's load. Nothing is timed by the wall
+//! clock except the timeout that ends a run whose controller stopped answering.
+
+use std::io::{Read, Write};
+use std::os::unix::net::{UnixListener, UnixStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use regatta_runtime::khepera::{Controller, Khepera, KheperaError, Senses};
+use regatta_runtime::sim::Simulation;
+
+use crate::devices::{with_resolution, Device, Source};
+use crate::error::WebotsError;
+use crate::protocol::{self, kind, op, status, Command as StepCommand, Writer};
+use crate::radio::{Delivered, Listener, Packet, Radio};
+
+/// How controllers are run.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// How long a controller may take to connect, or to ask for its next step (wall time).
+    pub timeout: Duration,
+    /// Where controllers' output goes: each line prefixed by the robot's name.
+    pub echo: bool,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            timeout: Duration::from_secs(10),
+            echo: true,
+        }
+    }
+}
+
+/// A robot to be driven by a controller program.
+pub struct Start {
+    /// The robot's index in the world.
+    pub robot: usize,
+    /// The controller's name, as the world gives it.
+    pub controller: String,
+    /// The executable, and the folder it runs in.
+    pub executable: PathBuf,
+    pub folder: PathBuf,
+    pub args: Vec<String>,
+    /// Its devices, in tag order ([`crate::devices::devices`]).
+    pub devices: Vec<Device>,
+    /// Whether the world's file is z-up (positions answer in the file's axes).
+    pub z_up: bool,
+}
+
+/// The sensors a controller enabled, as the runtime's controller interface declares them.
+struct Listening(Arc<AtomicU8>);
+
+const PROXIMITY: u8 = 1;
+const AMBIENT: u8 = 2;
+const CAMERA: u8 = 4;
+
+impl Controller for Listening {
+    fn step(&mut self, _: &mut dyn Khepera) -> Result<(), KheperaError> {
+        Ok(())
+    }
+
+    fn senses(&self) -> Senses {
+        let bits = self.0.load(Ordering::Relaxed);
+        Senses {
+            proximity: bits & PROXIMITY != 0,
+            ambient: bits & AMBIENT != 0,
+            vision: false,
+            camera: bits & CAMERA != 0,
+        }
+    }
+}
+
+/// A device's sampling: its period in steps (0: disabled) and the step of its next reading.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sampling {
+    period: u64,
+    due: u64,
+}
+
+/// A motor: target position (+∞: velocity control) and velocity (rad/s).
+#[derive(Clone, Copy, Debug)]
+struct Motor {
+    target: f64,
+    velocity: f64,
+}
+
+/// One controller process and its robot.
+struct Driven {
+    robot: usize,
+    robot_name: String,
+    controller: String,
+    child: Child,
+    stream: UnixStream,
+    devices: Vec<Device>,
+    sampling: Vec<Sampling>,
+    /// One per device (used by the motors).
+    motors: Vec<Motor>,
+    leds: Vec<i32>,
+    /// One per device (used by emitters and receivers).
+    radios: Vec<Radio>,
+    z_up: bool,
+    /// The step at which the controller's `wb_robot_step` returns.
+    wake: u64,
+    senses: Arc<AtomicU8>,
+    echo: Vec<std::thread::JoinHandle<()>>,
+    frame: Vec<u8>,
+    /// The controller is done (it called `wb_robot_cleanup`, or exited with status 0): its
+    /// robot stands still from then on.
+    finished: bool,
+}
+
+/// Every controller process of a run.
+pub struct Controllers {
+    driven: Vec<Driven>,
+    sockets: PathBuf,
+    time_step_ms: f64,
+    timeout: Duration,
+    writer: Writer,
+    commands: Vec<StepCommand>,
+    /// Emitters' packets not yet arrived.
+    in_flight: Vec<Packet>,
+}
+
+/// Webots' steps for `ms` milliseconds at a basic time step of `step_ms`: whole steps,
+/// rounded up (a duration is meant to be a multiple of the basic step).
+fn steps_for(ms: f64, step_ms: f64) -> u64 {
+    if ms <= 0.0 {
+        return 0;
+    }
+    libm::ceil(ms / step_ms - 1e-9).max(1.0) as u64
+}
+
+impl Controllers {
+    /// Starts every controller, sends each its robot, and waits for each one's first step
+    /// request (what it commands at time 0).
+    pub fn start(
+        simulation: &mut Simulation,
+        starts: Vec<Start>,
+        world: &Path,
+        project: &Path,
+        options: &Options,
+    ) -> Result<Controllers, WebotsError> {
+        let sockets = socket_folder()?;
+        let time_step_ms = simulation.time_step * 1000.0;
+        let mut controllers = Controllers {
+            driven: Vec::new(),
+            sockets,
+            time_step_ms,
+            timeout: options.timeout,
+            writer: Writer::new(),
+            commands: Vec::new(),
+            in_flight: Vec::new(),
+        };
+        for start in starts {
+            let driven = controllers.launch(simulation, start, world, project, options)?;
+            controllers.driven.push(driven);
+        }
+        // Each controller's first request: its commands at time 0.
+        for index in 0..controllers.driven.len() {
+            controllers.receive(index, simulation)?;
+        }
+        Ok(controllers)
+    }
+
+    fn launch(
+        &mut self,
+        simulation: &mut Simulation,
+        start: Start,
+        world: &Path,
+        project: &Path,
+        options: &Options,
+    ) -> Result<Driven, WebotsError> {
+        let rig = &simulation.compiled.rig.robots[start.robot];
+        let robot_name = rig.name.clone();
+        let devices = start.devices;
+        let path = self.sockets.join(format!("{}.sock", start.robot));
+        let listener =
+            UnixListener::bind(&path).map_err(|source| WebotsError::io(&path, source))?;
+        listener
+            .set_nonblocking(true)
+            .map_err(|source| WebotsError::io(&path, source))?;
+        let mut child = Command::new(&start.executable)
+            .args(&start.args)
+            .current_dir(&start.folder)
+            .env("REGATTA_CONTROLLER_URL", &path)
+            .env("WEBOTS_ROBOT_NAME", &robot_name)
+            .stdin(Stdio::null())
+            .stdout(if options.echo {
+                Stdio::piped()
+            } else {
+                Stdio::null()
+            })
+            .stderr(if options.echo {
+                Stdio::piped()
+            } else {
+                Stdio::null()
+            })
+            .spawn()
+            .map_err(|source| WebotsError::Spawn {
+                robot: robot_name.clone(),
+                controller: start.controller.clone(),
+                source: Arc::new(source),
+            })?;
+        let mut echo = Vec::new();
+        if options.echo {
+            if let Some(out) = child.stdout.take() {
+                echo.push(echo_lines(out, robot_name.clone()));
+            }
+            if let Some(err) = child.stderr.take() {
+                echo.push(echo_lines(err, robot_name.clone()));
+            }
+        }
+        let failure = |child: &mut Child, what: String| WebotsError::Controller {
+            robot: robot_name.clone(),
+            controller: start.controller.clone(),
+            time: 0.0,
+            what: match child.try_wait() {
+                Ok(Some(status)) => format!("{what}: it {}", describe_exit(status)),
+                _ => what,
+            },
+        };
+        let started = Instant::now();
+        let stream = loop {
+            match listener.accept() {
+                Ok((stream, _)) => break stream,
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                    if let Ok(Some(status)) = child.try_wait() {
+                        return Err(WebotsError::Controller {
+                            robot: robot_name.clone(),
+                            controller: start.controller.clone(),
+                            time: 0.0,
+                            what: format!(
+                                "it {} before connecting (did it call wb_robot_init?)",
+                                describe_exit(status)
+                            ),
+                        });
+                    }
+                    if started.elapsed() > options.timeout {
+                        let _ = child.kill();
+                        return Err(failure(
+                            &mut child,
+                            format!(
+                                "it did not connect within {} s",
+                                options.timeout.as_secs_f64()
+                            ),
+                        ));
+                    }
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+                Err(source) => return Err(WebotsError::io(&path, source)),
+            }
+        };
+        let _ = std::fs::remove_file(&path);
+        stream
+            .set_nonblocking(false)
+            .map_err(|source| WebotsError::io(&path, source))?;
+        stream
+            .set_read_timeout(Some(options.timeout))
+            .map_err(|source| WebotsError::io(&path, source))?;
+        let senses = Arc::new(AtomicU8::new(0));
+        simulation.set_controller(start.robot, Box::new(Listening(senses.clone())));
+        let rig = &simulation.compiled.rig.robots[start.robot];
+        simulation.robots[start.robot].keep_raw_readings(rig);
+        // Webots' motors start in position control at 0, at their largest velocity.
+        let motors = devices
+            .iter()
+            .map(|d| Motor {
+                target: 0.0,
+                velocity: d.params.first().copied().unwrap_or(0.0),
+            })
+            .collect();
+        let mut driven = Driven {
+            robot: start.robot,
+            robot_name,
+            controller: start.controller,
+            child,
+            stream,
+            sampling: vec![Sampling::default(); devices.len()],
+            leds: vec![0; devices.len()],
+            radios: devices
+                .iter()
+                .map(|d| Radio {
+                    channel: d.params.get(1).copied().unwrap_or(0.0) as i32,
+                    range: d.params.get(2).copied().unwrap_or(-1.0),
+                    pending: Vec::new(),
+                })
+                .collect(),
+            devices,
+            motors,
+            z_up: start.z_up,
+            wake: 0,
+            senses,
+            echo,
+            frame: Vec::new(),
+            finished: false,
+        };
+        self.hello(&mut driven, simulation, world, project)?;
+        Ok(driven)
+    }
+
+    fn hello(
+        &mut self,
+        driven: &mut Driven,
+        simulation: &Simulation,
+        world: &Path,
+        project: &Path,
+    ) -> Result<(), WebotsError> {
+        let rig = &simulation.compiled.rig.robots[driven.robot];
+        let w = &mut self.writer;
+        w.clear();
+        w.u32(protocol::MAGIC);
+        w.u32(protocol::VERSION);
+        w.f64(self.time_step_ms);
+        w.str(&rig.name);
+        w.str("");
+        w.str("");
+        w.str(&absolute(project).to_string_lossy());
+        w.str(&absolute(world).to_string_lossy());
+        w.u8(1);
+        w.u8(0);
+        w.u16(driven.devices.len() as u16);
+        for device in &driven.devices {
+            w.u8(device.kind);
+            w.str(&device.name);
+            w.str(&device.model);
+            w.u16(device.params.len() as u16);
+            for &p in &device.params {
+                w.f64(p);
+            }
+            w.u16(device.table.len() as u16);
+            for row in &device.table {
+                for &x in row {
+                    w.f64(x);
+                }
+            }
+        }
+        let frame = w.finish().to_vec();
+        send(driven, &frame, 0.0)
+    }
+
+    /// The step's exchange, between [`Simulation::sense`] and [`Simulation::act`]: replies to
+    /// the controllers whose step is due, reads their next requests, applies their commands,
+    /// and sets every driven robot's wheel speeds for the step.
+    pub fn exchange(&mut self, simulation: &mut Simulation) -> Result<(), WebotsError> {
+        let step = simulation.steps;
+        if !self.in_flight.is_empty() {
+            self.deliver(simulation);
+        }
+        let mut due = Vec::new();
+        for index in 0..self.driven.len() {
+            if !self.driven[index].finished && self.driven[index].wake <= step {
+                self.reply(index, simulation, status::RUNNING)?;
+                due.push(index);
+            }
+        }
+        for index in due {
+            self.receive(index, simulation)?;
+            // `wb_robot_step(0)` returns at once, without time passing.
+            while !self.driven[index].finished && self.driven[index].wake <= step {
+                self.reply(index, simulation, status::RUNNING)?;
+                self.receive(index, simulation)?;
+            }
+        }
+        for driven in &self.driven {
+            drive(driven, simulation);
+        }
+        Ok(())
+    }
+
+    /// Packets sent before this step arrive at the receivers enabled now.
+    fn deliver(&mut self, simulation: &Simulation) {
+        let mut listeners = Vec::new();
+        for driven in &mut self.driven {
+            let robot = &simulation.robots[driven.robot];
+            let rig = &simulation.compiled.rig.robots[driven.robot];
+            let to_robot = robot.pose.frame(rig.floor_y).linear.transpose();
+            for ((device, sampling), radio) in driven
+                .devices
+                .iter()
+                .zip(&driven.sampling)
+                .zip(&mut driven.radios)
+            {
+                if let (Source::Receiver(offset), true) = (device.source, sampling.period > 0) {
+                    listeners.push(Listener {
+                        medium: device.params[0] as u8,
+                        at: robot.pose.to_world(offset, rig.floor_y),
+                        to_robot,
+                        radio,
+                    });
+                }
+            }
+        }
+        crate::radio::deliver(&mut self.in_flight, simulation.steps, &mut listeners);
+    }
+
+    fn reply(
+        &mut self,
+        index: usize,
+        simulation: &Simulation,
+        state: u8,
+    ) -> Result<(), WebotsError> {
+        let step = simulation.steps;
+        let driven = &mut self.driven[index];
+        let w = &mut self.writer;
+        w.clear();
+        w.f64(simulation.time);
+        w.u8(state);
+        let robot = &simulation.robots[driven.robot];
+        let rig = &simulation.compiled.rig.robots[driven.robot];
+        let mut readings: Vec<(usize, Reading)> = Vec::new();
+        for (d, sampling) in driven.sampling.iter_mut().enumerate() {
+            if sampling.period == 0 || step < sampling.due {
+                continue;
+            }
+            while sampling.due <= step {
+                sampling.due += sampling.period;
+            }
+            let device = &driven.devices[d];
+            let one = |v: f64| Reading::Values(vec![with_resolution(v, device.resolution)]);
+            let reading = match device.source {
+                Source::WheelAngle { left, sign } => {
+                    let travel = if left { robot.travel.0 } else { robot.travel.1 };
+                    let angle = if rig.wheel_radius > 0.0 {
+                        sign * travel / rig.wheel_radius
+                    } else {
+                        0.0
+                    };
+                    one(angle)
+                }
+                Source::Fixed(v) => one(v),
+                Source::Distance(i) => one(robot
+                    .raw
+                    .as_ref()
+                    .and_then(|r| r.distance.get(i).copied())
+                    .unwrap_or(f64::NAN)),
+                Source::Light(i) => one(robot
+                    .raw
+                    .as_ref()
+                    .and_then(|r| r.light.get(i).copied())
+                    .unwrap_or(f64::NAN)),
+                Source::Camera(i) => match robot.cameras.get(i) {
+                    Some(camera) => Reading::Bytes(bgra(&camera.image.rgb)),
+                    None => continue,
+                },
+                Source::Gps(offset) => {
+                    let p = robot.pose.to_world(offset, rig.floor_y);
+                    // regatta is y-up; a z-up file's (x, y, z) is regatta's (x, −z, y).
+                    let p = if driven.z_up {
+                        [p.x, -p.z, p.y]
+                    } else {
+                        [p.x, p.y, p.z]
+                    };
+                    Reading::Values(p.map(|v| with_resolution(v, device.resolution)).to_vec())
+                }
+                Source::Receiver(_) => {
+                    Reading::Packets(std::mem::take(&mut driven.radios[d].pending))
+                }
+                Source::Wheel { .. } | Source::Inert | Source::Led | Source::Emitter(_) => continue,
+            };
+            readings.push((d, reading));
+        }
+        w.u16(readings.len() as u16);
+        for (d, reading) in &readings {
+            w.u16(*d as u16 + 1);
+            match reading {
+                Reading::Values(values) => {
+                    w.u8(protocol::reading::VALUES);
+                    w.u16(values.len() as u16);
+                    for &v in values {
+                        w.f64(v);
+                    }
+                }
+                Reading::Bytes(bytes) => {
+                    w.u8(protocol::reading::BYTES);
+                    w.bytes(bytes);
+                }
+                Reading::Packets(packets) => {
+                    w.u8(protocol::reading::PACKETS);
+                    w.u16(packets.len().min(u16::MAX as usize) as u16);
+                    for packet in packets.iter().take(u16::MAX as usize) {
+                        w.f64(packet.strength);
+                        for &x in &packet.direction {
+                            w.f64(x);
+                        }
+                        w.bytes(&packet.data);
+                    }
+                }
+            }
+        }
+        let frame = w.finish().to_vec();
+        send(driven, &frame, simulation.time)
+    }
+
+    /// Reads a controller's next step request and applies it.
+    fn receive(&mut self, index: usize, simulation: &mut Simulation) -> Result<(), WebotsError> {
+        let step = simulation.steps;
+        let time = simulation.time;
+        let time_step_ms = self.time_step_ms;
+        let driven = &mut self.driven[index];
+        if !receive_frame(driven, time, self.timeout)? {
+            driven.finished = true;
+            return Ok(());
+        }
+        let duration = protocol::read_step(&driven.frame, &mut self.commands)
+            .map_err(|e| protocol_error(driven, time, e))?;
+        if duration < 0 {
+            // wb_robot_cleanup: the controller is done.
+            driven.finished = true;
+            return Ok(());
+        }
+        for command in &self.commands {
+            let d = command.tag as usize;
+            let Some(device) = d.checked_sub(1).and_then(|d| driven.devices.get(d)) else {
+                return Err(protocol_error(
+                    driven,
+                    time,
+                    protocol::FrameError::NoDevice(command.tag),
+                ));
+            };
+            match (command.op, device.source) {
+                (op::ENABLE, _) => {
+                    let sampling = &mut driven.sampling[d - 1];
+                    if command.value > 0.0 && command.value.is_finite() {
+                        sampling.period = steps_for(command.value, time_step_ms);
+                        sampling.due = step + sampling.period;
+                    } else {
+                        sampling.period = 0;
+                    }
+                }
+                (op::MOTOR_POSITION, Source::Wheel { .. } | Source::Inert) => {
+                    driven.motors[d - 1].target = command.value;
+                }
+                (op::MOTOR_VELOCITY, Source::Wheel { .. } | Source::Inert) => {
+                    driven.motors[d - 1].velocity = command.value;
+                }
+                (op::LED_SET, _) => driven.leds[d - 1] = command.value as i32,
+                (op::EMITTER_SEND, Source::Emitter(offset)) => {
+                    let robot = &simulation.robots[driven.robot];
+                    let rig = &simulation.compiled.rig.robots[driven.robot];
+                    let radio = &driven.radios[d - 1];
+                    self.in_flight.push(Packet {
+                        sent: step,
+                        medium: device.params[0] as u8,
+                        channel: radio.channel,
+                        range: radio.range,
+                        from: robot.pose.to_world(offset, rig.floor_y),
+                        data: driven.frame[command.data.0..command.data.1].to_vec(),
+                    });
+                }
+                (op::EMITTER_CHANNEL, Source::Emitter(_))
+                | (op::RECEIVER_CHANNEL, Source::Receiver(_)) => {
+                    driven.radios[d - 1].channel = command.value as i32;
+                }
+                (op::EMITTER_RANGE, Source::Emitter(_)) => {
+                    driven.radios[d - 1].range = command.value;
+                }
+                (op, _) => {
+                    return Err(protocol_error(
+                        driven,
+                        time,
+                        protocol::FrameError::UnknownOp {
+                            op,
+                            tag: command.tag,
+                        },
+                    ))
+                }
+            }
+        }
+        let mut bits = 0;
+        for (device, sampling) in driven.devices.iter().zip(&driven.sampling) {
+            if sampling.period > 0 {
+                bits |= match device.kind {
+                    kind::DISTANCE_SENSOR => PROXIMITY,
+                    kind::LIGHT_SENSOR => AMBIENT,
+                    kind::CAMERA => CAMERA,
+                    _ => 0,
+                };
+            }
+        }
+        driven.senses.store(bits, Ordering::Relaxed);
+        driven.wake = step + steps_for(duration as f64, time_step_ms);
+        Ok(())
+    }
+
+    /// Whether every controller is done (each called `wb_robot_cleanup` or exited with
+    /// status 0).
+    pub fn all_finished(&self) -> bool {
+        self.driven.iter().all(|d| d.finished)
+    }
+
+    /// Ends every controller as Webots does: `wb_robot_step` returns −1, and a controller
+    /// still running a second later is killed.
+    pub fn finish(mut self, simulation: &Simulation) {
+        self.quit(Some(simulation));
+    }
+
+    fn quit(&mut self, simulation: Option<&Simulation>) {
+        for index in 0..self.driven.len() {
+            if let (Some(simulation), false) = (simulation, self.driven[index].finished) {
+                let _ = self.reply(index, simulation, status::QUIT);
+            }
+        }
+        let deadline = Instant::now() + Duration::from_secs(1);
+        for driven in &mut self.driven {
+            loop {
+                match driven.child.try_wait() {
+                    Ok(Some(_)) | Err(_) => break,
+                    Ok(None) if Instant::now() < deadline => {
+                        std::thread::sleep(Duration::from_millis(2))
+                    }
+                    Ok(None) => {
+                        let _ = driven.child.kill();
+                        let _ = driven.child.wait();
+                        break;
+                    }
+                }
+            }
+            for handle in driven.echo.drain(..) {
+                let _ = handle.join();
+            }
+        }
+        self.driven.clear();
+        let _ = std::fs::remove_dir_all(&self.sockets);
+    }
+}
+
+impl Drop for Controllers {
+    fn drop(&mut self) {
+        if !self.driven.is_empty() {
+            for driven in &mut self.driven {
+                let _ = driven.child.kill();
+            }
+            self.quit(None);
+        }
+    }
+}
+
+enum Reading {
+    Values(Vec<f64>),
+    Bytes(Vec<u8>),
+    Packets(Vec<Delivered>),
+}
+
+/// RGB rows to Webots' BGRA.
+fn bgra(rgb: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(rgb.len() / 3 * 4);
+    for pixel in rgb.chunks_exact(3) {
+        out.extend_from_slice(&[pixel[2], pixel[1], pixel[0], 255]);
+    }
+    out
+}
+
+/// The wheel speeds a robot's motors give for this step: velocity control, or Webots'
+/// default position control (P = 10, the speed bounded by the motor's velocity). A side with
+/// several driven wheels (skid steer) rolls at their mean.
+fn drive(driven: &Driven, simulation: &mut Simulation) {
+    let rig = &simulation.compiled.rig.robots[driven.robot];
+    let radius = rig.wheel_radius;
+    let robot = &mut simulation.robots[driven.robot];
+    if driven.finished || radius <= 0.0 {
+        robot.wheel_velocity = Some((0.0, 0.0));
+        return;
+    }
+    let mut sums = [(0.0, 0usize); 2];
+    for (device, motor) in driven.devices.iter().zip(&driven.motors) {
+        let Source::Wheel { left, sign } = device.source else {
+            continue;
+        };
+        let travel = if left { robot.travel.0 } else { robot.travel.1 };
+        let limit = motor.velocity.abs();
+        let velocity = if motor.target.is_infinite() {
+            motor.velocity
+        } else {
+            (10.0 * (motor.target - sign * travel / radius)).clamp(-limit, limit)
+        };
+        let side = &mut sums[usize::from(!left)];
+        side.0 += sign * velocity;
+        side.1 += 1;
+    }
+    let mean = |(sum, n): (f64, usize)| if n == 0 { 0.0 } else { sum / n as f64 };
+    robot.wheel_velocity = Some((mean(sums[0]) * radius, mean(sums[1]) * radius));
+}
+
+fn send(driven: &mut Driven, frame: &[u8], time: f64) -> Result<(), WebotsError> {
+    if let Err(e) = driven.stream.write_all(frame) {
+        return Err(lost(driven, time, e));
+    }
+    Ok(())
+}
+
+/// Reads a controller's next frame into `driven.frame`; `Ok(false)` when the controller
+/// ended with status 0 instead (a controller that returns from `main`).
+fn receive_frame(driven: &mut Driven, time: f64, timeout: Duration) -> Result<bool, WebotsError> {
+    let mut length = [0u8; 4];
+    if let Err(e) = driven.stream.read_exact(&mut length) {
+        if e.kind() == std::io::ErrorKind::UnexpectedEof && exited_cleanly(driven) {
+            return Ok(false);
+        }
+        return Err(if is_timeout(&e) {
+            let _ = driven.child.kill();
+            WebotsError::Controller {
+                robot: driven.robot_name.clone(),
+                controller: driven.controller.clone(),
+                time,
+                what: format!(
+                    "it stopped answering: no wb_robot_step within {} s",
+                    timeout.as_secs_f64()
+                ),
+            }
+        } else {
+            lost(driven, time, e)
+        });
+    }
+    let length = u32::from_le_bytes(length) as usize;
+    if length > 64 << 20 {
+        return Err(protocol_error(
+            driven,
+            time,
+            protocol::FrameError::Short(length),
+        ));
+    }
+    driven.frame.resize(length, 0);
+    let mut frame = std::mem::take(&mut driven.frame);
+    let read = driven.stream.read_exact(&mut frame);
+    driven.frame = frame;
+    read.map_err(|e| lost(driven, time, e))?;
+    Ok(true)
+}
+
+/// Whether the controller has exited with status 0 (waiting a moment for it to be reaped).
+fn exited_cleanly(driven: &mut Driven) -> bool {
+    let deadline = Instant::now() + Duration::from_millis(500);
+    loop {
+        match driven.child.try_wait() {
+            Ok(Some(status)) => return status.success(),
+            Ok(None) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(1)),
+            _ => return false,
+        }
+    }
+}
+
+fn is_timeout(error: &std::io::Error) -> bool {
+    matches!(
+        error.kind(),
+        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+    )
+}
+
+/// The connection broke: the controller ended (how, if it has) or closed its socket.
+fn lost(driven: &mut Driven, time: f64, error: std::io::Error) -> WebotsError {
+    // A process that closed its socket is ending: give it a moment to be reaped.
+    let deadline = Instant::now() + Duration::from_millis(500);
+    let what = loop {
+        match driven.child.try_wait() {
+            Ok(Some(status)) => break format!("it {}", describe_exit(status)),
+            Ok(None) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(1)),
+            _ => break format!("its connection broke ({error})"),
+        }
+    };
+    WebotsError::Controller {
+        robot: driven.robot_name.clone(),
+        controller: driven.controller.clone(),
+        time,
+        what,
+    }
+}
+
+fn protocol_error(driven: &Driven, time: f64, error: protocol::FrameError) -> WebotsError {
+    WebotsError::Controller {
+        robot: driven.robot_name.clone(),
+        controller: driven.controller.clone(),
+        time,
+        what: format!("it sent a malformed request ({error})"),
+    }
+}
+
+/// How a process ended, in words.
+fn describe_exit(status: std::process::ExitStatus) -> String {
+    use std::os::unix::process::ExitStatusExt;
+    match (status.code(), status.signal()) {
+        (Some(code), _) => format!("exited with status {code}"),
+        (None, Some(signal)) => format!("was killed by signal {signal}{}", signal_name(signal)),
+        _ => "ended".to_owned(),
+    }
+}
+
+fn signal_name(signal: i32) -> &'static str {
+    match signal {
+        4 => " (SIGILL)",
+        6 => " (SIGABRT)",
+        8 => " (SIGFPE)",
+        9 => " (SIGKILL)",
+        11 => " (SIGSEGV: the controller crashed)",
+        15 => " (SIGTERM)",
+        _ => "",
+    }
+}
+
+/// Copies a controller's output to standard error, each line behind the robot's name.
+fn echo_lines(pipe: impl Read + Send + 'static, robot: String) -> std::thread::JoinHandle<()> {
+    std::thread::spawn(move || {
+        use std::io::BufRead;
+        let reader = std::io::BufReader::new(pipe);
+        for line in reader.split(b'\n') {
+            let Ok(line) = line else { break };
+            eprintln!("[{robot}] {}", String::from_utf8_lossy(&line).trim_end());
+        }
+    })
+}
+
+fn absolute(path: &Path) -> PathBuf {
+    std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
+}
+
+/// A private folder (mode 0700) for the run's sockets.
+fn socket_folder() -> Result<PathBuf, WebotsError> {
+    use std::os::unix::fs::DirBuilderExt;
+    static COUNTER: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+    let base = std::env::var_os("XDG_RUNTIME_DIR")
+        .map(PathBuf::from)
+        .filter(|p| p.is_dir())
+        .unwrap_or_else(std::env::temp_dir);
+    let name = format!(
+        "regatta-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    );
+    let dir = base.join(name);
+    std::fs::DirBuilder::new()
+        .mode(0o700)
+        .create(&dir)
+        .map_err(|source| WebotsError::io(&dir, source))?;
+    Ok(dir)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations_become_whole_steps() {
+        assert_eq!(steps_for(32.0, 32.0), 1);
+        assert_eq!(steps_for(64.0, 32.0), 2);
+        assert_eq!(steps_for(40.0, 32.0), 2);
+        assert_eq!(steps_for(0.0, 32.0), 0);
+        assert_eq!(steps_for(8.0, 8.0), 1);
+        assert_eq!(steps_for(1.0, 32.0), 1);
+    }
+
+    #[test]
+    fn images_are_bgra() {
+        assert_eq!(bgra(&[1, 2, 3, 4, 5, 6]), vec![3, 2, 1, 255, 6, 5, 4, 255]);
+    }
+}
