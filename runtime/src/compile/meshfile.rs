@@ -35,6 +35,18 @@ pub fn decode(asset: &Asset, ccw: bool) -> Result<MeshFile, String> {
         }
         _ => return Err(format!("'{url}' is not an OBJ or STL file")),
     };
+    // A point at infinity or NaN would poison bounds and exports: its triangles go.
+    let positions = &file.mesh.positions;
+    let finite = |t: &[u32; 3]| t.iter().all(|&i| positions[i as usize].is_finite());
+    if !file.mesh.triangles.iter().all(finite) {
+        let keep: Vec<bool> = file.mesh.triangles.iter().map(finite).collect();
+        let mut k = keep.iter();
+        file.mesh.triangles.retain(|_| *k.next().unwrap_or(&false));
+        if let Some(colors) = &mut file.colors {
+            let mut k = keep.iter();
+            colors.retain(|_| *k.next().unwrap_or(&false));
+        }
+    }
     if file.mesh.triangles.is_empty() {
         return Err(format!("'{url}' holds no triangles"));
     }
@@ -171,6 +183,26 @@ mod tests {
         ] {
             let reason = decode(&asset(url, bytes, Vec::new()), true).err().unwrap();
             assert!(reason.contains(url), "{reason}");
+        }
+    }
+
+    #[test]
+    fn hostile_objs_are_reasons_or_meshes_never_a_panic() {
+        for text in [
+            "v 0 0 0\nf -100 2 3\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 0 0\n",
+            "v 1e400 nan inf\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "v 0 0 0\nf 1/99/99 1/-5 1//7\n",
+            "f 4294967295 4294967294 1\n",
+            "mtllib\nusemtl\nnewmtl\nv\nvt\nvn\nf\nl 1 2\np 1\ng\no\ns off\n",
+            "\u{0}\u{1}\u{2}binary",
+        ] {
+            if let Ok(file) = decode(&asset("h.obj", text.as_bytes(), Vec::new()), true) {
+                assert!(
+                    file.mesh.used_positions().all(|p| p.is_finite()),
+                    "{text:?}"
+                );
+            }
         }
     }
 
