@@ -38,8 +38,9 @@ fn the_geometry_world_embeds_its_images_with_coordinates_and_transforms() {
     assert!(!checked.has_errors(), "{}", checked.render(false));
     let (json, bin) = export_json(&checked);
     let images = json["images"].as_array().expect("images");
-    // checker.png (twice named, once embedded), bands.bmp converted, the PixelTexture.
-    assert_eq!(images.len(), 3, "{images:?}");
+    // checker.png (named three times, once embedded), bands.bmp converted, the PixelTexture,
+    // and the PBR sphere's roughness map made glTF's metallic-roughness image.
+    assert_eq!(images.len(), 4, "{images:?}");
     for image in images {
         assert_eq!(image["mimeType"], "image/png");
         let view = &json["bufferViews"][image["bufferView"].as_u64().unwrap() as usize];
@@ -65,6 +66,9 @@ fn the_geometry_world_embeds_its_images_with_coordinates_and_transforms() {
             assert!(primitive["attributes"]["TEXCOORD_0"].is_u64(), "{mesh}");
         }
     }
+    assert!(materials
+        .iter()
+        .any(|m| m["pbrMetallicRoughness"]["metallicRoughnessTexture"].is_object()));
     // The transparent textured face blends; the PBR sphere keeps its roughness.
     assert!(materials
         .iter()

@@ -29,6 +29,10 @@ impl Builder<'_> {
             out["pbrMetallicRoughness"]["baseColorTexture"] =
                 self.texture_info(texture, maps.transform);
         }
+        if let Some(texture) = maps.metallic_roughness {
+            out["pbrMetallicRoughness"]["metallicRoughnessTexture"] =
+                self.texture_info(texture, maps.transform);
+        }
         if let Some(texture) = maps.normal {
             out["normalTexture"] = self.texture_info(texture, maps.transform);
         }

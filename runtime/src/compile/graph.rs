@@ -221,6 +221,9 @@ pub struct TextureTransform {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Maps {
     pub base_color: Option<usize>,
+    /// A PBRAppearance's roughness and metalness maps combined as glTF wants them (roughness
+    /// in green, metalness in blue).
+    pub metallic_roughness: Option<usize>,
     pub normal: Option<usize>,
     pub occlusion: Option<usize>,
     pub emissive: Option<usize>,
@@ -232,6 +235,7 @@ pub struct Maps {
 impl Maps {
     pub const NONE: Maps = Maps {
         base_color: None,
+        metallic_roughness: None,
         normal: None,
         occlusion: None,
         emissive: None,
@@ -242,6 +246,7 @@ impl Maps {
     /// Whether any image is mapped.
     pub fn textured(&self) -> bool {
         self.base_color.is_some()
+            || self.metallic_roughness.is_some()
             || self.normal.is_some()
             || self.occlusion.is_some()
             || self.emissive.is_some()

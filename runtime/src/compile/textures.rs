@@ -1,8 +1,9 @@
 //! Appearances' images read into the render graph's [`Texture`]s and a material's [`Maps`]:
 //! an ImageTexture's file as the check read it (PNG and JPEG kept as found, BMP converted to
 //! PNG), a PixelTexture's pixels encoded as PNG, a TextureTransform, and a PBRAppearance's
-//! base colour, normal, occlusion and emissive maps. Only exporters read them. An image that
-//! does not decode is a warning naming it, never a panic.
+//! base colour, roughness and metalness (combined into one image), normal, occlusion and
+//! emissive maps. Only exporters read them. An image that does not decode is a warning
+//! naming it, never a panic.
 
 use std::collections::HashMap;
 use std::io::Cursor;
@@ -25,6 +26,20 @@ pub(crate) fn maps_of(
     textures: &mut Vec<Texture>,
     warnings: &mut Vec<String>,
 ) -> Maps {
+    let pbr = scene.type_name(appearance) == "PBRAppearance";
+    let metallic_roughness = pbr
+        .then(|| metallic_roughness(scene, appearance))
+        .flatten()
+        .and_then(|made| match made {
+            Ok(texture) => {
+                textures.push(texture);
+                Some(textures.len() - 1)
+            }
+            Err(reason) => {
+                warnings.push(reason);
+                None
+            }
+        });
     let mut texture = |field: &str| {
         let node = scene.child(appearance, field)?;
         if let Some(&done) = cache.read.get(&node) {
@@ -59,9 +74,10 @@ pub(crate) fn maps_of(
             translation: scene.vec2(node, "translation"),
         })
     };
-    if scene.type_name(appearance) == "PBRAppearance" {
+    if pbr {
         Maps {
             base_color: texture("baseColorMap"),
+            metallic_roughness,
             normal: texture("normalMap"),
             occlusion: texture("occlusionMap"),
             emissive: texture("emissiveColorMap"),
@@ -78,6 +94,58 @@ pub(crate) fn maps_of(
             ..Maps::NONE
         }
     }
+}
+
+/// A PBRAppearance's roughness and metalness maps as one image, roughness in green and
+/// metalness in blue (glTF's metallicRoughnessTexture), at the first map's size; a missing
+/// map is 1 (its factor alone). `None` when it has neither.
+fn metallic_roughness(scene: &Scene, pbr: NodeId) -> Option<Result<Texture, String>> {
+    let roughness = scene.child(pbr, "roughnessMap");
+    let metalness = scene.child(pbr, "metalnessMap");
+    if roughness.is_none() && metalness.is_none() {
+        return None;
+    }
+    let decode = |node: Option<NodeId>| -> Result<Option<(image::GrayImage, bool, bool)>, String> {
+        let Some(node) = node else { return Ok(None) };
+        let texture = texture_of(scene, node)?;
+        let gray = image::load_from_memory(&texture.bytes)
+            .map_err(|e| format!("texture '{}' is not a valid image ({e})", texture.name))?
+            .to_luma8();
+        Ok(Some((gray, texture.repeat_s, texture.repeat_t)))
+    };
+    let made = (|| {
+        let (roughness, metalness) = (decode(roughness)?, decode(metalness)?);
+        let first = roughness.as_ref().or(metalness.as_ref()).ok_or("no map")?;
+        let (w, h) = first.0.dimensions();
+        let (repeat_s, repeat_t) = (first.1, first.2);
+        let sized = |map: &Option<(image::GrayImage, bool, bool)>| {
+            map.as_ref().map(|(gray, _, _)| {
+                if gray.dimensions() == (w, h) {
+                    gray.clone()
+                } else {
+                    image::imageops::resize(gray, w, h, image::imageops::FilterType::Triangle)
+                }
+            })
+        };
+        let (g, b) = (sized(&roughness), sized(&metalness));
+        let combined = image::RgbImage::from_fn(w, h, |x, y| {
+            let at =
+                |m: &Option<image::GrayImage>| m.as_ref().map_or(255, |m| m.get_pixel(x, y).0[0]);
+            image::Rgb([255, at(&g), at(&b)])
+        });
+        let mut png = Vec::new();
+        combined
+            .write_to(&mut Cursor::new(&mut png), image::ImageFormat::Png)
+            .map_err(|e| format!("roughness and metalness maps could not be combined ({e})"))?;
+        Ok(Texture {
+            name: "roughness and metalness".to_owned(),
+            mime: "image/png",
+            bytes: png.into(),
+            repeat_s,
+            repeat_t,
+        })
+    })();
+    Some(made)
 }
 
 /// Whether an appearance maps an image (its material is then its own, not its Material's).
