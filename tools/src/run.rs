@@ -134,6 +134,12 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
                 failure = Some(error.to_string());
                 break;
             }
+            // A supervisor's wb_supervisor_simulation_quit ends the run after this step.
+            if let Some(status) = programs.quit_requested() {
+                eprintln!("a supervisor ended the run (status {status})");
+                simulation.act();
+                break;
+            }
         }
         simulation.act();
         if let Some(error) = &simulation.vision_error {

@@ -40,9 +40,9 @@ pub fn plan_programs(
     world: &std::path::Path,
     overrides: &ControllerOverride,
     lenient: bool,
-) -> anyhow::Result<Vec<regatta_webots::Planned>> {
+) -> anyhow::Result<Programs> {
     if overrides.builtin_only || world == std::path::Path::new("-") {
-        return Ok(Vec::new());
+        return Ok(Programs::default());
     }
     if !(overrides.controller_timeout > 0.0 && overrides.controller_timeout.is_finite()) {
         bail!(
@@ -91,6 +91,11 @@ pub fn plan_programs(
         }
     });
     regatta_webots::prepare(&mut loaded.compiled, &planned);
+    // A supervisor reads the typed scene, which the run would otherwise release.
+    let scene = planned
+        .iter()
+        .any(|p| p.supervisor)
+        .then(|| loaded.checked.scene.clone());
     for item in &planned {
         eprintln!(
             "note: robot '{}' runs its project's controller {} ({}): this runs the project's code (--builtin-only runs none)",
@@ -99,17 +104,25 @@ pub fn plan_programs(
             item.program.language(),
         );
     }
-    Ok(planned)
+    Ok(Programs { planned, scene })
+}
+
+/// The robots that run their project's programs, and the scene a supervisor among them reads.
+#[derive(Default)]
+pub struct Programs {
+    planned: Vec<regatta_webots::Planned>,
+    scene: Option<regatta_schema::Scene>,
 }
 
 /// Compiles (or finds compiled) and starts the planned controllers, each connected to its
 /// robot; `None` when there are none.
-pub fn start_programs(
-    simulation: &mut regatta_runtime::sim::Simulation,
-    planned: Vec<regatta_webots::Planned>,
+pub fn start_programs<'c>(
+    simulation: &mut regatta_runtime::sim::Simulation<'c>,
+    programs: Programs,
     world: &std::path::Path,
     overrides: &ControllerOverride,
-) -> anyhow::Result<Option<regatta_webots::Controllers>> {
+) -> anyhow::Result<Option<regatta_webots::Controllers<'c>>> {
+    let Programs { planned, scene } = programs;
     if planned.is_empty() {
         return Ok(None);
     }
@@ -140,6 +153,10 @@ pub fn start_programs(
             args: item.args,
             devices: item.devices,
             z_up: item.z_up,
+            supervisor: item.supervisor,
+            custom_data: item.custom_data,
+            start_rotation: item.start_rotation,
+            north: item.north,
         });
     }
     let options = regatta_webots::Options {
@@ -148,7 +165,7 @@ pub fn start_programs(
     };
     let project = regatta_webots::project_of(world);
     let controllers =
-        regatta_webots::Controllers::start(simulation, starts, world, &project, &options)?;
+        regatta_webots::Controllers::start(simulation, starts, scene, world, &project, &options)?;
     Ok(Some(controllers))
 }
 

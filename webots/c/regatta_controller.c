@@ -63,10 +63,11 @@ enum {
   OP_EMITTER_SEND,
   OP_EMITTER_CHANNEL,
   OP_EMITTER_RANGE,
-  OP_RECEIVER_CHANNEL
+  OP_RECEIVER_CHANNEL,
+  OP_CUSTOM_DATA
 };
 enum { STATUS_RUNNING = 0, STATUS_QUIT = 1 };
-enum { READING_VALUES = 0, READING_BYTES = 1, READING_PACKETS = 2 };
+enum { READING_VALUES = 0, READING_BYTES = 1, READING_PACKETS = 2, READING_CUSTOM_DATA = 3 };
 
 /* A packet a receiver holds. */
 typedef struct {
@@ -230,8 +231,9 @@ static void put(const void *data, size_t n) {
   R.out_length += n;
 }
 
-/* The step frame starts with its length (4), duration (4) and command count (2). */
-#define STEP_HEADER 10
+/* The step frame starts with its length (4), kind (1: 0, a step), duration (4) and command
+   count (2). */
+#define STEP_HEADER 11
 
 static void queue(int op, WbDeviceTag tag, double value) {
   if (R.out_length < STEP_HEADER) {
@@ -388,7 +390,7 @@ void wb_robot_cleanup(void) {
     int32_t duration = -1;
     uint32_t length = STEP_HEADER - 4;
     memcpy(header, &length, 4);
-    memcpy(header + 4, &duration, 4);
+    memcpy(header + 5, &duration, 4);
     write_all(header, STEP_HEADER);
   }
   close(R.fd);
@@ -405,6 +407,12 @@ static void apply_reply(void) {
   for (int i = 0; i < n; i++) {
     unsigned tag = take_u16();
     unsigned type = take_u8();
+    if (tag == 0 && type == READING_CUSTOM_DATA) {
+      /* A supervisor wrote this robot's customData. */
+      free(R.custom_data);
+      R.custom_data = take_str();
+      continue;
+    }
     if (tag == 0 || tag > (unsigned)R.n_devices)
       fail("regatta sent a reading for device %u, which does not exist", tag);
     Device *d = &R.devices[tag - 1];
@@ -477,8 +485,9 @@ int wb_robot_step_begin(int duration) {
   int32_t d = duration;
   uint16_t count = (uint16_t)R.n_commands;
   memcpy(R.out, &length, 4);
-  memcpy(R.out + 4, &d, 4);
-  memcpy(R.out + 8, &count, 2);
+  R.out[4] = 0;
+  memcpy(R.out + 5, &d, 4);
+  memcpy(R.out + 9, &count, 2);
   write_all(R.out, R.out_length);
   R.out_length = 0;
   R.n_commands = 0;
@@ -522,8 +531,11 @@ const char *wb_robot_get_custom_data(void) {
 }
 
 void wb_robot_set_custom_data(const char *data) {
+  if (!R.initialized)
+    fail("wb_robot_set_custom_data() called before wb_robot_init()");
   free(R.custom_data);
   R.custom_data = strdup(data ? data : "");
+  queue_bytes(OP_CUSTOM_DATA, 0, R.custom_data, (int)strlen(R.custom_data));
 }
 
 const char *wb_robot_get_data(void) {
@@ -1358,3 +1370,6 @@ int wb_keyboard_get_sampling_period(void) {
 int wb_keyboard_get_key(void) {
   return -1;
 }
+
+/* The supervisor's functions share this file's connection. */
+#include "supervisor.c"

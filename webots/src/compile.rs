@@ -54,10 +54,15 @@ pub const HEADERS: &[(&str, &str)] = &[
     ("emitter.h", include_str!("../include/webots/emitter.h")),
     ("receiver.h", include_str!("../include/webots/receiver.h")),
     ("keyboard.h", include_str!("../include/webots/keyboard.h")),
+    (
+        "supervisor.h",
+        include_str!("../include/webots/supervisor.h"),
+    ),
 ];
 
-/// The controller library's C source.
+/// The controller library's C source, and the supervisor's part it includes.
 pub const LIBRARY: &str = include_str!("../c/regatta_controller.c");
+pub const LIBRARY_SUPERVISOR: &str = include_str!("../c/supervisor.c");
 
 /// A controller found in a project.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -218,6 +223,7 @@ pub fn sdk(cache: &Path) -> Result<PathBuf, WebotsError> {
         hash.update(text.as_bytes());
     }
     hash.update(LIBRARY.as_bytes());
+    hash.update(LIBRARY_SUPERVISOR.as_bytes());
     let dir = cache.join("sdk").join(hex(&hash.finalize()));
     if dir.join("complete").is_file() {
         return Ok(dir);
@@ -230,6 +236,8 @@ pub fn sdk(cache: &Path) -> Result<PathBuf, WebotsError> {
     }
     let library = dir.join("regatta_controller.c");
     std::fs::write(&library, LIBRARY).map_err(|source| WebotsError::io(&library, source))?;
+    let part = dir.join("supervisor.c");
+    std::fs::write(&part, LIBRARY_SUPERVISOR).map_err(|source| WebotsError::io(&part, source))?;
     let mark = dir.join("complete");
     std::fs::write(&mark, b"").map_err(|source| WebotsError::io(&mark, source))?;
     Ok(dir)

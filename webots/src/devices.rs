@@ -35,14 +35,20 @@ pub enum Source {
     Inert,
     /// A reading that never changes (the angle of a rigid hinge).
     Fixed(f64),
-    /// Index into the rig's distance sensors.
+    /// Index into the rig's distance sensors (a stand-in's, read in the floor-level world).
     Distance(usize),
+    /// A generic robot's distance sensor, cast in 3-D ([`crate::rays`]).
+    Ray(crate::rays::RaySensor),
     /// Index into the rig's light sensors.
     Light(usize),
     /// Index into the rig's cameras.
     Camera(usize),
     /// The device's position in the robot's frame (regatta's: x forward, y up).
     Gps(DVec3),
+    /// An inertial unit or a compass: its rotation relative to the robot node, in the file's
+    /// axes.
+    InertialUnit(glam::DMat3),
+    Compass(glam::DMat3),
     /// An emitter or a receiver, at its position in the robot's frame.
     Emitter(DVec3),
     Receiver(DVec3),
@@ -237,35 +243,41 @@ impl Walk<'_> {
             "PositionSensor" if self.generic => self.position_sensor(node),
             "DistanceSensor" if self.generic => {
                 let name = scene.string(node, "name");
-                let device = match self
-                    .rig
-                    .distance_sensors
-                    .iter()
-                    .position(|s| s.name == name)
-                {
-                    Some(index) => distance_device(
-                        self.rig,
-                        index,
-                        scene.float(node, "resolution"),
-                        Some(scene.string(node, "type")),
-                    ),
-                    // A sensor looking down: the uniform floor, as far as the table goes.
-                    None => {
-                        let table = lookup_table(scene, node);
-                        let (low, high) = value_range(&table);
-                        let far = table.last().map_or(0.0, |row| row[1]);
-                        Device {
-                            kind: kind::DISTANCE_SENSOR,
-                            name: name.to_owned(),
-                            model: scene.string(node, "model").to_owned(),
-                            params: vec![0.0, low, high, scene.float(node, "aperture")],
-                            table,
-                            resolution: -1.0,
-                            source: Source::Fixed(far),
-                        }
-                    }
+                let at = frame.then(&local_frame(scene, node));
+                let placed = self.rig.body_to_robot.then(&at);
+                // The compiler gave the rig Webots' defaults; a sensor it left out (one
+                // looking down) has its own table.
+                let rig = self.rig.distance_sensors.iter().find(|s| s.name == name);
+                let table = rig.map_or_else(|| lookup_table(scene, node), |s| s.lookup.to_vec());
+                let rays = rig.map_or(1, |s| s.rays) as u32;
+                let medium = match scene.string(node, "type") {
+                    "infra-red" => 1,
+                    "sonar" => 2,
+                    "laser" => 3,
+                    _ => 0,
                 };
-                self.devices.push(device);
+                let own_up = if scene.up_axis == regatta_schema::UpAxis::Z {
+                    DVec3::Z
+                } else {
+                    DVec3::Y
+                };
+                let (low, high) = value_range(&table);
+                self.devices.push(Device {
+                    kind: kind::DISTANCE_SENSOR,
+                    name: name.to_owned(),
+                    model: scene.string(node, "model").to_owned(),
+                    params: vec![f64::from(medium), low, high, scene.float(node, "aperture")],
+                    table,
+                    resolution: scene.float(node, "resolution"),
+                    source: Source::Ray(crate::rays::RaySensor {
+                        position: placed.translation,
+                        direction: placed.linear * DVec3::X,
+                        up: placed.linear * own_up,
+                        medium,
+                        rays,
+                        aperture: scene.float(node, "aperture"),
+                    }),
+                });
             }
             "LightSensor" if self.generic => {
                 let name = scene.string(node, "name");
@@ -341,12 +353,33 @@ impl Walk<'_> {
                 });
             }
             "Accelerometer" | "Gyro" | "Compass" | "InertialUnit" | "TouchSensor" => {
-                let (kind, table) = match scene.type_name(node) {
-                    "Accelerometer" => (kind::ACCELEROMETER, lookup_table(scene, node)),
-                    "Gyro" => (kind::GYRO, lookup_table(scene, node)),
-                    "Compass" => (kind::COMPASS, lookup_table(scene, node)),
-                    "InertialUnit" => (kind::INERTIAL_UNIT, Vec::new()),
-                    _ => (kind::TOUCH_SENSOR, lookup_table(scene, node)),
+                let relative = frame.then(&local_frame(scene, node)).linear;
+                let (kind, table, source) = match scene.type_name(node) {
+                    "Accelerometer" => (
+                        kind::ACCELEROMETER,
+                        lookup_table(scene, node),
+                        Source::Fixed(f64::NAN),
+                    ),
+                    "Gyro" => (
+                        kind::GYRO,
+                        lookup_table(scene, node),
+                        Source::Fixed(f64::NAN),
+                    ),
+                    "Compass" => (
+                        kind::COMPASS,
+                        lookup_table(scene, node),
+                        Source::Compass(relative),
+                    ),
+                    "InertialUnit" => (
+                        kind::INERTIAL_UNIT,
+                        Vec::new(),
+                        Source::InertialUnit(relative),
+                    ),
+                    _ => (
+                        kind::TOUCH_SENSOR,
+                        lookup_table(scene, node),
+                        Source::Fixed(f64::NAN),
+                    ),
                 };
                 let params = match scene.type_name(node) {
                     "InertialUnit" => vec![scene.float(node, "noise")],
@@ -358,8 +391,8 @@ impl Walk<'_> {
                     model: scene.string(node, "model").to_owned(),
                     params,
                     table,
-                    resolution: -1.0,
-                    source: Source::Fixed(f64::NAN),
+                    resolution: scene.float(node, "resolution"),
+                    source,
                 });
             }
             "LED" => {

@@ -10,6 +10,8 @@
 //! - finding a controller in its project and compiling it into a cache ([`compile`]);
 //! - a robot's devices as Webots names them ([`devices`]);
 //! - emitters and receivers: packets between robots ([`radio`]);
+//! - a generic robot's distance sensors, cast in 3-D ([`rays`]);
+//! - a supervisor's view of the world ([`supervisor`]);
 //! - the processes in lock-step with a simulation ([`session`]).
 //!
 //! Running a world's controllers runs its project's code: [`plan`] finds which robots would,
@@ -20,7 +22,9 @@ pub mod devices;
 mod error;
 pub mod protocol;
 pub mod radio;
+pub mod rays;
 pub mod session;
+pub mod supervisor;
 
 use std::path::Path;
 
@@ -47,6 +51,14 @@ pub struct Planned {
     pub devices: Vec<devices::Device>,
     /// Whether the world's file is z-up (a GPS answers in the file's axes).
     pub z_up: bool,
+    /// Whether the robot is a supervisor (its `supervisor` field).
+    pub supervisor: bool,
+    /// Its `customData`.
+    pub custom_data: String,
+    /// Its rotation as written, in the file's axes (what orientation devices start from).
+    pub start_rotation: glam::DMat3,
+    /// The world's north in the file's axes (from `WorldInfo.coordinateSystem`).
+    pub north: glam::DVec3,
 }
 
 /// The robots of `compiled` whose controller name is a program of `project`
@@ -58,6 +70,7 @@ pub fn plan(
     project: &Path,
     skip: &[usize],
 ) -> Result<Vec<Planned>, WebotsError> {
+    let north = north_of(scene);
     let mut planned = Vec::new();
     for (robot, rig) in compiled.rig.robots.iter().enumerate() {
         if skip.contains(&robot) {
@@ -70,10 +83,49 @@ pub fn plan(
                 args: rig.controller_args.clone(),
                 devices: devices::devices(scene, rig),
                 z_up: scene.up_axis == regatta_schema::UpAxis::Z,
+                supervisor: scene.spec(rig.node).field_index("supervisor").is_some()
+                    && scene.bool(rig.node, "supervisor"),
+                custom_data: if scene.spec(rig.node).field_index("customData").is_some() {
+                    scene.string(rig.node, "customData").to_owned()
+                } else {
+                    String::new()
+                },
+                start_rotation: regatta_runtime::geometry::Frame::vrml(
+                    glam::DVec3::ZERO,
+                    scene.rotation(rig.node, "rotation"),
+                    glam::DVec3::ONE,
+                    [0.0, 0.0, 1.0, 0.0],
+                    glam::DVec3::ZERO,
+                )
+                .linear,
+                north,
             });
         }
     }
     Ok(planned)
+}
+
+/// The world's north in its file's axes: +x for NUE (and y-up worlds), +y for ENU (and
+/// z-up worlds), +z for EUN.
+pub fn north_of(scene: &regatta_schema::Scene) -> glam::DVec3 {
+    let written = scene
+        .roots
+        .iter()
+        .find(|&&n| scene.type_name(n) == "WorldInfo")
+        .map(|&n| scene.string(n, "coordinateSystem").to_owned())
+        .unwrap_or_default();
+    north_for(&written, scene.up_axis == regatta_schema::UpAxis::Z)
+}
+
+/// North for a `coordinateSystem` value (empty: by the world's up axis).
+pub fn north_for(system: &str, z_up: bool) -> glam::DVec3 {
+    match system {
+        "NUE" => glam::DVec3::X,
+        "EUN" => glam::DVec3::Z,
+        "ENU" => glam::DVec3::Y,
+        _ if z_up => glam::DVec3::Y,
+        _ => glam::DVec3::X,
+    }
 }
 
 /// Readies the compiled world for the planned robots: their built-in controller is `none`,

@@ -9,6 +9,8 @@
 //!   model, parameters and lookup table;
 //! - **step** (controller → regatta): the duration asked of `wb_robot_step` (ms) and the
 //!   commands queued since the last step, each `(op, device tag, value)`;
+//! - **request** (a supervisor → regatta, between steps): one question or change, answered
+//!   at once by an **answer** frame ([`request`]);
 //! - **reply** (regatta → controller): the simulated time, whether the run goes on, and the
 //!   readings due since the last reply, each `(tag, values)` or `(tag, bytes)`.
 //!
@@ -36,6 +38,38 @@ pub mod kind {
     pub const RECEIVER: u8 = 14;
 }
 
+/// The first byte of a controller's frame.
+pub mod frame {
+    pub const STEP: u8 = 0;
+    pub const REQUEST: u8 = 1;
+}
+
+/// A supervisor's requests (the byte after [`frame::REQUEST`]).
+pub mod request {
+    /// → the requester's own node.
+    pub const SELF: u8 = 1;
+    /// DEF name → node (0: none).
+    pub const FROM_DEF: u8 = 2;
+    /// node, DEF name inside its PROTO → node.
+    pub const FROM_PROTO_DEF: u8 = 3;
+    /// node → type name, base type name, DEF name, whether it is a PROTO instance.
+    pub const NODE_INFO: u8 = 4;
+    /// node, field name → field (0: none) and its `WbFieldType`.
+    pub const FIELD: u8 = 5;
+    /// field → its value: a count of numbers, the numbers, a string.
+    pub const FIELD_GET: u8 = 6;
+    /// field, a count of numbers, the numbers, a string.
+    pub const FIELD_SET: u8 = 7;
+    /// node → position (3), orientation (9, row-major), velocity (6), in the file's axes.
+    pub const NODE_STATE: u8 = 8;
+    pub const SET_VELOCITY: u8 = 9;
+    pub const RESET_PHYSICS: u8 = 10;
+    pub const SIMULATION_RESET_PHYSICS: u8 = 11;
+    pub const SIMULATION_RESET: u8 = 12;
+    pub const SIMULATION_MODE: u8 = 13;
+    pub const SIMULATION_QUIT: u8 = 14;
+}
+
 /// Commands of a step frame.
 pub mod op {
     /// Enable a sensor with a sampling period (ms; 0 disables).
@@ -54,6 +88,8 @@ pub mod op {
     pub const EMITTER_RANGE: u8 = 7;
     /// A receiver's channel.
     pub const RECEIVER_CHANNEL: u8 = 8;
+    /// The robot's custom data (tag 0): the value is its size, its bytes follow.
+    pub const CUSTOM_DATA: u8 = 9;
 }
 
 /// Run states of a reply.
@@ -70,6 +106,8 @@ pub mod reading {
     /// A receiver's packets: a count, then each one's signal strength, the emitter's
     /// direction (3 values) and its bytes.
     pub const PACKETS: u8 = 2;
+    /// The robot's custom data as a supervisor wrote it (tag 0), a string.
+    pub const CUSTOM_DATA: u8 = 3;
 }
 
 /// A frame being written.
@@ -183,6 +221,17 @@ impl<'a> Reader<'a> {
         Ok(start)
     }
 
+    pub fn u32(&mut self) -> Result<u32, FrameError> {
+        let b = self.take(4)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    /// A string: `u32` length, then UTF-8 bytes (replaced where they are not).
+    pub fn str(&mut self) -> Result<String, FrameError> {
+        let n = self.u32()? as usize;
+        Ok(String::from_utf8_lossy(self.take(n)?).into_owned())
+    }
+
     pub fn f64(&mut self) -> Result<f64, FrameError> {
         let b = self.take(8)?;
         let mut word = [0; 8];
@@ -205,6 +254,9 @@ pub struct Command {
 /// A step frame: the duration asked (ms) and the commands.
 pub fn read_step(payload: &[u8], commands: &mut Vec<Command>) -> Result<i32, FrameError> {
     let mut reader = Reader::new(payload);
+    if reader.u8()? != frame::STEP {
+        return Err(FrameError::Short(0));
+    }
     let duration = reader.i32()?;
     let count = reader.u16()?;
     commands.clear();
@@ -212,7 +264,7 @@ pub fn read_step(payload: &[u8], commands: &mut Vec<Command>) -> Result<i32, Fra
         let op = reader.u8()?;
         let tag = reader.u16()?;
         let value = reader.f64()?;
-        let data = if op == op::EMITTER_SEND {
+        let data = if op == op::EMITTER_SEND || op == op::CUSTOM_DATA {
             if !(value >= 0.0 && value <= u32::MAX as f64) {
                 return Err(FrameError::Short(reader.position()));
             }
@@ -237,7 +289,7 @@ mod tests {
 
     #[test]
     fn a_step_frame_reads_back() {
-        let mut payload = Vec::new();
+        let mut payload = vec![frame::STEP];
         payload.extend_from_slice(&32i32.to_le_bytes());
         payload.extend_from_slice(&2u16.to_le_bytes());
         for (op, tag, value) in [(op::ENABLE, 3u16, 64.0f64), (op::MOTOR_VELOCITY, 1, -2.5)] {

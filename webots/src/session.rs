@@ -23,6 +23,7 @@ use crate::devices::{with_resolution, Device, Source};
 use crate::error::WebotsError;
 use crate::protocol::{self, kind, op, status, Command as StepCommand, Writer};
 use crate::radio::{Delivered, Listener, Packet, Radio};
+use crate::supervisor::{Supervisor, MODE_REAL_TIME};
 
 /// How controllers are run.
 #[derive(Clone, Debug)]
@@ -56,6 +57,12 @@ pub struct Start {
     pub devices: Vec<Device>,
     /// Whether the world's file is z-up (positions answer in the file's axes).
     pub z_up: bool,
+    /// Whether the robot is a supervisor, and its custom data.
+    pub supervisor: bool,
+    pub custom_data: String,
+    /// Its rotation as written and the world's north, in the file's axes.
+    pub start_rotation: glam::DMat3,
+    pub north: glam::DVec3,
 }
 
 /// The sensors a controller enabled, as the runtime's controller interface declares them.
@@ -109,7 +116,14 @@ struct Driven {
     leds: Vec<i32>,
     /// One per device (used by emitters and receivers).
     radios: Vec<Radio>,
+    /// One per device (used by the distance sensors cast in 3-D): their noise.
+    streams: Vec<regatta_runtime::sim::noise::Stream>,
     z_up: bool,
+    supervisor: bool,
+    custom_data: String,
+    start_rotation: glam::DMat3,
+    start_heading: f64,
+    north: glam::DVec3,
     /// The step at which the controller's `wb_robot_step` returns.
     wake: u64,
     senses: Arc<AtomicU8>,
@@ -121,7 +135,7 @@ struct Driven {
 }
 
 /// Every controller process of a run.
-pub struct Controllers {
+pub struct Controllers<'c> {
     driven: Vec<Driven>,
     sockets: PathBuf,
     time_step_ms: f64,
@@ -130,6 +144,12 @@ pub struct Controllers {
     commands: Vec<StepCommand>,
     /// Emitters' packets not yet arrived.
     in_flight: Vec<Packet>,
+    /// The supervisor's view, when a robot is one.
+    supervisor: Option<Supervisor>,
+    /// Wall clock and simulated time when real-time mode began.
+    real_time: Option<(Instant, f64)>,
+    /// The ray caster of generic robots' distance sensors, when one has any.
+    rays: Option<crate::rays::Rays<'c>>,
 }
 
 /// Webots' steps for `ms` milliseconds at a basic time step of `step_ms`: whole steps,
@@ -141,16 +161,17 @@ fn steps_for(ms: f64, step_ms: f64) -> u64 {
     libm::ceil(ms / step_ms - 1e-9).max(1.0) as u64
 }
 
-impl Controllers {
+impl<'c> Controllers<'c> {
     /// Starts every controller, sends each its robot, and waits for each one's first step
     /// request (what it commands at time 0).
     pub fn start(
-        simulation: &mut Simulation,
+        simulation: &mut Simulation<'c>,
         starts: Vec<Start>,
+        scene: Option<regatta_schema::Scene>,
         world: &Path,
         project: &Path,
         options: &Options,
-    ) -> Result<Controllers, WebotsError> {
+    ) -> Result<Controllers<'c>, WebotsError> {
         let sockets = socket_folder()?;
         let time_step_ms = simulation.time_step * 1000.0;
         let mut controllers = Controllers {
@@ -161,7 +182,22 @@ impl Controllers {
             writer: Writer::new(),
             commands: Vec::new(),
             in_flight: Vec::new(),
+            supervisor: None,
+            real_time: None,
+            rays: None,
         };
+        let compiled = simulation.compiled;
+        if starts
+            .iter()
+            .any(|s| s.devices.iter().any(|d| matches!(d.source, Source::Ray(_))))
+        {
+            controllers.rays = Some(crate::rays::Rays::new(compiled));
+        }
+        if starts.iter().any(|s| s.supervisor) {
+            if let Some(scene) = scene {
+                controllers.supervisor = Some(Supervisor::new(scene, simulation));
+            }
+        }
         for start in starts {
             let driven = controllers.launch(simulation, start, world, project, options)?;
             controllers.driven.push(driven);
@@ -288,6 +324,16 @@ impl Controllers {
             stream,
             sampling: vec![Sampling::default(); devices.len()],
             leds: vec![0; devices.len()],
+            streams: (0..devices.len())
+                .map(|d| {
+                    regatta_runtime::sim::noise::Stream::new(
+                        simulation.seed,
+                        start.robot,
+                        crate::rays::STREAM_KIND,
+                        d,
+                    )
+                })
+                .collect(),
             radios: devices
                 .iter()
                 .map(|d| Radio {
@@ -299,6 +345,11 @@ impl Controllers {
             devices,
             motors,
             z_up: start.z_up,
+            supervisor: start.supervisor,
+            custom_data: start.custom_data,
+            start_rotation: start.start_rotation,
+            start_heading: simulation.robots[start.robot].pose.heading,
+            north: start.north,
             wake: 0,
             senses,
             echo,
@@ -324,11 +375,11 @@ impl Controllers {
         w.f64(self.time_step_ms);
         w.str(&rig.name);
         w.str("");
-        w.str("");
+        w.str(&driven.custom_data);
         w.str(&absolute(project).to_string_lossy());
         w.str(&absolute(world).to_string_lossy());
         w.u8(1);
-        w.u8(0);
+        w.u8(u8::from(driven.supervisor && self.supervisor.is_some()));
         w.u16(driven.devices.len() as u16);
         for device in &driven.devices {
             w.u8(device.kind);
@@ -375,7 +426,32 @@ impl Controllers {
         for driven in &self.driven {
             drive(driven, simulation);
         }
+        self.pace(simulation.time);
         Ok(())
+    }
+
+    /// In real-time mode (a supervisor's `wb_supervisor_simulation_set_mode`), the run waits
+    /// for the wall clock; the results are the same in every mode.
+    fn pace(&mut self, time: f64) {
+        let real_time = self
+            .supervisor
+            .as_ref()
+            .is_some_and(|s| s.mode == MODE_REAL_TIME);
+        match (real_time, self.real_time) {
+            (true, None) => self.real_time = Some((Instant::now(), time)),
+            (true, Some((since, start))) => {
+                let ahead = (time - start) - since.elapsed().as_secs_f64();
+                if ahead > 0.0 {
+                    std::thread::sleep(Duration::from_secs_f64(ahead));
+                }
+            }
+            (false, _) => self.real_time = None,
+        }
+    }
+
+    /// The status a supervisor asked the run to end with (`wb_supervisor_simulation_quit`).
+    pub fn quit_requested(&self) -> Option<i32> {
+        self.supervisor.as_ref().and_then(|s| s.quit)
     }
 
     /// Packets sent before this step arrive at the receivers enabled now.
@@ -419,6 +495,14 @@ impl Controllers {
         let robot = &simulation.robots[driven.robot];
         let rig = &simulation.compiled.rig.robots[driven.robot];
         let mut readings: Vec<(usize, Reading)> = Vec::new();
+        // The robot's orientation and the world's north, for the devices that read them.
+        let rotation = orientation(driven, robot.pose.heading, self.supervisor.as_ref());
+        let north = self
+            .supervisor
+            .as_ref()
+            .and_then(|s| s.north())
+            .unwrap_or(driven.north);
+        let mut prepared = None;
         for (d, sampling) in driven.sampling.iter_mut().enumerate() {
             if sampling.period == 0 || step < sampling.due {
                 continue;
@@ -439,6 +523,21 @@ impl Controllers {
                     one(angle)
                 }
                 Source::Fixed(v) => one(v),
+                Source::Ray(sensor) => match &self.rays {
+                    Some(rays) => {
+                        let prepared =
+                            prepared.get_or_insert_with(|| rays.prepare(simulation, driven.robot));
+                        one(rays.measure(
+                            prepared,
+                            simulation,
+                            driven.robot,
+                            &sensor,
+                            &device.table,
+                            &mut driven.streams[d],
+                        ))
+                    }
+                    None => one(f64::NAN),
+                },
                 Source::Distance(i) => one(robot
                     .raw
                     .as_ref()
@@ -466,11 +565,39 @@ impl Controllers {
                 Source::Receiver(_) => {
                     Reading::Packets(std::mem::take(&mut driven.radios[d].pending))
                 }
+                Source::InertialUnit(relative) => {
+                    let m = rotation * relative;
+                    let angles = roll_pitch_yaw(m, driven.z_up);
+                    Reading::Values(
+                        angles
+                            .map(|v| with_resolution(v, device.resolution))
+                            .to_vec(),
+                    )
+                }
+                Source::Compass(relative) => {
+                    let v = (rotation * relative).transpose() * north;
+                    Reading::Values(
+                        v.to_array()
+                            .map(|x| with_resolution(x, device.resolution))
+                            .to_vec(),
+                    )
+                }
                 Source::Wheel { .. } | Source::Inert | Source::Led | Source::Emitter(_) => continue,
             };
             readings.push((d, reading));
         }
-        w.u16(readings.len() as u16);
+        // A supervisor's change of this robot's custom data travels as a reading of tag 0.
+        let custom = self.supervisor.as_mut().and_then(|s| {
+            std::mem::take(&mut s.custom_data_changed[driven.robot])
+                .then(|| s.custom_data[driven.robot].clone())
+        });
+        w.u16((readings.len() + usize::from(custom.is_some())) as u16);
+        if let Some(custom) = custom {
+            w.u16(0);
+            w.u8(protocol::reading::CUSTOM_DATA);
+            w.str(&custom);
+            driven.custom_data = custom;
+        }
         for (d, reading) in &readings {
             w.u16(*d as u16 + 1);
             match reading {
@@ -508,9 +635,28 @@ impl Controllers {
         let time = simulation.time;
         let time_step_ms = self.time_step_ms;
         let driven = &mut self.driven[index];
-        if !receive_frame(driven, time, self.timeout)? {
-            driven.finished = true;
-            return Ok(());
+        loop {
+            if !receive_frame(driven, time, self.timeout)? {
+                driven.finished = true;
+                return Ok(());
+            }
+            if driven.frame.first() != Some(&protocol::frame::REQUEST) {
+                break;
+            }
+            // A supervisor's request, answered at once.
+            let Some(supervisor) = self.supervisor.as_mut().filter(|_| driven.supervisor) else {
+                return Err(protocol_error(driven, time, protocol::FrameError::Short(0)));
+            };
+            supervisor
+                .answer(
+                    &driven.frame[1..],
+                    driven.robot,
+                    simulation,
+                    &mut self.writer,
+                )
+                .map_err(|e| protocol_error(driven, time, e))?;
+            let answer = self.writer.finish().to_vec();
+            send(driven, &answer, time)?;
         }
         let duration = protocol::read_step(&driven.frame, &mut self.commands)
             .map_err(|e| protocol_error(driven, time, e))?;
@@ -520,6 +666,15 @@ impl Controllers {
             return Ok(());
         }
         for command in &self.commands {
+            if command.op == op::CUSTOM_DATA {
+                let text = String::from_utf8_lossy(&driven.frame[command.data.0..command.data.1])
+                    .into_owned();
+                if let Some(supervisor) = &mut self.supervisor {
+                    supervisor.custom_data[driven.robot] = text.clone();
+                }
+                driven.custom_data = text;
+                continue;
+            }
             let d = command.tag as usize;
             let Some(device) = d.checked_sub(1).and_then(|d| driven.devices.get(d)) else {
                 return Err(protocol_error(
@@ -580,10 +735,10 @@ impl Controllers {
         let mut bits = 0;
         for (device, sampling) in driven.devices.iter().zip(&driven.sampling) {
             if sampling.period > 0 {
-                bits |= match device.kind {
-                    kind::DISTANCE_SENSOR => PROXIMITY,
-                    kind::LIGHT_SENSOR => AMBIENT,
-                    kind::CAMERA => CAMERA,
+                bits |= match (device.kind, device.source) {
+                    (_, Source::Distance(_)) => PROXIMITY,
+                    (kind::LIGHT_SENSOR, _) => AMBIENT,
+                    (kind::CAMERA, _) => CAMERA,
                     _ => 0,
                 };
             }
@@ -635,7 +790,7 @@ impl Controllers {
     }
 }
 
-impl Drop for Controllers {
+impl Drop for Controllers<'_> {
     fn drop(&mut self) {
         if !self.driven.is_empty() {
             for driven in &mut self.driven {
@@ -643,6 +798,40 @@ impl Drop for Controllers {
             }
             self.quit(None);
         }
+    }
+}
+
+/// A robot's orientation now, in the file's axes: as a supervisor last set it, or as written,
+/// turned about the vertical by as much as the robot has turned since.
+fn orientation(driven: &Driven, heading: f64, supervisor: Option<&Supervisor>) -> glam::DMat3 {
+    let up = if driven.z_up {
+        glam::DVec3::Z
+    } else {
+        glam::DVec3::Y
+    };
+    let (rotation, since) = supervisor
+        .and_then(|s| s.orientation(driven.robot))
+        .unwrap_or((driven.start_rotation, driven.start_heading));
+    glam::DMat3::from_quat(glam::DQuat::from_axis_angle(up, heading - since)) * rotation
+}
+
+/// Webots' roll, pitch and yaw of a rotation: about x, y and z in a z-up (ENU) world
+/// (`R = Rz(yaw)·Ry(pitch)·Rx(roll)`), about x, z and y in a y-up (NUE) one
+/// (`R = Ry(yaw)·Rz(pitch)·Rx(roll)`).
+fn roll_pitch_yaw(m: glam::DMat3, z_up: bool) -> [f64; 3] {
+    let at = |row: usize, column: usize| m.col(column)[row];
+    if z_up {
+        [
+            libm::atan2(at(2, 1), at(2, 2)),
+            -libm::asin(at(2, 0).clamp(-1.0, 1.0)),
+            libm::atan2(at(1, 0), at(0, 0)),
+        ]
+    } else {
+        [
+            libm::atan2(-at(1, 2), at(1, 1)),
+            libm::asin(at(1, 0).clamp(-1.0, 1.0)),
+            libm::atan2(-at(2, 0), at(0, 0)),
+        ]
     }
 }
 

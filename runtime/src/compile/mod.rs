@@ -710,10 +710,21 @@ impl Compiler<'_> {
                 if direction.y < -std::f64::consts::FRAC_1_SQRT_2 {
                     return;
                 }
-                let table = lookup_table(scene, node);
+                // On a generic Webots robot, what a field leaves unwritten is Webots' default
+                // (one ray, the table [0 0 0, 0.1 1000 0]), not the Khepera's.
+                let generic = scene.type_name(self.rig.robots[robot].node) == "Robot";
+                let table = if generic && !written(scene, node, "lookupTable") {
+                    WEBOTS_DISTANCE_TABLE.to_vec()
+                } else {
+                    lookup_table(scene, node)
+                };
+                let rays = if generic && !written(scene, node, "numberOfRays") {
+                    1
+                } else {
+                    scene.int(node, "numberOfRays").max(1) as usize
+                };
                 // Webots has no `range`: on a generic Webots robot, the table's farthest row is
                 // where the sensor stops seeing.
-                let generic = scene.type_name(self.rig.robots[robot].node) == "Robot";
                 let range = match table.last() {
                     Some(last) if generic && last[0] > 0.0 => last[0],
                     _ => scene.float(node, "range"),
@@ -723,12 +734,12 @@ impl Compiler<'_> {
                     position,
                     direction,
                     lookup: self.tables.share(table),
-                    rays: scene.int(node, "numberOfRays").max(1) as usize,
+                    rays,
                     aperture: scene.float(node, "aperture"),
                     range,
                     period: scene.float(node, "samplingPeriod"),
                     ray_turns: self.turns.share(DistanceSensorRig::turns(
-                        scene.int(node, "numberOfRays").max(1) as usize,
+                        rays,
                         scene.float(node, "aperture"),
                     )),
                 };
@@ -966,6 +977,17 @@ fn device_pose(scene: &Scene, node: NodeId, frame: &Frame) -> (DVec3, DVec3) {
         device.translation,
         device.apply_vector(DVec3::X).normalize_or(DVec3::X),
     )
+}
+
+/// Webots' default lookup table of a DistanceSensor: 0 at 0 m to 1000 at 0.1 m.
+const WEBOTS_DISTANCE_TABLE: [[f64; 3]; 2] = [[0.0, 0.0, 0.0], [0.1, 1000.0, 0.0]];
+
+/// Whether a node's field was written (or bound through IS) rather than defaulted.
+fn written(scene: &Scene, node: NodeId, name: &str) -> bool {
+    scene
+        .spec(node)
+        .field_index(name)
+        .is_some_and(|index| scene.node(node).value_span_at(index).is_some())
 }
 
 fn lookup_table(scene: &Scene, node: NodeId) -> Vec<[f64; 3]> {
