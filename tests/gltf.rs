@@ -21,6 +21,7 @@ fn expected_nodes(compiled: &Compiled) -> usize {
         .sum();
     graph.groups.len()
         + graph.primitives.len()
+        + graph.lines.len()
         + graph.lights.len()
         + graph.viewpoint.iter().count()
         + sensors
@@ -47,6 +48,11 @@ fn world_matrices(document: &gltf::Document) -> Vec<Option<DMat4>> {
     out
 }
 
+/// The largest coordinate of a box, in absolute value.
+fn want_magnitude(bounds: Aabb) -> f64 {
+    bounds.min.abs().max(bounds.max.abs()).max_element()
+}
+
 /// Exports, writes GLB, reads it back and checks node count and per-primitive bounds.
 /// Returns the read-back document and blob.
 fn round_trip(compiled: &Compiled, quality: u32, what: &str) -> (gltf::Document, Vec<u8>) {
@@ -69,8 +75,8 @@ fn round_trip(compiled: &Compiled, quality: u32, what: &str) -> (gltf::Document,
     let graph = &compiled.graph;
     assert_eq!(
         mesh_nodes.len(),
-        graph.primitives.len(),
-        "{what}: one mesh node per primitive"
+        graph.primitives.len() + graph.lines.len(),
+        "{what}: one mesh node per primitive and per line or point set"
     );
     let chord = 1.0 - (std::f64::consts::PI / segments(quality) as f64).cos();
     for (primitive, node) in graph.primitives.iter().zip(&mesh_nodes) {
@@ -103,7 +109,10 @@ fn round_trip(compiled: &Compiled, quality: u32, what: &str) -> (gltf::Document,
             .iter()
             .fold(0.0f64, |m, x| m.max(x.abs()))
             * 3.0;
+        // glTF stores single precision: far from the origin, a position is off by its ulp.
+        let magnitude = want_magnitude(primitive.bounds);
         let tolerance = 1e-6
+            + magnitude * f32::EPSILON as f64
             + match primitive.shape {
                 Shape::Cylinder { radius, .. }
                 | Shape::Cone { radius, .. }

@@ -70,14 +70,45 @@ impl Camera {
         noise: &mut Stream,
         out: &mut CameraImage,
     ) {
+        let Some(robot_frame) = poses.poses.get(viewer).map(|_| poses.frame(viewer)) else {
+            let (width, height) = (self.rig.width, self.rig.height);
+            (out.width, out.height) = (width, height);
+            out.rgb.clear();
+            return;
+        };
+        let to_world = robot_frame.then(&self.rig.frame);
+        self.draw(raster, plan, poses, Some(viewer), to_world, noise, out);
+    }
+
+    /// Renders by rasterisation a camera whose rig frame is in world coordinates (a world's
+    /// Viewpoint, as `regatta render --viewpoint` draws it), with every robot seen.
+    pub fn update_raster_world(
+        &mut self,
+        raster: &Rasterizer,
+        plan: &Plan,
+        poses: &Poses,
+        noise: &mut Stream,
+        out: &mut CameraImage,
+    ) {
+        let to_world = self.rig.frame;
+        self.draw(raster, plan, poses, None, to_world, noise, out);
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn draw(
+        &mut self,
+        raster: &Rasterizer,
+        plan: &Plan,
+        poses: &Poses,
+        viewer: Option<usize>,
+        to_world: crate::geometry::Frame,
+        noise: &mut Stream,
+        out: &mut CameraImage,
+    ) {
         let (width, height) = (self.rig.width, self.rig.height);
         out.width = width;
         out.height = height;
         out.rgb.clear();
-        let Some(robot_frame) = poses.poses.get(viewer).map(|_| poses.frame(viewer)) else {
-            return;
-        };
-        let to_world = robot_frame.then(&self.rig.frame);
         let to_camera = to_world.inverse().unwrap_or(crate::geometry::Frame {
             linear: glam::DMat3::ZERO,
             translation: DVec3::ZERO,
@@ -97,7 +128,7 @@ impl Camera {
             longest: self.longest,
         };
         let quantise = self.rig.noise <= 0.0;
-        raster.draw(plan, poses, Some(viewer), &view, quantise, &mut self.target);
+        raster.draw(plan, poses, viewer, &view, quantise, &mut self.target);
         if quantise {
             std::mem::swap(&mut out.rgb, &mut self.target.bytes);
             return;

@@ -20,6 +20,10 @@ const CATALOGUE_FILES: &[(&str, &str)] = &[
         "webots_devices.toml",
         include_str!("../catalogue/webots_devices.toml"),
     ),
+    (
+        "unsimulated.toml",
+        include_str!("../catalogue/unsimulated.toml"),
+    ),
 ];
 
 /// One field of a node type, as the catalogue declares it.
@@ -181,6 +185,10 @@ pub struct NodeSpec {
     pub classes: Vec<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub aliases: Vec<String>,
+    /// A Webots node read only for the nodes it holds: fields it does not list are skipped
+    /// without a message (the node itself is reported as not simulated).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub open: bool,
     pub fields: Vec<FieldSpec>,
 }
 

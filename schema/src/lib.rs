@@ -28,5 +28,5 @@ pub use lower::{
 pub use protos::{
     standard_proto, standard_protos, ProtoField, ProtoSpec, BUILTIN_PROTOS, WEBOTS_STANDINS,
 };
-pub use scene::{Fields, FileId, Scene, SceneNode, UpAxis, Written};
+pub use scene::{Asset, Companion, Fields, FileId, Scene, SceneNode, UpAxis, Written};
 pub use value::{BaseType, FieldType, NodeId, Value};

@@ -383,9 +383,42 @@ pub struct Scene {
     pub up_axis: UpAxis,
     /// The convention of the world's objects (robots, devices, cylinder axes).
     pub objects: crate::webots::Objects,
+    /// The files mesh and image nodes name, read through the world's file access rules, by
+    /// ascending node (a node has at most one: the first of its urls that could be read).
+    pub assets: Vec<Asset>,
+}
+
+/// A file a node names and the exporters need (a Mesh's or CadShape's model, an
+/// ImageTexture's image), read once by the check and shared by every node naming it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Asset {
+    pub node: NodeId,
+    /// The url as written.
+    pub url: String,
+    /// The file's bytes, at most the file-size limit.
+    pub bytes: Arc<[u8]>,
+    /// Files the first one names (an OBJ's MTL libraries), each with its bytes or why they
+    /// could not be read.
+    pub companions: Vec<Companion>,
+}
+
+/// A file named inside an asset (an OBJ's `mtllib`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Companion {
+    /// The name as the asset wrote it.
+    pub name: String,
+    pub bytes: Result<Arc<[u8]>, String>,
 }
 
 impl Scene {
+    /// The file a mesh or image node names, if it could be read.
+    pub fn asset(&self, id: NodeId) -> Option<&Asset> {
+        self.assets
+            .binary_search_by_key(&id, |a| a.node)
+            .ok()
+            .map(|i| &self.assets[i])
+    }
+
     /// The node behind a handle.
     pub fn node(&self, id: NodeId) -> &SceneNode {
         &self.nodes[id.index()]

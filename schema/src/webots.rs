@@ -113,17 +113,19 @@ pub fn webots_path(url: &str) -> Option<&str> {
 pub fn unsimulated(name: &str) -> Option<&'static str> {
     Some(match name {
         "Hinge2Joint" | "SliderJoint" | "BallJoint" | "JointParameters" | "LinearMotor"
-        | "Brake" => {
-            "joints and motors other than a differential drive are not simulated (regatta's robots are kinematic); the parts they carry are left out"
+        | "Brake" | "Servo" => {
+            "joints and motors other than a differential drive are not simulated (regatta's robots are kinematic); the parts they carry stay where the file puts them"
         }
         "Speaker" | "Microphone" | "Display" | "Pen" | "Connector" | "VacuumGripper"
         | "Altimeter" | "Lidar" | "RangeFinder" | "Radar" | "Radio" | "Charger" | "Track"
         | "Propeller" | "Muscle" | "Skin" => {
             "this Webots device is not simulated; a controller cannot read it"
         }
-        "Fluid" | "ImmersionProperties" | "Damping" | "Fog" | "Capsule" | "Plane" | "Mesh"
-        | "CadShape" | "Extrusion" => "this Webots node is not simulated by regatta",
+        "Fluid" | "ImmersionProperties" | "Damping" | "Fog" => {
+            "this Webots node is not simulated by regatta"
+        }
         "Pi-puck" => "the Pi-puck extension board carries no device regatta simulates",
+        "Supervisor" => "a supervisor's controller is not run (regatta has no supervisor API)",
         _ => return None,
     })
 }

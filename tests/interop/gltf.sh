@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Exports every world in worlds/, an animated run, and the corpus's worlds to glTF, and runs
+# Exports every world in worlds/, the geometry test world, an animated run, and the corpus's worlds to glTF, and runs
 # the Khronos glTF-Validator (npm package gltf-validator) over all of them: any error fails.
 # Usage: tests/interop/gltf.sh path/to/regatta
 set -euo pipefail
@@ -17,6 +17,8 @@ for world in worlds/*.wbt; do
   "$regatta" gltf "$world" -o "$out/$name.glb" 2>>"$out/export.log"
   "$regatta" gltf "$world" -o "$out/$name.gltf" --quality 8 2>>"$out/export.log"
 done
+# Every geometry node the export reads (lines, points, mesh files), with its texture.
+"$regatta" gltf tests/data/gltf/worlds/geometry.wbt -o "$out/geometry.glb" 2>>"$out/export.log"
 "$regatta" run worlds/regatta.wbt --duration 20 --log "$out/run.mcap" >/dev/null
 "$regatta" gltf worlds/regatta.wbt --log "$out/run.mcap" -o "$out/regatta-run.glb" 2>>"$out/export.log"
 

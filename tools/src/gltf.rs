@@ -24,6 +24,9 @@ pub struct Args {
     /// A log recorded from this world: each robot's poses become an animation.
     #[arg(long)]
     log: Option<PathBuf>,
+    /// Print each shape of the world: exported (with its triangles) or skipped, and why.
+    #[arg(long)]
+    report: bool,
     #[command(flatten)]
     options: crate::world::WorldOptions,
 }
@@ -67,6 +70,9 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         write(&bin, &document.bin)?;
         write(&args.output, document.to_gltf(&bin_name).as_bytes())?;
     }
+    if args.report {
+        print!("{}", report(&loaded, args.quality));
+    }
     let frames: usize = tracks.iter().map(|t| t.times.len()).max().unwrap_or(0);
     eprintln!(
         "wrote {}: {} nodes, {} triangles{}",
@@ -80,6 +86,48 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         }
     );
     Ok(Outcome::Clean)
+}
+
+/// The export's report: one line per shape (its place in the files, its geometry, what became
+/// of it), then the totals.
+fn report(loaded: &crate::world::Loaded, quality: u32) -> String {
+    let scene = &loaded.checked.scene;
+    let rows = regatta_gltf::report(&loaded.compiled, quality);
+    let mut out = String::new();
+    let (mut exported, mut triangles) = (0, 0);
+    for row in &rows {
+        let origin = scene.node(row.node).origin;
+        let file = origin.file.0 as usize;
+        let place = match loaded.checked.sources.get(file) {
+            Some(source) => {
+                let (line, col) =
+                    regatta_parser::diagnostic::line_col(&source.text, origin.span.start as usize);
+                format!("{}:{line}:{col}", source.name)
+            }
+            None => "?".to_owned(),
+        };
+        // The geometry node's own type (the graph calls every triangulated one "Mesh").
+        let own = scene.spec(row.node).field_index("geometry").is_some();
+        let geometry = match own.then(|| scene.child(row.node, "geometry")).flatten() {
+            Some(g) => scene.type_name(g).to_owned(),
+            None if !own || row.geometry.is_empty() => scene.type_name(row.node).to_owned(),
+            None => row.geometry.clone(),
+        };
+        match &row.status {
+            Ok(n) => {
+                exported += 1;
+                triangles += n;
+                out.push_str(&format!("exported {place} {geometry}: {n} triangles\n"));
+            }
+            Err(reason) => out.push_str(&format!("skipped {place} {geometry}: {reason}\n")),
+        }
+    }
+    out.push_str(&format!(
+        "{} shapes: {exported} exported, {} skipped; {triangles} triangles\n",
+        rows.len(),
+        rows.len() - exported
+    ));
+    out
 }
 
 fn write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {

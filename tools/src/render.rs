@@ -35,6 +35,101 @@ pub struct Args {
     /// What renders vision devices (`wgpu`: paper optics on the GPU, every robot in one batch).
     #[arg(long, value_enum, default_value_t)]
     renderer: crate::vision::RendererKind,
+    /// Instead of the robots' devices, the world seen from its first Viewpoint with the CPU
+    /// rasteriser, as OUT/viewpoint.png (what a glTF viewer should show of the export).
+    #[arg(long)]
+    viewpoint: bool,
+    /// With --viewpoint: every surface white and unlit on black, the world's silhouette (what
+    /// the browser test compares a glTF viewer's picture with).
+    #[arg(long, requires = "viewpoint")]
+    silhouette: bool,
+    /// The viewpoint picture's size in pixels (WIDTHxHEIGHT).
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    size: (usize, usize),
+}
+
+fn parse_size(text: &str) -> Result<(usize, usize), String> {
+    let (w, h) = text
+        .split_once('x')
+        .ok_or_else(|| format!("'{text}' is not WIDTHxHEIGHT"))?;
+    let parse = |v: &str| v.parse::<usize>().ok().filter(|&n| (1..=4096).contains(&n));
+    match (parse(w), parse(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(format!("'{text}': each side is 1 to 4096 pixels")),
+    }
+}
+
+/// The world from its first Viewpoint (VRML97: looking along −z with +y up, the field of view
+/// across the smaller side), rasterised as a robot's camera is, every robot at its start.
+fn render_viewpoint(args: &Args, compiled: &regatta_runtime::Compiled) -> anyhow::Result<()> {
+    use glam::{DMat3, DVec3};
+    let graph = &compiled.graph;
+    let viewpoint = graph
+        .viewpoint
+        .as_ref()
+        .context("the world has no Viewpoint")?;
+    let (width, height) = args.size;
+    // A camera looks along its +x with +y up and +z to the right.
+    let turn = regatta_runtime::geometry::Frame {
+        linear: DMat3::from_cols(DVec3::NEG_Z, DVec3::Y, DVec3::X),
+        translation: DVec3::ZERO,
+    };
+    // Square pixels: across the wider side the half-angle's tangent grows with the aspect.
+    let tan_small = (viewpoint.field_of_view / 2.0).tan();
+    let aspect = width as f64 / height as f64;
+    let horizontal = 2.0 * (tan_small * aspect.max(1.0)).atan();
+    let rig = regatta_runtime::compile::rig::CameraRig {
+        name: "viewpoint".to_owned(),
+        frame: viewpoint.frame.then(&turn),
+        width,
+        height,
+        field_of_view: horizontal,
+        near: 0.01,
+        far: 0.0,
+        noise: 0.0,
+        period: 0.0,
+        renderer: regatta_runtime::compile::rig::CameraRenderer::Raster,
+    };
+    let silhouette;
+    let graph = if args.silhouette {
+        let mut white = graph.clone();
+        for material in &mut white.materials {
+            *material = regatta_runtime::compile::graph::Material::UNLIT;
+        }
+        white.background = regatta_runtime::compile::graph::Background {
+            sky: [0.0; 3],
+            ground: None,
+        };
+        silhouette = white;
+        &silhouette
+    } else {
+        graph
+    };
+    // The robots' plan leaves out what no vision device can see (a floor under a linear
+    // camera): a viewer sees everything, and every light.
+    let mut plan = compiled.plan.clone();
+    plan.visible = (0..graph.primitives.len()).collect();
+    plan.lights = (0..graph.lights.len()).collect();
+    let plan = &plan;
+    let raster = regatta_runtime::render::raster::Rasterizer::new(graph, plan);
+    let poses = Poses {
+        poses: compiled.rig.robots.iter().map(|r| r.start).collect(),
+        floor_y: compiled.rig.robots.iter().map(|r| r.floor_y).collect(),
+    };
+    let mut camera = regatta_runtime::camera::Camera::new(&rig);
+    let mut image = regatta_runtime::camera::CameraImage::default();
+    let mut unused = regatta_runtime::sim::noise::Stream::new(0, 0, 0, 0);
+    camera.update_raster_world(&raster, plan, &poses, &mut unused, &mut image);
+    let picture = RgbImage::from_raw(width as u32, height as u32, image.rgb)
+        .context("the rasteriser gave no picture")?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let path = args.out.join("viewpoint.png");
+    picture
+        .save(&path)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    println!("{}", path.display());
+    Ok(())
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -50,6 +145,10 @@ const STRIP_HEIGHT: u32 = 36;
 pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
     let loaded = crate::world::load(&args.world, &args.options, color)?;
     let compiled = &loaded.compiled;
+    if args.viewpoint {
+        render_viewpoint(&args, compiled)?;
+        return Ok(Outcome::Clean);
+    }
     let robots: Vec<usize> = match &args.robot {
         Some(name) => vec![crate::world::robot_named(compiled, &args.world, name)?],
         None => (0..compiled.rig.robots.len()).collect(),

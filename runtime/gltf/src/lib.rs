@@ -7,7 +7,10 @@
 //! so no further axis change is made. Conversions that are not one-to-one are listed on
 //! [`export`] and in ARCHITECTURE.md.
 
+mod lines;
+pub mod report;
 pub mod tessellate;
+mod textures;
 
 use std::collections::{BTreeSet, HashMap};
 
@@ -18,6 +21,7 @@ use regatta_runtime::geometry::Frame;
 use regatta_runtime::Compiled;
 use serde_json::{json, Map, Value};
 
+pub use report::{report, Row};
 pub use tessellate::{segments, Triangles};
 
 /// Export settings.
@@ -92,7 +96,7 @@ impl Document {
 /// Exports a compiled world, with an animation when `tracks` is not empty.
 ///
 /// - Nodes: one per render-graph group (named by DEF, PROTO instance or type), per primitive,
-///   per light, for the Viewpoint, and per robot sensor (a child of its robot, with its
+///   per line or point set (glTF modes LINES and POINTS, unlit), per light, for the Viewpoint, and per robot sensor (a child of its robot, with its
 ///   parameters in `extras`). Robots are scene roots so that their animation is in world
 ///   coordinates.
 /// - Transforms that glTF's translation–rotation–scale cannot carry (a shear from
@@ -114,6 +118,7 @@ pub fn export(
     let mut builder = Builder::new(compiled, options);
     builder.groups();
     builder.primitives();
+    builder.lines();
     builder.lights();
     builder.viewpoint();
     builder.sensors();
@@ -204,6 +209,10 @@ struct Builder<'a> {
     extensions_used: BTreeSet<&'static str>,
     animations: Vec<Value>,
     triangle_count: usize,
+    /// Images, samplers and textures written so far.
+    written: Written,
+    /// glTF materials that map an image: their meshes carry TEXCOORD_0.
+    textured: std::collections::HashSet<usize>,
 }
 
 impl<'a> Builder<'a> {
@@ -230,6 +239,8 @@ impl<'a> Builder<'a> {
             extensions_used: BTreeSet::new(),
             animations: Vec::new(),
             triangle_count: 0,
+            written: Default::default(),
+            textured: Default::default(),
         }
     }
 
@@ -437,6 +448,16 @@ impl<'a> Builder<'a> {
             let color = self.accessor(&flat(colors), "VEC3", Some(34962), None);
             attributes.insert("COLOR_0".into(), json!(color));
         }
+        if self.textured.contains(&material) && triangles.uvs.len() == triangles.positions.len() {
+            // glTF's v runs down the image, VRML's t up it.
+            let uvs: Vec<f32> = triangles
+                .uvs
+                .iter()
+                .flat_map(|uv| [uv.x, 1.0 - uv.y])
+                .collect();
+            let uv = self.accessor(&uvs, "VEC2", Some(34962), None);
+            attributes.insert("TEXCOORD_0".into(), json!(uv));
+        }
         let indices = self.index_accessor(&triangles.indices);
         self.meshes.push(json!({
             "name": name,
@@ -477,6 +498,7 @@ impl<'a> Builder<'a> {
     ) -> usize {
         let width = match kind {
             "SCALAR" => 1,
+            "VEC2" => 2,
             "VEC3" => 3,
             _ => 4,
         };
@@ -530,7 +552,10 @@ impl<'a> Builder<'a> {
         if let Some(&m) = self.material_cache.get(&key) {
             return m;
         }
-        let base = if colored {
+        // VRML replaces the diffuse colour by a Color node's or an image's (glTF multiplies);
+        // Webots' PBRAppearance multiplies its map by its base colour, as glTF does.
+        let replaced = material.maps.base_color.is_some() && material.maps.pbr.is_none();
+        let base = if colored || replaced {
             [1.0; 3]
         } else {
             clamp01(material.diffuse)
@@ -580,8 +605,12 @@ impl<'a> Builder<'a> {
         if !extensions.is_empty() {
             out["extensions"] = Value::Object(extensions);
         }
+        self.maps(material, &mut out);
         self.materials.push(out);
         let m = self.materials.len() - 1;
+        if material.maps.textured() {
+            self.textured.insert(m);
+        }
         self.material_cache.insert(key, m);
         m
     }
@@ -877,6 +906,9 @@ impl<'a> Builder<'a> {
         put("accessors", self.accessors);
         put("bufferViews", self.buffer_views);
         put("cameras", self.cameras);
+        put("images", self.written.images);
+        put("samplers", self.written.samplers);
+        put("textures", self.written.textures);
         put("animations", self.animations);
         if !self.bin.is_empty() {
             root["buffers"] = json!([{ "byteLength": self.bin.len() }]);
@@ -894,6 +926,18 @@ impl<'a> Builder<'a> {
             triangle_count: self.triangle_count,
         })
     }
+}
+
+/// What the builder keeps of the textures it wrote.
+#[derive(Default)]
+pub(crate) struct Written {
+    pub(crate) images: Vec<Value>,
+    pub(crate) samplers: Vec<Value>,
+    pub(crate) textures: Vec<Value>,
+    /// Graph texture → glTF texture.
+    pub(crate) by_texture: HashMap<usize, usize>,
+    /// (repeatS, repeatT) → sampler.
+    pub(crate) by_wrap: HashMap<(bool, bool), usize>,
 }
 
 /// Blinn–Phong shininess (VRML's 0…1, exponent 128·s) to glTF perceptual roughness.

@@ -2,7 +2,7 @@
 //! analytic shapes tessellated at a chosen quality, IndexedFaceSet and ElevationGrid meshes
 //! given creaseAngle normals.
 
-use glam::{DVec3, Vec3};
+use glam::{DVec2, DVec3, Vec2, Vec3};
 use regatta_runtime::compile::graph::{Mesh, Shape};
 use regatta_runtime::geometry::Frame;
 
@@ -12,13 +12,16 @@ pub struct Triangles {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
     pub colors: Option<Vec<Vec3>>,
+    /// VRML97 texture coordinates (s, t), one per vertex.
+    pub uvs: Vec<Vec2>,
     pub indices: Vec<u32>,
 }
 
 impl Triangles {
-    fn vertex(&mut self, position: DVec3, normal: DVec3) -> u32 {
+    fn vertex(&mut self, position: DVec3, normal: DVec3, uv: [f64; 2]) -> u32 {
         self.positions.push(position.as_vec3());
         self.normals.push(unit_or_up(normal).as_vec3());
+        self.uvs.push(DVec2::from_array(uv).as_vec2());
         (self.positions.len() - 1) as u32
     }
 
@@ -67,6 +70,25 @@ fn around(k: usize, n: usize) -> (f64, f64) {
     (libm::sin(angle), libm::cos(angle))
 }
 
+/// The texture s of step `k` of `n` around the y axis: VRML97 starts at the back (−z) and
+/// goes counter-clockwise seen from above; step 0 is on +z, half way. Past 1 on purpose: a
+/// repeating sampler wraps it, and the seam needs no vertex of its own.
+fn around_s(k: usize, n: usize) -> f64 {
+    0.5 + k as f64 / n as f64
+}
+
+/// The directions a Box face's s and t run along (VRML97 6.4).
+fn box_face_axes(axis: usize, sign: f64) -> (DVec3, DVec3) {
+    match (axis, sign > 0.0) {
+        (0, true) => (DVec3::NEG_Z, DVec3::Y),
+        (0, false) => (DVec3::Z, DVec3::Y),
+        (1, true) => (DVec3::X, DVec3::NEG_Z),
+        (1, false) => (DVec3::X, DVec3::Z),
+        (_, true) => (DVec3::X, DVec3::Y),
+        (_, false) => (DVec3::NEG_X, DVec3::Y),
+    }
+}
+
 /// Tessellates an analytic shape, or gives a mesh creaseAngle normals.
 pub fn triangles(shape: &Shape, meshes: &[Mesh], quality: u32) -> Triangles {
     let n = segments(quality);
@@ -85,8 +107,15 @@ pub fn triangles(shape: &Shape, meshes: &[Mesh], quality: u32) -> Triangles {
                         p[va] = sv * half[va];
                         p
                     };
+                    // VRML97 6.4: each face shows the whole image, upright seen from
+                    // outside (the top's seen from the front, the bottom's from behind).
+                    let (s_dir, t_dir) = box_face_axes(axis, sign);
+                    let uv = |p: DVec3| {
+                        let along = |d: DVec3| (p.dot(d) / half.dot(d.abs()) + 1.0) / 2.0;
+                        [along(s_dir), along(t_dir)]
+                    };
                     let quad = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-                        .map(|(su, sv)| out.vertex(corner(su, sv), normal));
+                        .map(|(su, sv)| out.vertex(corner(su, sv), normal, uv(corner(su, sv))));
                     out.triangle(quad[0], quad[1], quad[2]);
                     out.triangle(quad[0], quad[2], quad[3]);
                 }
@@ -105,8 +134,11 @@ pub fn triangles(shape: &Shape, meshes: &[Mesh], quality: u32) -> Triangles {
                     .map(|k| {
                         let (s, c) = around(k, n);
                         let normal = DVec3::new(s, 0.0, c);
-                        let low = out.vertex(DVec3::new(radius * s, -half, radius * c), normal);
-                        let high = out.vertex(DVec3::new(radius * s, half, radius * c), normal);
+                        let u = around_s(k, n);
+                        let low =
+                            out.vertex(DVec3::new(radius * s, -half, radius * c), normal, [u, 0.0]);
+                        let high =
+                            out.vertex(DVec3::new(radius * s, half, radius * c), normal, [u, 1.0]);
                         (low, high)
                     })
                     .collect();
@@ -135,9 +167,22 @@ pub fn triangles(shape: &Shape, meshes: &[Mesh], quality: u32) -> Triangles {
                     let (s1, c1) = around(k + 1, n);
                     let (sm, cm) = around(2 * k + 1, 2 * n);
                     let slope = |s: f64, c: f64| DVec3::new(s * height, radius, c * height);
-                    let a = out.vertex(DVec3::new(radius * s0, -half, radius * c0), slope(s0, c0));
-                    let b = out.vertex(DVec3::new(radius * s1, -half, radius * c1), slope(s1, c1));
-                    let apex = out.vertex(DVec3::new(0.0, half, 0.0), slope(sm, cm));
+                    let (u0, u1) = (around_s(k, n), around_s(k + 1, n));
+                    let a = out.vertex(
+                        DVec3::new(radius * s0, -half, radius * c0),
+                        slope(s0, c0),
+                        [u0, 0.0],
+                    );
+                    let b = out.vertex(
+                        DVec3::new(radius * s1, -half, radius * c1),
+                        slope(s1, c1),
+                        [u1, 0.0],
+                    );
+                    let apex = out.vertex(
+                        DVec3::new(0.0, half, 0.0),
+                        slope(sm, cm),
+                        [(u0 + u1) / 2.0, 1.0],
+                    );
                     out.triangle(a, b, apex);
                 }
             }
@@ -155,7 +200,8 @@ pub fn triangles(shape: &Shape, meshes: &[Mesh], quality: u32) -> Triangles {
                         .map(|k| {
                             let (s, c) = around(k, n);
                             let unit = DVec3::new(sp * s, cp, sp * c);
-                            out.vertex(unit * radius, unit)
+                            let t = 1.0 - i as f64 / rings as f64;
+                            out.vertex(unit * radius, unit, [around_s(k, n), t])
                         })
                         .collect()
                 })
@@ -181,11 +227,13 @@ pub fn triangles(shape: &Shape, meshes: &[Mesh], quality: u32) -> Triangles {
 /// A flat disk of `radius` at height `y`, facing `up` (±1).
 fn disk(out: &mut Triangles, radius: f64, y: f64, up: f64, n: usize) {
     let normal = DVec3::Y * up;
-    let center = out.vertex(DVec3::new(0.0, y, 0.0), normal);
+    // VRML97: a cap shows the image's inscribed circle, upright seen from outside.
+    let uv = |s: f64, c: f64| [(s + 1.0) / 2.0, (1.0 - up * c) / 2.0];
+    let center = out.vertex(DVec3::new(0.0, y, 0.0), normal, [0.5, 0.5]);
     let rim: Vec<u32> = (0..=n)
         .map(|k| {
             let (s, c) = around(k, n);
-            out.vertex(DVec3::new(radius * s, y, radius * c), normal)
+            out.vertex(DVec3::new(radius * s, y, radius * c), normal, uv(s, c))
         })
         .collect();
     for k in 0..n {
@@ -244,6 +292,14 @@ pub fn mesh_triangles(mesh: &Mesh) -> Triangles {
         colors: (mesh.corner_colors.is_some() || mesh.triangle_colors.is_some()).then(Vec::new),
         ..Triangles::default()
     };
+    let generated = generated_tex_coords(mesh);
+    let uv_of = |triangle: usize, corner: usize| -> Vec2 {
+        let st = match &mesh.tex_coords {
+            Some(given) => given[triangle][corner],
+            None => generated(mesh.triangles[triangle][corner]),
+        };
+        DVec2::from_array(st).as_vec2()
+    };
     // Output vertices made at each point, chained: head per point, next per vertex.
     let mut head = vec![u32::MAX; positions.len()];
     let mut next: Vec<u32> = Vec::new();
@@ -260,13 +316,17 @@ pub fn mesh_triangles(mesh: &Mesh) -> Triangles {
             }
             let normal = unit_or_up(if sum == DVec3::ZERO { own } else { sum }).as_vec3();
             let color = color_of(index, corner).map(|c| DVec3::from_array(c).as_vec3());
+            let uv = uv_of(index, corner);
             let mut found = head[point as usize];
             while found != u32::MAX {
                 let same_color = match (&out.colors, color) {
                     (Some(colors), Some(c)) => colors[found as usize] == c,
                     _ => true,
                 };
-                if out.normals[found as usize] == normal && same_color {
+                if out.normals[found as usize] == normal
+                    && same_color
+                    && out.uvs[found as usize] == uv
+                {
                     break;
                 }
                 found = next[found as usize];
@@ -275,6 +335,7 @@ pub fn mesh_triangles(mesh: &Mesh) -> Triangles {
                 found = out.positions.len() as u32;
                 out.positions.push(positions[point as usize].as_vec3());
                 out.normals.push(normal);
+                out.uvs.push(uv);
                 if let (Some(colors), Some(c)) = (&mut out.colors, color) {
                     colors.push(c);
                 }
@@ -286,6 +347,32 @@ pub fn mesh_triangles(mesh: &Mesh) -> Triangles {
         out.indices.extend(corners);
     }
     out
+}
+
+/// VRML97 6.23's default texture coordinates of a face set: s along the longest side of the
+/// bounding box, t along the second longest, both in units of the longest, from its minimum.
+fn generated_tex_coords(mesh: &Mesh) -> impl Fn(u32) -> [f64; 2] + '_ {
+    let (lo, hi) = mesh.used_positions().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(p), hi.max(p)),
+    );
+    let size = (hi - lo).max(DVec3::ZERO);
+    let mut axes = [0usize, 1, 2];
+    // Longest first; ties keep x before y before z, as VRML97 asks.
+    axes.sort_by(|&a, &b| size[b].total_cmp(&size[a]));
+    let (s_axis, t_axis) = (axes[0], axes[1]);
+    let scale = if size[s_axis] > 0.0 {
+        1.0 / size[s_axis]
+    } else {
+        0.0
+    };
+    move |i: u32| {
+        let p = mesh.positions[i as usize];
+        [
+            (p[s_axis] - lo[s_axis]) * scale,
+            (p[t_axis] - lo[t_axis]) * scale,
+        ]
+    }
 }
 
 #[cfg(test)]

@@ -2,8 +2,9 @@
 //! renderer, the wgpu backend and the glTF exporter all read it; none of their details live
 //! here.
 //!
-//! Box, Cylinder, Cone and Sphere stay analytic; IndexedFaceSet and ElevationGrid are
-//! triangulated (concave and non-planar faces included). Static parts are kept apart from
+//! Box, Cylinder, Cone and Sphere stay analytic; IndexedFaceSet, ElevationGrid, Extrusion,
+//! Plane, Capsule and mesh files are triangulated (concave and non-planar faces included).
+//! Lines and points, which no renderer draws, are kept apart for exporters. Static parts are kept apart from
 //! robot-attached parts (whose frames are relative to their robot) and indexed by a BVH.
 
 use glam::{DVec2, DVec3};
@@ -172,15 +173,83 @@ pub struct Mesh {
     /// Whether back faces are culled (`solid TRUE`).
     pub solid: bool,
     pub crease_angle: f64,
+    /// Per-corner texture coordinates (s, t), parallel to `triangles`, when the file gives
+    /// them or its node defines them (a grid, a plane); exporters generate the others.
+    pub tex_coords: Option<Vec<[[f64; 2]; 3]>>,
 }
 
 impl Mesh {
+    /// Sets per-corner texture coordinates from one (s, t) per position.
+    pub fn tex_coords_per_point(&mut self, points: &[[f64; 2]]) {
+        let at = |i: u32| points.get(i as usize).copied().unwrap_or([0.0; 2]);
+        self.tex_coords = Some(self.triangles.iter().map(|t| t.map(at)).collect());
+    }
+
     /// The positions triangles refer to (points no face uses are not geometry), with repeats.
     pub fn used_positions(&self) -> impl Iterator<Item = DVec3> + '_ {
         self.triangles
             .iter()
             .flatten()
             .map(|&i| self.positions[i as usize])
+    }
+}
+
+/// An image a texture shows, as the file holds it (PNG or JPEG), or converted to PNG (a
+/// PixelTexture, or another format the `image` crate reads).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    /// The url, or "PixelTexture".
+    pub name: String,
+    pub mime: &'static str,
+    pub bytes: std::sync::Arc<[u8]>,
+    pub repeat_s: bool,
+    pub repeat_t: bool,
+}
+
+/// VRML97's TextureTransform: texture coordinates are translated, then turned and scaled
+/// about `center`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureTransform {
+    pub center: [f64; 2],
+    pub rotation: f64,
+    pub scale: [f64; 2],
+    pub translation: [f64; 2],
+}
+
+/// The images a material maps (indices into [`RenderGraph::textures`]) and Webots' PBR
+/// parameters. Only exporters read them; the renderers use the material's colours.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Maps {
+    pub base_color: Option<usize>,
+    /// A PBRAppearance's roughness and metalness maps combined as glTF wants them (roughness
+    /// in green, metalness in blue).
+    pub metallic_roughness: Option<usize>,
+    pub normal: Option<usize>,
+    pub occlusion: Option<usize>,
+    pub emissive: Option<usize>,
+    pub transform: Option<TextureTransform>,
+    /// A PBRAppearance's (roughness, metalness), kept as written.
+    pub pbr: Option<(f64, f64)>,
+}
+
+impl Maps {
+    pub const NONE: Maps = Maps {
+        base_color: None,
+        metallic_roughness: None,
+        normal: None,
+        occlusion: None,
+        emissive: None,
+        transform: None,
+        pbr: None,
+    };
+
+    /// Whether any image is mapped.
+    pub fn textured(&self) -> bool {
+        self.base_color.is_some()
+            || self.metallic_roughness.is_some()
+            || self.normal.is_some()
+            || self.occlusion.is_some()
+            || self.emissive.is_some()
     }
 }
 
@@ -196,6 +265,8 @@ pub struct Material {
     pub transparency: f64,
     pub ir_reflectance: f64,
     pub unlit: bool,
+    /// Textures and PBR parameters, for exporters.
+    pub maps: Maps,
 }
 
 impl Material {
@@ -208,7 +279,36 @@ impl Material {
         transparency: 0.0,
         ir_reflectance: 1.0,
         unlit: true,
+        maps: Maps::NONE,
     };
+}
+
+/// Lines or points (IndexedLineSet, PointSet): exported, never drawn by the simulator's
+/// renderers (VRML97 lines and points have no area to see).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LineSet {
+    /// In the frame below; for lines, two per segment.
+    pub positions: Vec<DVec3>,
+    /// Whether `positions` are segment ends in pairs (else points).
+    pub lines: bool,
+    /// One colour per position, when the file gives colours.
+    pub colors: Option<Vec<[f64; 3]>>,
+    pub frame: Frame,
+    pub material: usize,
+    pub owner: Owner,
+    /// The Shape node it comes from.
+    pub node: NodeId,
+    pub group: Option<GroupId>,
+}
+
+/// A Shape whose geometry is not in the graph, and why (for `regatta gltf --report`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Skipped {
+    /// The Shape (or CadShape) node.
+    pub node: NodeId,
+    /// Its geometry's type, or "" when it has none.
+    pub geometry: String,
+    pub reason: String,
 }
 
 /// Who a primitive or light moves with.
@@ -314,6 +414,12 @@ pub struct RenderGraph {
     pub meshes: Vec<Mesh>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    /// Lines and points, for exporters.
+    pub lines: Vec<LineSet>,
+    /// The images materials map, each file once.
+    pub textures: Vec<Texture>,
+    /// Shapes left out, with the reason, for exporters' reports.
+    pub skipped: Vec<Skipped>,
     pub groups: Vec<Group>,
     pub viewpoint: Option<Viewpoint>,
     pub background: Background,

@@ -6,11 +6,15 @@
 //! frames relative to it, and its devices go to the rig.
 
 pub mod drive;
+mod exported;
 pub mod graph;
+pub mod meshfile;
 pub mod network;
 pub mod plan;
 pub mod rig;
 pub mod shapes;
+pub mod solids;
+mod textures;
 pub mod triangulate;
 
 use std::sync::Arc;
@@ -29,7 +33,7 @@ use rig::{
     filter_set, CameraRenderer, CameraRig, DistanceSensorRig, LightSensorRig, LinearCameraRig,
     Optics, PanoramicRig, Pose2, RobotRig, SensorRig, TurretRig,
 };
-use shapes::{background_of, material_of, shape_of};
+use shapes::{background_of, material_of, shape_of, Geometry};
 
 /// World-wide settings the runtime needs.
 #[derive(Clone, Debug, PartialEq)]
@@ -79,6 +83,9 @@ pub fn compile(scene: &Scene) -> Compiled {
             meshes: Vec::new(),
             materials: Vec::new(),
             lights: Vec::new(),
+            lines: Vec::new(),
+            textures: Vec::new(),
+            skipped: Vec::new(),
             groups: Vec::new(),
             viewpoint: None,
             background: background_of(scene),
@@ -88,6 +95,7 @@ pub fn compile(scene: &Scene) -> Compiled {
         rig: SensorRig::default(),
         warnings: Vec::new(),
         materials: Vec::new(),
+        texture_cache: Default::default(),
         landmarks: Vec::new(),
         group: None,
         tables: Shared::default(),
@@ -146,6 +154,8 @@ struct Compiler<'s> {
     warnings: Vec<String>,
     /// Material nodes already converted, to share entries.
     materials: Vec<(Option<NodeId>, usize)>,
+    /// Texture nodes already read.
+    texture_cache: textures::TextureCache,
     landmarks: Vec<Landmark>,
     /// The group the walk is inside.
     group: Option<GroupId>,
@@ -240,11 +250,16 @@ impl Compiler<'_> {
         let scene = self.scene;
         let axes = scene.node(node).axes;
         match scene.type_name(node) {
-            "Transform" | "Solid" => {
+            "Transform" | "Solid" | "Pose" => {
+                let spec = scene.spec(node);
                 let local = Frame::vrml(
                     DVec3::from_array(scene.vec3(node, "translation")),
                     scene.rotation(node, "rotation"),
-                    DVec3::from_array(scene.vec3(node, "scale")),
+                    if spec.field_index("scale").is_some() {
+                        DVec3::from_array(scene.vec3(node, "scale"))
+                    } else {
+                        DVec3::ONE
+                    },
                     if scene.spec(node).field_index("scaleOrientation").is_some() {
                         scene.rotation(node, "scaleOrientation")
                     } else {
@@ -286,13 +301,14 @@ impl Compiler<'_> {
             "Shape" => {
                 // Webots' FLU geometry: cylinders, cones and elevation grids along z.
                 let frame = match scene.child(node, "geometry").map(|g| scene.type_name(g)) {
-                    Some("Cylinder" | "Cone" | "ElevationGrid") => {
+                    Some("Cylinder" | "Cone" | "ElevationGrid" | "Capsule" | "Plane") => {
                         turned(frame, flu_to_regatta(scene, axes.body))
                     }
                     _ => *frame,
                 };
                 self.shape(node, &frame, owner)
             }
+            "CadShape" => self.cad_shape(node, frame, owner),
             "PointLight" | "DirectionalLight" | "SpotLight" => self.light(node, frame, owner),
             "Viewpoint" if owner == Owner::Static && self.graph.viewpoint.is_none() => {
                 let mut local = Frame::vrml(
@@ -339,6 +355,17 @@ impl Compiler<'_> {
                         scene.type_name(node)
                     )),
                 }
+                // The shapes a device carries (a Webots camera's housing) are seen.
+                if scene.spec(node).field_index("children").is_some() {
+                    self.open_node(node, frame, owner, depth);
+                }
+            }
+            // Nodes kept only for what they hold, and the other devices' shapes (an LED's).
+            _ if scene.spec(node).open
+                || (scene.spec(node).classes.iter().any(|c| c == "device")
+                    && scene.spec(node).field_index("children").is_some()) =>
+            {
+                self.open_node(node, frame, owner, depth)
             }
             _ => {}
         }
@@ -365,15 +392,41 @@ impl Compiler<'_> {
     }
 
     fn material(&mut self, appearance: Option<NodeId>) -> usize {
-        // A VRML Appearance shares its Material; a PBRAppearance is its own material.
+        // A VRML Appearance shares its Material, unless it maps an image; a PBRAppearance is
+        // its own material.
         let key = appearance.and_then(|a| match self.scene.type_name(a) {
             "PBRAppearance" => Some(a),
+            _ if textures::has_texture(self.scene, a) => Some(a),
             _ => self.scene.child(a, "material"),
         });
         if let Some(&(_, index)) = self.materials.iter().find(|(k, _)| *k == key) {
             return index;
         }
-        let material: Material = material_of(self.scene, appearance);
+        let mut material: Material = material_of(self.scene, appearance);
+        if let Some(appearance) = appearance {
+            let mut maps = textures::maps_of(
+                self.scene,
+                appearance,
+                &mut self.texture_cache,
+                &mut self.graph.textures,
+                &mut self.warnings,
+            );
+            // A texture without a Material is lit as a white one is (VRML97 6.4).
+            if maps.base_color.is_some() && material.unlit {
+                material = Material {
+                    diffuse: [1.0; 3],
+                    ambient_intensity: 0.2,
+                    specular: [0.0; 3],
+                    emissive: [0.0; 3],
+                    shininess: 0.2,
+                    transparency: 0.0,
+                    ir_reflectance: 1.0,
+                    unlit: false,
+                    maps: graph::Maps::NONE,
+                };
+            }
+            std::mem::swap(&mut material.maps, &mut maps);
+        }
         self.graph.materials.push(material);
         let index = self.graph.materials.len() - 1;
         self.materials.push((key, index));
@@ -383,17 +436,48 @@ impl Compiler<'_> {
     fn shape(&mut self, node: NodeId, frame: &Frame, owner: Owner) {
         let scene = self.scene;
         let Some(geometry) = scene.child(node, "geometry") else {
+            self.skip(node, "", "the Shape has no geometry".to_owned());
             return;
         };
-        let Some(shape) = shape_of(scene, geometry, &mut self.graph.meshes) else {
-            return;
+        let shape = match shape_of(scene, geometry, &mut self.graph.meshes) {
+            Ok(Geometry::Shape(shape)) => shape,
+            Ok(Geometry::Lines(mut lines)) => {
+                lines.frame = *frame;
+                lines.material = self.material(scene.child(node, "appearance"));
+                lines.owner = owner;
+                lines.node = node;
+                lines.group = self.group;
+                self.graph.lines.push(lines);
+                return;
+            }
+            Err(reason) => {
+                self.skip(node, scene.type_name(geometry), reason);
+                return;
+            }
         };
+        let material = self.material(scene.child(node, "appearance"));
+        self.place(node, shape, material, frame, owner);
+    }
+
+    /// Adds a primitive for `shape` at `frame`.
+    pub(super) fn place(
+        &mut self,
+        node: NodeId,
+        shape: graph::Shape,
+        material: usize,
+        frame: &Frame,
+        owner: Owner,
+    ) {
         let Some(inverse) = frame.inverse() else {
             self.warnings
                 .push("a shape with a degenerate (zero-scale) transform is ignored".to_owned());
+            self.skip(
+                node,
+                shape.name(),
+                "its transform has a zero scale".to_owned(),
+            );
             return;
         };
-        let material = self.material(scene.child(node, "appearance"));
         let bounds = shape.bounds_under(frame, &self.graph.meshes);
         let upright = is_upright(&shape, frame);
         self.graph.primitives.push(Primitive {

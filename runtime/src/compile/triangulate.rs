@@ -35,7 +35,22 @@ pub fn indexed_face_set(scene: &Scene, node: NodeId) -> Mesh {
         corner_colors: (!colors.is_empty() && per_vertex).then(Vec::new),
         solid: scene.bool(node, "solid"),
         crease_angle: scene.float(node, "creaseAngle"),
+        tex_coords: None,
     };
+    let tex_points: Vec<[f64; 2]> = match scene
+        .child(node, "texCoord")
+        .map(|c| scene.field(c, "point"))
+    {
+        Some(Value::Vec2s(points)) => points.clone(),
+        _ => Vec::new(),
+    };
+    let tex_index = match scene.field(node, "texCoordIndex") {
+        Value::Ints(index) if !index.is_empty() => index.as_slice(),
+        _ => &[],
+    };
+    if !tex_points.is_empty() {
+        mesh.tex_coords = Some(Vec::new());
+    }
     let mut face: Vec<u32> = Vec::new();
     let mut face_number = 0usize;
     let mut corner = 0usize;
@@ -60,6 +75,25 @@ pub fn indexed_face_set(scene: &Scene, node: NodeId) -> Mesh {
                     &valid,
                 );
                 triangle_colors.extend(std::iter::repeat_n(color, mesh.triangles.len() - before));
+            }
+            if let Some(tex_coords) = &mut mesh.tex_coords {
+                // Given texture coordinates: by texCoordIndex corner for corner, else by
+                // coordIndex (VRML97 6.23).
+                let corners = &face[..];
+                let coord_of = |point: u32| {
+                    let slot = corners.iter().position(|&p| p == point).unwrap_or(0);
+                    let index = if tex_index.is_empty() {
+                        point as usize
+                    } else {
+                        tex_index
+                            .get(start_corner + slot)
+                            .map_or(usize::MAX, |&c| c.max(0) as usize)
+                    };
+                    tex_points.get(index).copied().unwrap_or([0.0; 2])
+                };
+                for triangle in &mesh.triangles[before..] {
+                    tex_coords.push(triangle.map(coord_of));
+                }
             }
             if let Some(corner_colors) = &mut mesh.corner_colors {
                 let corners = &face[..];
@@ -220,7 +254,31 @@ pub fn elevation_grid(scene: &Scene, node: NodeId) -> Mesh {
             }
         }
     }
+    mesh.tex_coords_per_point(&grid_tex_coords(scene, node, nx, nz));
     mesh
+}
+
+/// An elevation grid's texture coordinates, one per point: its TextureCoordinate's, else
+/// (VRML97 6.15) 0 to 1 from the first point to the last along each axis.
+pub fn grid_tex_coords(scene: &Scene, node: NodeId, nx: usize, nz: usize) -> Vec<[f64; 2]> {
+    if let Some(Value::Vec2s(points)) = scene
+        .child(node, "texCoord")
+        .map(|c| scene.field(c, "point"))
+    {
+        if points.len() >= nx * nz {
+            return points[..nx * nz].to_vec();
+        }
+    }
+    let mut out = Vec::with_capacity(nx * nz);
+    for j in 0..nz {
+        for i in 0..nx {
+            out.push([
+                i as f64 / (nx - 1).max(1) as f64,
+                j as f64 / (nz - 1).max(1) as f64,
+            ]);
+        }
+    }
+    out
 }
 
 #[cfg(test)]

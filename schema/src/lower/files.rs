@@ -291,6 +291,9 @@ impl<'c> Lowerer<'c> {
             // lenient mode, as Webots skips it: its nodes are then unknown, and a robot among
             // them is what `run` refuses to simulate. Nothing refused is read in either mode.
             (_, UrlUse::ExternProto) => self.strict_or_warn(file, diagnostic),
+            (Refusal::Missing | Refusal::Network { .. } | Refusal::Empty, UrlUse::Asset(_)) => {
+                self.strict_or_warn(file, diagnostic)
+            }
             (Refusal::Missing | Refusal::Network { .. }, UrlUse::Image(_)) => {
                 let mut diagnostic = diagnostic;
                 diagnostic.severity = regatta_parser::Severity::Warning;

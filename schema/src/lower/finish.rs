@@ -75,6 +75,7 @@ impl<'c> Lowerer<'c> {
             files: self.sources.iter().map(|s| s.name.clone()).collect(),
             up_axis: self.up_axis,
             objects: self.objects,
+            assets: std::mem::take(&mut self.assets),
         };
         Checked {
             strict: self.options.strict,
@@ -99,6 +100,7 @@ impl<'c> Lowerer<'c> {
             files: Vec::new(),
             up_axis: self.up_axis,
             objects: self.objects,
+            assets: Vec::new(),
         };
         let robots: Vec<NodeId> = scene
             .walk()

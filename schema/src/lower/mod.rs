@@ -19,13 +19,15 @@
 //! This file holds the entry points. The lowerer's state is `state.rs`; each of its jobs is a
 //! file: `nodes.rs` (DEF/USE, built-in nodes), `fields.rs` (field values, IS), `protos.rs`
 //! (PROTO instances), `declared.rs` (PROTO declarations where they stand), `templates.rs`,
-//! `files.rs` (urls, EXTERNPROTO, Inline), `routes.rs`, `axes.rs`, `limits.rs`, `report.rs` (diagnostics and blame), `finish.rs`; what a check is
+//! `files.rs` (urls, EXTERNPROTO, Inline), `routes.rs`, `assets.rs` (mesh and image files),
+//! `axes.rs`, `limits.rs`, `report.rs` (diagnostics and blame), `finish.rs`; what a check is
 //! given and returns are `options.rs` and `checked.rs`.
 
 use std::path::{Path, PathBuf};
 
 use regatta_parser::SourceText;
 
+mod assets;
 mod axes;
 mod checked;
 mod declared;

@@ -180,6 +180,9 @@ impl<'c> Lowerer<'c> {
                 let id = if let Some(proto) = proto {
                     self.instantiate(&proto, node, items, scope)?
                 } else if let Some(spec) = self.catalogue().lookup(&type_name.text) {
+                    if self.catalogue().spec(spec).open {
+                        self.unsimulated_node(type_name, items, place, scope);
+                    }
                     self.lower_builtin(spec, node, items, scope)?
                 } else {
                     let url = self.unresolved.get(&type_name.text).cloned();
@@ -307,6 +310,44 @@ impl<'c> Lowerer<'c> {
         self.strict_or_warn(scope.file, diagnostic.with_code("unknown-node"));
     }
 
+    /// A Webots node the catalogue keeps only for what it holds (`open`): said to be not
+    /// simulated (an error in strict mode, as an unknown node is); at the top of a world, one
+    /// that names a controller is a robot regatta does not build.
+    fn unsimulated_node(
+        &mut self,
+        type_name: &syntax::Ident,
+        items: &[BodyItem],
+        place: &str,
+        scope: &Scope,
+    ) {
+        let name = &type_name.text;
+        let sets_controller = items
+            .iter()
+            .any(|item| matches!(item, BodyItem::Field(f) if f.name.text == "controller"));
+        if place == "the world" && sets_controller {
+            self.unbuilt_robots.push(UnbuiltRobot {
+                type_name: name.clone(),
+                url: None,
+                file: scope.file,
+                span: type_name.span,
+            });
+        }
+        let mut diagnostic = Diagnostic::error(
+            type_name.span,
+            format!("'{name}' is read but not simulated by regatta"),
+        )
+        .with_label("not simulated")
+        .with_code("unsimulated-node");
+        if let Some(reason) = crate::webots::unsimulated(name) {
+            diagnostic = diagnostic.with_note(format!("{name}: {reason}"));
+        }
+        self.strict_or_warn(
+            scope.file,
+            diagnostic
+                .with_note("the shapes it holds are kept in place (the glTF export shows them)"),
+        );
+    }
+
     pub(super) fn lower_builtin(
         &mut self,
         spec_id: SpecId,
@@ -337,6 +378,11 @@ impl<'c> Lowerer<'c> {
                             if !matches!(field.value, syntax::FieldValue::Is(_)) {
                                 self.strict_or_warn(scope.file, node_event_with_value(&field.name, access, &spec.name));
                             }
+                            continue;
+                        }
+                        if spec.open {
+                            // Read, not typed: DEFs inside are skipped, as an unknown node's.
+                            skip_defs(&field.value, scope);
                             continue;
                         }
                         let mut diagnostic = Diagnostic::error(field.name.span, format!("{} '{}' field in {} node.", self.unknown(), field.name.text, spec.name))
@@ -406,14 +452,28 @@ impl<'c> Lowerer<'c> {
         if spec.name == "Inline" {
             return self.inline(&urls, node, scope, origin);
         }
-        // Other files are named, not read (textures): each must still lie inside the root.
+        // Meshes and images are read for the exporters (the first url that can be); other
+        // files are named, not read: each must still lie inside the root.
+        let reads = super::assets::reads_asset(&spec.name);
+        let mut asset = None;
         for (_, url, file, span) in &urls {
-            if let Err(refusal) = self.resolve_url(*file, url) {
-                self.refuse(*file, *span, url, refusal, UrlUse::Image(&spec.name));
+            match self.resolve_url(*file, url) {
+                Ok(path) if reads && asset.is_none() => {
+                    asset = self.read_asset(&path, url, *file, *span);
+                }
+                Ok(_) => {}
+                Err(refusal) => {
+                    let user = if reads {
+                        UrlUse::Asset(&spec.name)
+                    } else {
+                        UrlUse::Image(&spec.name)
+                    };
+                    self.refuse(*file, *span, url, refusal, user);
+                }
             }
         }
         let fields = fields.finish(origin, &mut self.shared_fields);
-        self.alloc(
+        let id = self.alloc(
             SceneNode {
                 spec: spec_id,
                 fields,
@@ -425,7 +485,12 @@ impl<'c> Lowerer<'c> {
             },
             scope.file,
             node.span,
-        )
+        )?;
+        if let Some(mut asset) = asset {
+            asset.node = id;
+            self.assets.push(asset);
+        }
+        Some(id)
     }
 
     /// Where a field's value was written: the file, each string's span, and the field's span.
@@ -469,5 +534,25 @@ fn string_spans(value: &syntax::FieldValue) -> Vec<Span> {
             })
             .collect(),
         _ => Vec::new(),
+    }
+}
+
+/// Records the DEFs of the nodes inside a value that is not typed, so that a USE of them says
+/// they were skipped.
+fn skip_defs(value: &syntax::FieldValue, scope: &mut Scope) {
+    if let syntax::FieldValue::Value(syntax::Value {
+        items: Items::Atoms(atoms),
+        ..
+    }) = value
+    {
+        for atom in atoms {
+            if let Atom::Node(child) = atom {
+                syntax::walk_node(child, &mut |inner| {
+                    if let Some(def) = &inner.def {
+                        scope.skipped_defs.insert(def.text.clone());
+                    }
+                });
+            }
+        }
     }
 }

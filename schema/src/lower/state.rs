@@ -94,6 +94,8 @@ pub(super) enum UrlUse<'a> {
     ExternProto,
     /// A file a node names but regatta does not read (an ImageTexture's image).
     Image(&'a str),
+    /// A file the exporters read (a Mesh's model).
+    Asset(&'a str),
 }
 
 impl UrlUse<'_> {
@@ -101,7 +103,7 @@ impl UrlUse<'_> {
         match self {
             UrlUse::Inline => "Inline",
             UrlUse::ExternProto => "EXTERNPROTO",
-            UrlUse::Image(node) => node,
+            UrlUse::Image(node) | UrlUse::Asset(node) => node,
         }
     }
 
@@ -109,7 +111,9 @@ impl UrlUse<'_> {
         match self {
             UrlUse::Inline => "the Inline stays empty",
             UrlUse::ExternProto => "its PROTO stays unknown",
-            UrlUse::Image(_) => "the image is not used (regatta does not read images yet)",
+            UrlUse::Image(_) => "the image is not used",
+            UrlUse::Asset("ImageTexture") => "the texture is not exported",
+            UrlUse::Asset(_) => "the shape is not exported",
         }
     }
 }
@@ -199,6 +203,10 @@ pub(super) struct Lowerer<'c> {
     pub(super) world_seed: i64,
     /// The world's Webots version (its header), which templates see in `context`.
     pub(super) webots_version: String,
+    /// Mesh and image files read so far, by node.
+    pub(super) assets: Vec<crate::scene::Asset>,
+    /// Each file read for an asset, once, by canonical path (`Err`: why it was not).
+    pub(super) asset_files: HashMap<PathBuf, Result<std::sync::Arc<[u8]>, String>>,
 }
 
 impl<'c> Lowerer<'c> {
@@ -250,6 +258,8 @@ impl<'c> Lowerer<'c> {
             template_instances: 0,
             world_seed: 0,
             webots_version: String::new(),
+            assets: Vec::new(),
+            asset_files: HashMap::new(),
         }
     }
 
