@@ -331,7 +331,9 @@ fn apply(
         }
         Control::Step(n) => {
             pace.paused = false;
-            pace.stepping = Some(n);
+            // Steps asked while others are still pending add up: two clicks are two steps,
+            // however busy the loop was when they arrived.
+            pace.stepping = Some(pace.stepping.unwrap_or(0).saturating_add(n));
         }
         Control::Speed(speed) => {
             pace.speed = speed;

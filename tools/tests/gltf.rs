@@ -226,3 +226,33 @@ fn the_report_lists_every_shape_with_what_became_of_it() {
         "{report}"
     );
 }
+
+/// Issue 40: with `--proto-path` at a Webots installation, a world made of its PROTOs exports
+/// whole (`../shared/webots` stands where an installation would: the API tests' `SolidProto`).
+#[test]
+fn protos_from_a_webots_installation_export_whole() {
+    let webots = common::root().join("../shared/webots");
+    if !webots.join("tests/api/protos/SolidProto.proto").is_file() {
+        eprintln!("skipped: ../shared/webots is not there");
+        return;
+    }
+    let out = common::temp_dir("gltf-proto-path").join("solid.glb");
+    let output = common::regatta()
+        .arg("--proto-path")
+        .arg(&webots)
+        .args(["gltf", "--lenient", "--report"])
+        .arg(webots.join("tests/api/worlds/supervisor_get_from_def.wbt"))
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let report = format!("{stdout}{stderr}");
+    assert!(
+        report.contains("1 shapes: 1 exported, 0 skipped"),
+        "the box inside the installation's SolidProto is exported:\n{report}"
+    );
+    assert!(out.is_file());
+}
