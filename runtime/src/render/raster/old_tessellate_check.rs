@@ -1,3 +1,6 @@
+//! TEMPORARY (deleted before merge): the rasteriser's former tessellation, compared with
+//! `crate::tessellate` at `Detail::RASTER`.
+//!
 //! The render graph's shapes as triangles, in their local frames, once per world: the
 //! geometric half of the rasteriser, kept apart from its pipeline.
 //!
@@ -102,7 +105,7 @@ fn usable(values: &[f64]) -> bool {
 }
 
 /// The shape's triangles in its local frame (empty for degenerate shapes).
-pub fn tessellate(shape: &Shape, meshes: &[Mesh]) -> TriangleSet {
+fn tessellate(shape: &Shape, meshes: &[Mesh]) -> TriangleSet {
     let mut set = TriangleSet::default();
     match shape {
         Shape::Box { half } => {
@@ -261,49 +264,60 @@ fn corners(mesh: &Mesh, triangle: &[u32; 3]) -> Option<[DVec3; 3]> {
     Some(out)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
 
-    #[test]
-    fn degenerate_shapes_draw_nothing() {
-        for shape in [
-            Shape::Box {
-                half: DVec3::new(0.0, 1.0, 1.0),
-            },
-            Shape::Sphere { radius: f64::NAN },
-            Shape::Cylinder {
-                radius: -1.0,
-                height: 1.0,
-                side: true,
-                bottom: true,
-                top: true,
-            },
-            Shape::Cone {
-                radius: 1.0,
-                height: f64::INFINITY,
-                side: true,
-                bottom: true,
-            },
-            Shape::Mesh(7),
-        ] {
-            assert!(tessellate(&shape, &[]).triangles.is_empty(), "{shape:?}");
+#[test]
+fn the_shared_tessellation_gives_the_rasterisers_triangles() {
+    use crate::tessellate::{tessellate as shared, Detail};
+    let mut shapes = Vec::new();
+    for h in [0.01, 0.1, 0.25, 0.3, 1.0, 3.7, 50.0] {
+        shapes.push(Shape::Box { half: DVec3::new(h, 0.5 * h, 2.0 * h) });
+        shapes.push(Shape::Sphere { radius: h });
+        for (side, bottom, top) in [(true, true, true), (true, false, true), (false, true, false), (true, false, false)] {
+            shapes.push(Shape::Cylinder { radius: h, height: 2.0 * h, side, bottom, top });
+            shapes.push(Shape::Cone { radius: h, height: 1.5 * h, side, bottom });
         }
     }
-
-    #[test]
-    fn box_faces_face_outwards() {
-        let set = tessellate(
-            &Shape::Box {
-                half: DVec3::new(1.0, 2.0, 3.0),
-            },
-            &[],
-        );
-        for t in &set.triangles {
-            let [a, b, c] = t.map(|i| set.vertices[i as usize]);
-            let geometric = (b.position - a.position).cross(c.position - a.position);
-            assert!(geometric.dot(a.normal) > 0.0);
-            assert!(a.position.dot(a.normal) > 0.0);
+    let mesh = Mesh {
+        positions: vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.0, -1.0),
+            DVec3::new(1.0, 0.1, -1.0),
+            DVec3::new(1.0, 0.1, -1.0),
+            DVec3::new(f64::NAN, 0.1, -1.0),
+        ],
+        triangles: vec![[0, 1, 2], [1, 3, 2], [3, 4, 2], [0, 5, 1]],
+        triangle_colors: Some(vec![[0.1, 0.2, 0.3], [0.4, 0.5, 0.6], [0.0; 3], [1.0; 3]]),
+        solid: true,
+        ..Mesh::default()
+    };
+    let meshes = vec![mesh.clone(), Mesh { triangle_colors: None, ..mesh }];
+    shapes.push(Shape::Mesh(0));
+    shapes.push(Shape::Mesh(1));
+    let (mut reversed, mut dropped) = (0, 0);
+    for shape in &shapes {
+        let old = tessellate(shape, &meshes);
+        let new = shared(shape, &meshes, &Detail::RASTER);
+        assert_eq!(old.vertices.len(), new.positions.len(), "{shape:?}");
+        for (i, v) in old.vertices.iter().enumerate() {
+            assert_eq!(v.position.to_array().map(f64::to_bits), new.positions[i].to_array().map(f64::to_bits), "{shape:?}");
+            assert_eq!(v.normal.to_array().map(f64::to_bits), new.normals[i].to_array().map(f64::to_bits), "{shape:?}");
+            assert_eq!(v.color, new.colors.as_ref().map(|c| c[i]), "{shape:?}");
         }
+        let mut next = 0;
+        for t in &old.triangles {
+            if new.triangles.get(next) == Some(t) {
+                next += 1;
+            } else if new.triangles.get(next) == Some(&[t[0], t[2], t[1]]) {
+                reversed += 1;
+                next += 1;
+            } else {
+                let [a, b, c] = t.map(|i| old.vertices[i as usize].position);
+                assert!((b - a).cross(c - a).length() < 1e-12, "{shape:?} {t:?}");
+                dropped += 1;
+            }
+        }
+        assert_eq!(next, new.triangles.len(), "{shape:?}");
     }
+    eprintln!("{reversed} triangles reversed, {dropped} without area dropped");
 }
