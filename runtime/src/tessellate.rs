@@ -206,11 +206,26 @@ pub fn tessellate(shape: &Shape, meshes: &[Mesh], detail: &Detail) -> Tessellati
             let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
             // Each face: a corner, two edges, its outward normal.
             let faces = [
-                [h * DVec3::new(1.0, -1.0, -1.0), y * 2.0 * h.y, z * 2.0 * h.z, x],
+                [
+                    h * DVec3::new(1.0, -1.0, -1.0),
+                    y * 2.0 * h.y,
+                    z * 2.0 * h.z,
+                    x,
+                ],
                 [-h, z * 2.0 * h.z, y * 2.0 * h.y, -x],
-                [h * DVec3::new(-1.0, 1.0, -1.0), z * 2.0 * h.z, x * 2.0 * h.x, y],
+                [
+                    h * DVec3::new(-1.0, 1.0, -1.0),
+                    z * 2.0 * h.z,
+                    x * 2.0 * h.x,
+                    y,
+                ],
                 [-h, x * 2.0 * h.x, z * 2.0 * h.z, -y],
-                [h * DVec3::new(-1.0, -1.0, 1.0), x * 2.0 * h.x, y * 2.0 * h.y, z],
+                [
+                    h * DVec3::new(-1.0, -1.0, 1.0),
+                    x * 2.0 * h.x,
+                    y * 2.0 * h.y,
+                    z,
+                ],
                 [-h, y * 2.0 * h.y, x * 2.0 * h.x, -z],
             ];
             for face in faces {
@@ -483,10 +498,15 @@ fn crease_mesh(mesh: &Mesh) -> Tessellation {
 /// in units of the longest, from its minimum. Points out of range count for nothing.
 fn tex_coords(mesh: &Mesh) -> impl Fn(usize, usize) -> [f64; 2] + '_ {
     let point = |i: u32| mesh.positions.get(i as usize).copied();
-    let (lo, hi) = mesh.triangles.iter().flatten().filter_map(|&i| point(i)).fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), p| (lo.min(p), hi.max(p)),
-    );
+    let (lo, hi) = mesh
+        .triangles
+        .iter()
+        .flatten()
+        .filter_map(|&i| point(i))
+        .fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(p), hi.max(p)),
+        );
     let size = (hi - lo).max(DVec3::ZERO);
     let mut axes = [0usize, 1, 2];
     // Longest first; ties keep x before y before z, as VRML97 asks.
@@ -545,7 +565,11 @@ mod tests {
                     (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
                     |(lo, hi), &p| (lo.min(p), hi.max(p)),
                 );
-                assert_eq!((lo, hi), (DVec3::splat(-0.5), DVec3::splat(0.5)), "{shape:?}");
+                assert_eq!(
+                    (lo, hi),
+                    (DVec3::splat(-0.5), DVec3::splat(0.5)),
+                    "{shape:?}"
+                );
                 assert_eq!(t.normals.len(), t.positions.len());
                 assert_eq!(t.uvs.len(), t.positions.len());
                 for tri in &t.triangles {
@@ -632,7 +656,10 @@ mod tests {
             Shape::Mesh(7),
         ] {
             for detail in [Detail::RASTER, Detail::export(32)] {
-                assert!(tessellate(&shape, &[], &detail).triangles.is_empty(), "{shape:?}");
+                assert!(
+                    tessellate(&shape, &[], &detail).triangles.is_empty(),
+                    "{shape:?}"
+                );
             }
         }
     }

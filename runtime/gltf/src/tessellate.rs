@@ -29,7 +29,11 @@ impl From<Tessellation> for Triangles {
             colors: t
                 .colors
                 .map(|c| c.iter().map(|&c| DVec3::from_array(c).as_vec3()).collect()),
-            uvs: t.uvs.iter().map(|&uv| DVec2::from_array(uv).as_vec2()).collect(),
+            uvs: t
+                .uvs
+                .iter()
+                .map(|&uv| DVec2::from_array(uv).as_vec2())
+                .collect(),
             indices: t.triangles.into_iter().flatten().collect(),
         }
     }

@@ -12,8 +12,6 @@
 //! the triangle that won it), so hidden pixels are never shaded. `docs/camera-raster.md`
 //! gives the measured agreement and speed.
 
-#[cfg(test)]
-mod old_tessellate_check;
 mod triangle;
 
 use glam::DVec3;
