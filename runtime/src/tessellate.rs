@@ -193,6 +193,37 @@ fn usable(values: &[f64]) -> bool {
     values.iter().all(|v| v.is_finite() && *v > 0.0)
 }
 
+/// Why an analytic shape gives no triangles at any detail, if it gives none: a size that is
+/// not finite and positive, or a Cylinder or Cone with none of its parts. (A mesh gives none
+/// when it has no triangles, or, drawn flat, none with an area.)
+pub fn no_surface(shape: &Shape) -> Option<&'static str> {
+    let (sizes, parts): (&[f64], bool) = match shape {
+        Shape::Box { half } => (&[half.x, half.y, half.z], true),
+        Shape::Sphere { radius } => (std::slice::from_ref(radius), true),
+        Shape::Cylinder {
+            radius,
+            height,
+            side,
+            bottom,
+            top,
+        } => (&[*radius, *height], *side || *bottom || *top),
+        Shape::Cone {
+            radius,
+            height,
+            side,
+            bottom,
+        } => (&[*radius, *height], *side || *bottom),
+        Shape::Mesh(_) => return None,
+    };
+    if !usable(sizes) {
+        Some("a size that is not finite and positive")
+    } else if !parts {
+        Some("none of its parts (side, bottom, top) drawn")
+    } else {
+        None
+    }
+}
+
 /// The shape's triangles in its local frame at `detail` (none for a degenerate shape or a
 /// mesh index out of range).
 pub fn tessellate(shape: &Shape, meshes: &[Mesh], detail: &Detail) -> Tessellation {
@@ -661,6 +692,38 @@ mod tests {
                     "{shape:?}"
                 );
             }
+            assert!(
+                no_surface(&shape).is_some() || matches!(shape, Shape::Mesh(_)),
+                "{shape:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_cylinder_or_cone_without_parts_has_no_surface() {
+        let empty = [
+            Shape::Cylinder {
+                radius: 1.0,
+                height: 1.0,
+                side: false,
+                bottom: false,
+                top: false,
+            },
+            Shape::Cone {
+                radius: 1.0,
+                height: 1.0,
+                side: false,
+                bottom: false,
+            },
+        ];
+        for shape in empty {
+            assert!(no_surface(&shape).is_some());
+            assert!(tessellate(&shape, &[], &Detail::RASTER)
+                .triangles
+                .is_empty());
+        }
+        for shape in round_shapes() {
+            assert_eq!(no_surface(&shape), None);
         }
     }
 

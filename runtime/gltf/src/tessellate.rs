@@ -3,7 +3,7 @@
 //! a frame the node cannot carry baked in.
 
 use glam::{DVec2, DVec3, Vec2, Vec3};
-use regatta_runtime::compile::graph::{Mesh, Shape};
+use regatta_runtime::compile::graph::{Mesh, RenderGraph, Shape};
 use regatta_runtime::geometry::Frame;
 use regatta_runtime::tessellate::{tessellate, Detail, Tessellation};
 
@@ -65,4 +65,17 @@ fn unit_or_up(v: DVec3) -> DVec3 {
 /// into [`segments`]`(quality)` around, meshes with creaseAngle normals.
 pub fn triangles(shape: &Shape, meshes: &[Mesh], quality: u32) -> Triangles {
     tessellate(shape, meshes, &Detail::export(quality)).into()
+}
+
+/// Why a shape gives no triangles, if it gives none: the export leaves it out (glTF has no
+/// empty meshes) and the report says why.
+pub fn no_triangles(shape: &Shape, graph: &RenderGraph) -> Option<&'static str> {
+    match *shape {
+        Shape::Mesh(index) => graph
+            .meshes
+            .get(index)
+            .is_none_or(|mesh| mesh.triangles.is_empty())
+            .then_some("a mesh without triangles"),
+        ref shape => regatta_runtime::tessellate::no_surface(shape),
+    }
 }
