@@ -251,3 +251,37 @@ Robot { children [
     // Strict mode refuses what it does not simulate, at its line.
     assert!(check(&world, true, Limits::default()).has_errors());
 }
+
+/// A Cylinder or Cone with none of its parts drawn has no surface: the export leaves it out
+/// (glTF has no empty meshes) and the report says why; the other primitives are exported.
+#[test]
+fn a_shape_without_surface_is_left_out_and_reported() {
+    let dir = project("empty");
+    let world = write_world(
+        &dir,
+        "Shape { geometry Cylinder { side FALSE top FALSE bottom FALSE } }\n\
+         Shape { geometry Cone { side FALSE bottom FALSE } }\n\
+         Shape { geometry Cylinder { side FALSE top FALSE } }\n\
+         Shape { geometry Sphere { } }\n",
+    );
+    let checked = check(&world, true, Limits::default());
+    assert!(!checked.has_errors(), "{}", checked.render(false));
+    let compiled = regatta_runtime::compile(&checked.scene);
+    let rows = report(&compiled, 16);
+    let skipped: Vec<&str> = rows
+        .iter()
+        .filter_map(|r| r.status.as_ref().err().map(String::as_str))
+        .collect();
+    assert_eq!(skipped.len(), 2, "{rows:#?}");
+    assert!(
+        skipped.iter().all(|r| r.starts_with("no surface")),
+        "{skipped:?}"
+    );
+    let document = export(&compiled, &Options { quality: 16 }, &[]).unwrap();
+    let glb = document.to_glb();
+    let gltf = gltf::Gltf::from_slice(&glb).expect("the gltf crate reads the export");
+    assert_eq!(gltf.meshes().count(), 2);
+    for accessor in gltf.accessors() {
+        assert!(accessor.count() > 0);
+    }
+}

@@ -20,6 +20,7 @@ pub mod optics;
 pub mod render;
 pub mod retina;
 pub mod sim;
+pub mod tessellate;
 #[cfg(test)]
 mod test_random;
 pub mod vision;

@@ -1,5 +1,5 @@
-//! The world's geometry for the page: the glTF export's tessellation (`regatta_gltf::
-//! tessellate`, the same triangles at the same quality), flattened into triangle lists with
+//! The world's geometry for the page: the runtime's one tessellation as the glTF export takes
+//! it (`regatta_gltf::tessellate`, the same triangles at the same quality), flattened into triangle lists with
 //! one colour each, static parts in world coordinates and each robot's parts in its own
 //! frame (the page places them at every pose).
 

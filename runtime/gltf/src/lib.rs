@@ -384,6 +384,11 @@ impl<'a> Builder<'a> {
             let Some(local) = parent_world.inverse().map(|inv| inv.then(&world)) else {
                 continue;
             };
+            // Nothing to draw (a Cylinder with no side, top or bottom): no empty mesh, which
+            // glTF forbids; the report says why.
+            if tessellate::no_triangles(&primitive.shape, graph).is_some() {
+                continue;
+            }
             let material = &graph.materials[primitive.material];
             let (colored, double_sided) = match &primitive.shape {
                 Shape::Mesh(index) => {

@@ -24,6 +24,14 @@ pub fn report(compiled: &Compiled, quality: u32) -> Vec<Row> {
     let graph: &RenderGraph = &compiled.graph;
     let mut rows = Vec::new();
     for primitive in &graph.primitives {
+        if let Some(reason) = tessellate::no_triangles(&primitive.shape, graph) {
+            rows.push(Row {
+                node: primitive.node,
+                geometry: primitive.shape.name().to_owned(),
+                status: Err(format!("no surface: {reason}")),
+            });
+            continue;
+        }
         let triangles = match &primitive.shape {
             Shape::Mesh(index) => graph.meshes[*index].triangles.len(),
             shape => {

@@ -36,7 +36,7 @@ pub fn capsule(scene: &Scene, node: NodeId) -> Mesh {
     let radius = scene.float(node, "radius");
     let half = scene.float(node, "height") / 2.0;
     // Segments around: the subdivision, at least 8, rounded up to a multiple of 4 so that the
-    // extreme points are vertices (as the glTF export tessellates cylinders).
+    // extreme points are vertices (as `tessellate.rs` cuts cylinders).
     let around = (scene.int(node, "subdivision").max(8) as usize).div_ceil(4) * 4;
     let rings = around / 4;
     let mut mesh = Mesh {

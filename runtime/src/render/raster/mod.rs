@@ -1,5 +1,5 @@
 //! The CPU rasteriser of 2-D cameras: the render graph's primitives tessellated once
-//! ([`tessellate`]; static ones in world space, robot-attached ones in their robot's frame and
+//! ([`crate::tessellate`] at [`Detail::RASTER`]; static ones in world space, robot-attached ones in their robot's frame and
 //! placed per frame), near-plane clipping, a z-buffer, and per-vertex VRML97 lighting by the
 //! same `shade` as the ray caster, interpolated perspective-correctly (Gouraud).
 //!
@@ -12,7 +12,6 @@
 //! the triangle that won it), so hidden pixels are never shaded. `docs/camera-raster.md`
 //! gives the measured agreement and speed.
 
-pub mod tessellate;
 mod triangle;
 
 use glam::DVec3;
@@ -22,7 +21,7 @@ use super::{shade, world_lights, Poses};
 use crate::compile::graph::{Owner, RenderGraph};
 use crate::compile::plan::Plan;
 use crate::geometry::Frame;
-use tessellate::{tessellate, TriangleSet};
+use crate::tessellate::{tessellate, Detail, Tessellation};
 use triangle::{Buffers, Corner, Paint, Screen};
 
 /// One primitive's triangles: world space for static parts, robot space for attached ones.
@@ -30,7 +29,7 @@ struct Part {
     primitive: usize,
     material: usize,
     robot: Option<usize>,
-    set: TriangleSet,
+    set: Tessellation,
     /// Bounding sphere, in the same space as the vertices.
     centre: DVec3,
     radius: f64,
@@ -118,18 +117,19 @@ impl<'g> Rasterizer<'g> {
             if !wanted[index] {
                 continue;
             }
-            let mut set = tessellate(&primitive.shape, &graph.meshes);
+            let mut set = tessellate(&primitive.shape, &graph.meshes, &Detail::RASTER);
             // Both kinds are stored after their primitive's own frame: world space for
             // static parts, the robot's frame for attached ones.
-            for v in &mut set.vertices {
-                v.position = primitive.frame.apply(v.position);
-                v.normal = primitive.frame.apply_normal(&primitive.inverse, v.normal);
+            for (p, n) in set.positions.iter_mut().zip(&mut set.normals) {
+                *p = primitive.frame.apply(*p);
+                *n = primitive.frame.apply_normal(&primitive.inverse, *n);
             }
             // A vertex that overflowed its frame takes its triangles with it (indices stay).
             let finite: Vec<bool> = set
-                .vertices
+                .positions
                 .iter()
-                .map(|v| v.position.is_finite() && v.normal.is_finite())
+                .zip(&set.normals)
+                .map(|(p, n)| p.is_finite() && n.is_finite())
                 .collect();
             set.triangles.retain(|t| {
                 t.iter()
@@ -138,9 +138,9 @@ impl<'g> Rasterizer<'g> {
             if set.triangles.is_empty() {
                 continue;
             }
-            let (min, max) = set.vertices.iter().filter(|v| v.position.is_finite()).fold(
+            let (min, max) = set.positions.iter().filter(|p| p.is_finite()).fold(
                 (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-                |(lo, hi), v| (lo.min(v.position), hi.max(v.position)),
+                |(lo, hi), &p| (lo.min(p), hi.max(p)),
             );
             let centre = (min + max) / 2.0;
             let radius = (max - min).length() / 2.0;
@@ -277,14 +277,14 @@ impl<'g> Rasterizer<'g> {
         target: &mut Target,
     ) {
         let (view, screen, eye, lights) = (frame.view, frame.screen, frame.eye, frame.lights);
-        let n = part.set.vertices.len();
+        let n = part.set.positions.len();
         target.camera.clear();
         target.world.clear();
-        for v in &part.set.vertices {
+        for (&position, &normal) in part.set.positions.iter().zip(&part.set.normals) {
             let (p, normal) = match placement {
                 // Robot frames are rigid: normals turn as vectors.
-                Some(frame) => (frame.apply(v.position), frame.apply_vector(v.normal)),
-                None => (v.position, v.normal),
+                Some(frame) => (frame.apply(position), frame.apply_vector(normal)),
+                None => (position, normal),
             };
             target.world.push((p, normal));
             target.camera.push(view.to_camera.apply(p));
@@ -321,7 +321,7 @@ impl<'g> Rasterizer<'g> {
                     let mut record = (0u32, 0u64);
                     target.shaded[i] = shade(
                         material,
-                        part.set.vertices[i].color,
+                        color_at(&part.set, i),
                         point,
                         normal,
                         eye,
@@ -345,7 +345,7 @@ impl<'g> Rasterizer<'g> {
             let [a, b, c] = t.map(|i| target.shadowed[i as usize]);
             // A shadow's edge crosses the triangle: its pixels are shaded one by one.
             let mixed = frame.occluders.is_some() && (a != b || b != c);
-            let color = part.set.vertices[t[0] as usize].color;
+            let color = color_at(&part.set, t[0] as usize);
             triangle::draw(
                 screen,
                 corners,
@@ -476,6 +476,11 @@ impl<'g> Rasterizer<'g> {
             }
         }
     }
+}
+
+/// A vertex's colour override (a mesh's Color node), if any.
+fn color_at(set: &Tessellation, vertex: usize) -> Option<[f64; 3]> {
+    set.colors.as_ref().and_then(|c| c.get(vertex).copied())
 }
 
 /// What covers a pixel: its id, or 0 (the background) where its depth says nothing was drawn
