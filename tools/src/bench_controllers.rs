@@ -27,9 +27,11 @@ pub struct Args {
     builtin: String,
 }
 
-/// What one run printed of its speed.
+/// What one run printed of its speed, and its peak memory (KiB, the largest of the
+/// simulator and its controllers).
 struct Run {
     steps_per_second: f64,
+    peak_kib: i64,
 }
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
@@ -54,11 +56,15 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     one(&me, &programs, &args.world)?;
     one(&me, &builtin, &args.world)?;
     let (mut with_programs, mut with_builtin) = (Vec::new(), Vec::new());
+    let (mut peak_programs, mut peak_builtin) = (0, 0);
     for _ in 0..args.runs {
-        with_programs.push(one(&me, &programs, &args.world)?.steps_per_second);
-        with_builtin.push(one(&me, &builtin, &args.world)?.steps_per_second);
+        let run = one(&me, &programs, &args.world)?;
+        with_programs.push(run.steps_per_second);
+        peak_programs = peak_programs.max(run.peak_kib);
+        let run = one(&me, &builtin, &args.world)?;
+        with_builtin.push(run.steps_per_second);
+        peak_builtin = peak_builtin.max(run.peak_kib);
     }
-    let peak = largest_child_peak_kib();
     let median = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
@@ -73,29 +79,36 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     println!("  project's controllers    {p:>12.0} steps/s");
     println!("  built-in {:<15} {b:>12.0} steps/s", args.builtin);
     println!("  ratio                    {:>12.3}", p / b);
-    if let Some(kib) = peak {
-        println!(
-            "  peak memory of the largest process (simulator or controller): {:.1} MB",
-            kib as f64 / 1024.0
-        );
-    }
+    println!(
+        "  peak memory (the largest process of a run): {:.1} MB with the project's controllers, {:.1} MB with {}",
+        peak_programs as f64 / 1024.0,
+        peak_builtin as f64 / 1024.0,
+        args.builtin
+    );
     Ok(Outcome::Clean)
 }
 
 fn one(me: &Path, args: &[String], world: &Path) -> anyhow::Result<Run> {
-    let output = Command::new(me)
+    use std::io::Read;
+    let mut child = Command::new(me)
         .args(args)
         .arg(world)
         .stdin(Stdio::null())
-        .output()
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
         .context("cannot start regatta run")?;
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    if !output.status.success() {
-        bail!(
-            "regatta run {} failed:\n{}",
-            world.display(),
-            String::from_utf8_lossy(&output.stderr)
-        );
+    let mut stdout = String::new();
+    let mut stderr = String::new();
+    if let Some(mut out) = child.stdout.take() {
+        out.read_to_string(&mut stdout)?;
+    }
+    if let Some(mut err) = child.stderr.take() {
+        err.read_to_string(&mut stderr)?;
+    }
+    let (status, peak_kib) = wait_with_peak(child.id() as i32)?;
+    if status != 0 {
+        bail!("regatta run {} failed:\n{stderr}", world.display());
     }
     let steps_per_second = stdout
         .lines()
@@ -105,14 +118,33 @@ fn one(me: &Path, args: &[String], world: &Path) -> anyhow::Result<Run> {
             speed.split_whitespace().next()?.parse::<f64>().ok()
         })
         .context("the run printed no speed")?;
-    Ok(Run { steps_per_second })
+    Ok(Run {
+        steps_per_second,
+        peak_kib,
+    })
 }
 
-/// The largest peak resident set of any child process so far (KiB), from getrusage.
-fn largest_child_peak_kib() -> Option<i64> {
-    // SAFETY: getrusage fills the struct it is given and reads nothing else.
-    unsafe {
+/// Waits for a child, returning its exit status and the peak resident set (KiB) of it and the
+/// descendants it waited for, from the operating system's accounting (wait4).
+fn wait_with_peak(pid: i32) -> anyhow::Result<(i32, i64)> {
+    let mut status = 0;
+    // SAFETY: wait4 fills the status and usage it is given; the child is ours and not yet
+    // waited for (std's handle is dropped without waiting).
+    let (done, usage) = unsafe {
         let mut usage: libc::rusage = std::mem::zeroed();
-        (libc::getrusage(libc::RUSAGE_CHILDREN, &mut usage) == 0).then_some(usage.ru_maxrss)
+        let done = libc::wait4(pid, &mut status, 0, &mut usage);
+        (done, usage)
+    };
+    if done != pid {
+        bail!(
+            "cannot wait for regatta run: {}",
+            std::io::Error::last_os_error()
+        );
     }
+    let code = if libc::WIFEXITED(status) {
+        libc::WEXITSTATUS(status)
+    } else {
+        -1
+    };
+    Ok((code, usage.ru_maxrss))
 }
