@@ -86,6 +86,8 @@ pub fn devices(scene: &Scene, rig: &RobotRig) -> Vec<Device> {
     if scene.type_name(rig.node) != "Robot" {
         drive_devices(rig, &mut devices);
         sensor_devices(rig, &mut devices);
+        let model = scene.node(rig.node).proto_names.first().map(String::as_str);
+        stand_in_leds(model.unwrap_or(""), &mut devices);
     }
     let mut walk = Walk {
         scene,
@@ -132,6 +134,28 @@ fn drive_devices(rig: &RobotRig, devices: &mut Vec<Device>) {
             table: Vec::new(),
             resolution: -1.0,
             source: Source::WheelAngle { left, sign: 1.0 },
+        });
+    }
+}
+
+/// The LEDs of Webots' models that regatta's stand-ins leave out of their bodies (they are
+/// devices only: a controller sets and reads them): the e-puck's ring `led0`–`led7`, its body
+/// `led8` and front `led9`; the Khepera I's and II's `led0` and `led1`.
+fn stand_in_leds(model: &str, devices: &mut Vec<Device>) {
+    let count = match model {
+        "E-puck" | "E-puck_enu" => 10,
+        "Khepera1" | "Khepera2" => 2,
+        _ => 0,
+    };
+    for index in 0..count {
+        devices.push(Device {
+            kind: kind::LED,
+            name: format!("led{index}"),
+            model: String::new(),
+            params: vec![0.0, 1.0],
+            table: Vec::new(),
+            resolution: -1.0,
+            source: Source::Led,
         });
     }
 }

@@ -3,6 +3,7 @@
    Braitenberg vehicle. */
 #include <stdio.h>
 #include <webots/distance_sensor.h>
+#include <webots/led.h>
 #include <webots/motor.h>
 #include <webots/robot.h>
 
@@ -26,8 +27,12 @@ int main(int argc, char **argv) {
   /* Sensors 0–2 look right and ahead, 5–7 left and ahead. */
   const double weights_left[8] = {-1.3, -1.0, -0.6, 0.0, 0.0, 0.6, 1.0, 1.3};
   const double weights_right[8] = {1.3, 1.0, 0.6, 0.0, 0.0, -0.6, -1.0, -1.3};
+  /* The front LED blinks once a second. */
+  WbDeviceTag front = wb_robot_get_device("led9");
   int steps = 0;
   while (wb_robot_step(TIME_STEP) != -1) {
+    if (steps % 16 == 0)
+      wb_led_set(front, !wb_led_get(front));
     double l = 0.5 * MAX_SPEED, r = 0.5 * MAX_SPEED;
     for (int i = 0; i < 8; i++) {
       double v = wb_distance_sensor_get_value(sensors[i]);
@@ -46,8 +51,8 @@ int main(int argc, char **argv) {
     wb_motor_set_velocity(left, l);
     wb_motor_set_velocity(right, r);
     if (++steps % 625 == 0)
-      printf("t = %.3f s: ps0 %.1f, ps7 %.1f\n", wb_robot_get_time(), wb_distance_sensor_get_value(sensors[0]),
-             wb_distance_sensor_get_value(sensors[7]));
+      printf("t = %.3f s: ps0 %.1f, ps7 %.1f, led9 %d\n", wb_robot_get_time(), wb_distance_sensor_get_value(sensors[0]),
+             wb_distance_sensor_get_value(sensors[7]), wb_led_get(front));
   }
   wb_robot_cleanup();
   return 0;
