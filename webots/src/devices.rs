@@ -11,6 +11,7 @@
 //! `right wheel sensor`, the names of Webots' own models), then its sensors.
 
 use glam::DVec3;
+use regatta_runtime::compile::frames::local_frame;
 use regatta_runtime::compile::rig::RobotRig;
 use regatta_runtime::geometry::Frame;
 use regatta_schema::{NodeId, Scene};
@@ -507,16 +508,6 @@ impl Walk<'_> {
             self.devices[first + s].params[0] = (first + m + 1) as f64;
         }
     }
-}
-
-fn local_frame(scene: &Scene, node: NodeId) -> Frame {
-    Frame::vrml(
-        DVec3::from_array(scene.vec3(node, "translation")),
-        scene.rotation(node, "rotation"),
-        DVec3::ONE,
-        [0.0, 0.0, 1.0, 0.0],
-        DVec3::ZERO,
-    )
 }
 
 fn lookup_table(scene: &Scene, node: NodeId) -> Vec<[f64; 3]> {

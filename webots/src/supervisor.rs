@@ -11,6 +11,7 @@
 use std::collections::HashMap;
 
 use glam::{DMat3, DQuat, DVec3};
+use regatta_runtime::compile::frames::local_frame;
 use regatta_runtime::geometry::Frame;
 use regatta_runtime::sim::Simulation;
 use regatta_schema::{BaseType, FieldType, NodeId, Scene, Value};
@@ -47,16 +48,6 @@ pub struct Supervisor {
     pub quit: Option<i32>,
     /// Each robot's rotation as a supervisor last set it (file axes), with its heading then.
     orientations: Vec<Option<(DMat3, f64)>>,
-}
-
-fn local_frame(scene: &Scene, node: NodeId) -> Frame {
-    Frame::vrml(
-        DVec3::from_array(scene.vec3(node, "translation")),
-        scene.rotation(node, "rotation"),
-        DVec3::ONE,
-        [0.0, 0.0, 1.0, 0.0],
-        DVec3::ZERO,
-    )
 }
 
 /// Whether a node has a field `name` of type `ty`.

@@ -12,6 +12,7 @@
 use glam::{DMat3, DVec3};
 use regatta_schema::{NodeId, Scene};
 
+use super::frames::local_frame;
 use crate::geometry::Frame;
 
 /// A driven wheel.
@@ -168,16 +169,6 @@ fn collect(scene: &Scene, node: NodeId, frame: &Frame, out: &mut Vec<Candidate>,
         }
         _ => {}
     }
-}
-
-fn local_frame(scene: &Scene, node: NodeId) -> Frame {
-    Frame::vrml(
-        DVec3::from_array(scene.vec3(node, "translation")),
-        scene.rotation(node, "rotation"),
-        DVec3::ONE,
-        [0.0, 0.0, 1.0, 0.0],
-        DVec3::ZERO,
-    )
 }
 
 fn hinge(scene: &Scene, node: NodeId, frame: &Frame) -> Option<Candidate> {

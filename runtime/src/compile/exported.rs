@@ -3,7 +3,6 @@
 //! devices, Webots' CadShape, and the shapes it leaves out with the reason (the export's
 //! report).
 
-use glam::DVec3;
 use regatta_schema::NodeId;
 
 use super::graph::{self, Material, Owner};
@@ -19,13 +18,7 @@ impl Compiler<'_> {
         let axes = scene.node(node).axes;
         let spec = scene.spec(node);
         let local = if spec.field_index("translation").is_some() {
-            Frame::vrml(
-                DVec3::from_array(scene.vec3(node, "translation")),
-                scene.rotation(node, "rotation"),
-                DVec3::ONE,
-                [0.0, 0.0, 1.0, 0.0],
-                DVec3::ZERO,
-            )
+            super::frames::local_frame(scene, node)
         } else {
             Frame::IDENTITY
         };

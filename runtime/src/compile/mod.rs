@@ -7,6 +7,7 @@
 
 pub mod drive;
 mod exported;
+pub mod frames;
 pub mod graph;
 pub mod meshfile;
 pub mod network;
