@@ -130,34 +130,18 @@ pub fn start_programs<'c>(
     let mut starts = Vec::new();
     for item in planned {
         let robot = simulation.compiled.rig.robots[item.robot].name.clone();
-        let name = item
-            .program
-            .folder()
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
         let started = std::time::Instant::now();
         let (executable, built) = regatta_webots::compile::compile(&item.program, &cache)
             .map_err(|e| anyhow::anyhow!("robot '{robot}': {e}"))?;
+        let start = item.start(executable);
         if built {
             eprintln!(
-                "note: compiled controller \"{name}\" in {:.2} s",
+                "note: compiled controller \"{}\" in {:.2} s",
+                start.controller,
                 started.elapsed().as_secs_f64()
             );
         }
-        starts.push(regatta_webots::Start {
-            robot: item.robot,
-            controller: name,
-            executable,
-            folder: item.program.folder().to_path_buf(),
-            args: item.args,
-            devices: item.devices,
-            z_up: item.z_up,
-            supervisor: item.supervisor,
-            custom_data: item.custom_data,
-            start_rotation: item.start_rotation,
-            north: item.north,
-        });
+        starts.push(start);
     }
     let options = regatta_webots::Options {
         timeout: std::time::Duration::from_secs_f64(overrides.controller_timeout),

@@ -26,7 +26,7 @@ pub mod rays;
 pub mod session;
 pub mod supervisor;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use regatta_runtime::compile::Compiled;
 
@@ -59,6 +59,30 @@ pub struct Planned {
     pub start_rotation: glam::DMat3,
     /// The world's north in the file's axes (from `WorldInfo.coordinateSystem`).
     pub north: glam::DVec3,
+}
+
+impl Planned {
+    /// What [`Controllers::start`] needs to run it, from its compiled `executable`.
+    pub fn start(&self, executable: PathBuf) -> Start {
+        Start {
+            robot: self.robot,
+            controller: self
+                .program
+                .folder()
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            executable,
+            folder: self.program.folder().to_path_buf(),
+            args: self.args.clone(),
+            devices: self.devices.clone(),
+            z_up: self.z_up,
+            supervisor: self.supervisor,
+            custom_data: self.custom_data.clone(),
+            start_rotation: self.start_rotation,
+            north: self.north,
+        }
+    }
 }
 
 /// The robots of `compiled` whose controller name is a program of `project`

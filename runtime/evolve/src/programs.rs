@@ -8,7 +8,7 @@ use std::sync::Arc;
 use regatta_runtime::compile::Compiled;
 use regatta_runtime::sim::Simulation;
 use regatta_schema::Scene;
-use regatta_webots::{Controllers, Options, Planned, Program, Start};
+use regatta_webots::{Controllers, Options, Planned, Program};
 
 /// The programs of a world's robots, compiled.
 #[derive(Clone, Debug, Default)]
@@ -75,24 +75,7 @@ impl Programs {
         let starts = self
             .robots
             .iter()
-            .map(|(item, executable)| Start {
-                robot: item.robot,
-                controller: item
-                    .program
-                    .folder()
-                    .file_name()
-                    .map(|n| n.to_string_lossy().into_owned())
-                    .unwrap_or_default(),
-                executable: executable.clone(),
-                folder: item.program.folder().to_path_buf(),
-                args: item.args.clone(),
-                devices: item.devices.clone(),
-                z_up: item.z_up,
-                supervisor: item.supervisor,
-                custom_data: item.custom_data.clone(),
-                start_rotation: item.start_rotation,
-                north: item.north,
-            })
+            .map(|(item, executable)| item.start(executable.clone()))
             .collect();
         let options = Options {
             echo: false,

@@ -54,17 +54,7 @@ impl Compiler<'_> {
             Ok(shape) => {
                 // The file's colours replace the diffuse colour, as a Color node does: a
                 // white VRML97 Material otherwise at its defaults.
-                self.graph.materials.push(Material {
-                    diffuse: [1.0; 3],
-                    ambient_intensity: 0.2,
-                    specular: [0.0; 3],
-                    emissive: [0.0; 3],
-                    shininess: 0.2,
-                    transparency: 0.0,
-                    ir_reflectance: 1.0,
-                    unlit: false,
-                    maps: graph::Maps::NONE,
-                });
+                self.graph.materials.push(Material::WHITE);
                 let material = self.graph.materials.len() - 1;
                 self.place(node, shape, material, frame, owner);
             }

@@ -281,6 +281,20 @@ impl Material {
         unlit: true,
         maps: Maps::NONE,
     };
+
+    /// A white VRML97 Material otherwise at its defaults: what a texture without a Material,
+    /// or a mesh file's own colours, is lit as.
+    pub const WHITE: Material = Material {
+        diffuse: [1.0; 3],
+        ambient_intensity: 0.2,
+        specular: [0.0; 3],
+        emissive: [0.0; 3],
+        shininess: 0.2,
+        transparency: 0.0,
+        ir_reflectance: 1.0,
+        unlit: false,
+        maps: Maps::NONE,
+    };
 }
 
 /// Lines or points (IndexedLineSet, PointSet): exported, never drawn by the simulator's

@@ -414,17 +414,7 @@ impl Compiler<'_> {
             );
             // A texture without a Material is lit as a white one is (VRML97 6.4).
             if maps.base_color.is_some() && material.unlit {
-                material = Material {
-                    diffuse: [1.0; 3],
-                    ambient_intensity: 0.2,
-                    specular: [0.0; 3],
-                    emissive: [0.0; 3],
-                    shininess: 0.2,
-                    transparency: 0.0,
-                    ir_reflectance: 1.0,
-                    unlit: false,
-                    maps: graph::Maps::NONE,
-                };
+                material = Material::WHITE;
             }
             std::mem::swap(&mut material.maps, &mut maps);
         }
