@@ -74,7 +74,7 @@ pub fn plan_programs(
     planned.retain(|item| {
         let robot = &names[item.robot];
         match &item.program {
-            regatta_webots::Program::C { .. } => true,
+            regatta_webots::Program::C { .. } | regatta_webots::Program::Extern { .. } => true,
             other => {
                 let message = format!(
                     "robot '{robot}': its controller \"{}\" is written in {}, which this version of regatta does not run yet (C controllers run)",
@@ -96,7 +96,10 @@ pub fn plan_programs(
         .iter()
         .any(|p| p.supervisor)
         .then(|| loaded.checked.scene.clone());
-    for item in &planned {
+    for item in planned
+        .iter()
+        .filter(|p| !matches!(p.program, regatta_webots::Program::Extern { .. }))
+    {
         eprintln!(
             "note: robot '{}' runs its project's controller {} ({}): this runs the project's code (--builtin-only runs none)",
             names[item.robot],
@@ -108,7 +111,7 @@ pub fn plan_programs(
 }
 
 /// The robots that run their project's programs, and the scene a supervisor among them reads.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct Programs {
     planned: Vec<regatta_webots::Planned>,
     scene: Option<regatta_schema::Scene>,
@@ -131,10 +134,14 @@ pub fn start_programs<'c>(
     let mut starts = Vec::new();
     for item in planned {
         let robot = simulation.compiled.rig.robots[item.robot].name.clone();
+        if let regatta_webots::Program::Extern { .. } = item.program {
+            starts.push(item.start(None));
+            continue;
+        }
         let started = std::time::Instant::now();
         let (executable, built) = regatta_webots::compile::compile(&item.program, &cache)
             .map_err(|e| anyhow::anyhow!("robot '{robot}': {e}"))?;
-        let start = item.start(executable);
+        let start = item.start(Some(executable));
         if built {
             eprintln!(
                 "note: compiled controller \"{}\" in {:.2} s",

@@ -40,6 +40,12 @@ impl Programs {
         let cache = regatta_webots::compile::cache_dir();
         let mut robots = Vec::new();
         for item in planned {
+            if let Program::Extern { .. } = item.program {
+                return Err(format!(
+                    "robot '{}' has an <extern> controller, which a batch cannot start (run the world with `regatta run` and start the controller by hand)",
+                    compiled.rig.robots[item.robot].name
+                ));
+            }
             if !matches!(item.program, Program::C { .. }) {
                 return Err(format!(
                     "robot '{}': its controller is written in {}, which regatta does not run yet",
@@ -75,7 +81,7 @@ impl Programs {
         let starts = self
             .robots
             .iter()
-            .map(|(item, executable)| item.start(executable.clone()))
+            .map(|(item, executable)| item.start(Some(executable.clone())))
             .collect();
         let options = Options {
             echo: false,
