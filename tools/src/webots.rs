@@ -25,6 +25,11 @@ pub struct ControllerOverride {
     /// people you do not trust: running a project's controllers runs its code.
     #[arg(long)]
     pub builtin_only: bool,
+    /// Wait for the controllers of `<extern>` robots, started by hand with the
+    /// REGATTA_CONTROLLER_URL the run prints (as Webots' extern controllers); without it such
+    /// a robot is refused, or with --lenient runs a built-in controller.
+    #[arg(long = "extern")]
+    pub extern_controllers: bool,
     /// How long a project's controller may take to start or to ask for its next step before
     /// the run ends with an error (wall-clock seconds).
     #[arg(long, value_name = "SECONDS", default_value_t = 10.0)]
@@ -74,7 +79,9 @@ pub fn plan_programs(
     planned.retain(|item| {
         let robot = &names[item.robot];
         match &item.program {
-            regatta_webots::Program::C { .. } | regatta_webots::Program::Extern { .. } => true,
+            regatta_webots::Program::C { .. } => true,
+            // Left to the controller resolution (refused, or a built-in) unless asked for.
+            regatta_webots::Program::Extern { .. } => overrides.extern_controllers,
             other => {
                 let message = format!(
                     "robot '{robot}': its controller \"{}\" is written in {}, which this version of regatta does not run yet (C controllers run)",

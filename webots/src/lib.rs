@@ -24,6 +24,7 @@ pub mod compile;
 pub mod devices;
 mod error;
 pub mod laser;
+mod link;
 pub mod motion;
 pub mod output;
 pub mod protocol;
