@@ -674,7 +674,12 @@ impl ColumnScene<'_> {
                     }
                 }
                 for &robot in near.iter() {
+                    let other = Some(robot as usize) != viewer;
                     for entry in parts_of.get(robot as usize).cloned().unwrap_or(0..0) {
+                        // Other robots' parts tucked under their body are left out.
+                        if other && self.tucked.get(entry).copied().unwrap_or(false) {
+                            continue;
+                        }
                         if let Some(object) = part(entry) {
                             place(object);
                         }
