@@ -698,7 +698,11 @@ impl ColumnScene<'_> {
                             .robot_at
                             .get(robot)
                             .is_some_and(|at| at.distance_squared(eye2) > distance2);
-                    if let Some(object) = part(entry).filter(|_| !far) {
+                    // Other robots' parts tucked under their body are left out too.
+                    let tucked = crowd
+                        && Some(robot) != viewer
+                        && self.tucked.get(entry).copied().unwrap_or(false);
+                    if let Some(object) = part(entry).filter(|_| !far && !tucked) {
                         place(object);
                     }
                 }
