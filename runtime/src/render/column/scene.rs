@@ -242,12 +242,10 @@ impl<'g> ColumnScene<'g> {
 /// and its top no higher. Robot parts are placed in the robot's frame: the relation holds in
 /// every pose.
 fn tucked_parts(graph: &RenderGraph, parts: &[(usize, usize)]) -> Vec<bool> {
-    let local: Vec<Option<Upright>> = parts
-        .iter()
-        .map(|&(p, _)| upright_of(graph, p, &graph.primitives[p].frame))
-        .collect();
+    // Placed twice rather than kept: a large swarm's parts would raise the peak memory.
+    let local = |p: usize| upright_of(graph, p, &graph.primitives[p].frame);
     let mut body: Vec<Option<(DVec2, f64, f64)>> = Vec::new();
-    for (&(_, robot), upright) in parts.iter().zip(&local) {
+    for &(p, robot) in parts {
         if body.len() <= robot {
             body.resize(robot + 1, None);
         }
@@ -256,18 +254,17 @@ fn tucked_parts(graph: &RenderGraph, parts: &[(usize, usize)]) -> Vec<bool> {
             y1,
             side: true,
             ..
-        }) = upright
+        }) = local(p)
         {
-            if body[robot].is_none_or(|(_, widest, _)| *radius > widest) {
-                body[robot] = Some((*center, *radius, *y1));
+            if body[robot].is_none_or(|(_, widest, _)| radius > widest) {
+                body[robot] = Some((center, radius, y1));
             }
         }
     }
     parts
         .iter()
-        .zip(&local)
-        .map(|(&(_, robot), upright)| {
-            let (Some((center, radius, top)), Some(part)) = (body[robot], upright) else {
+        .map(|&(p, robot)| {
+            let (Some((center, radius, top)), Some(part)) = (body[robot], local(p)) else {
                 return false;
             };
             let within = |point: DVec2| point.distance(center) <= radius + TUCK;
