@@ -80,6 +80,8 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
         args.options.lenient,
     )?;
     crate::webots::prepare_run(&mut loaded, &args.controllers, args.options.lenient)?;
+    // A run exports nothing: its robots' grouping nodes go (most of a crowd's render graph).
+    loaded.compiled.graph.release_exported_groups();
     let compiled = &loaded.compiled;
     let name = crate::world::world_name(&args.world);
     let mut simulation =

@@ -525,7 +525,7 @@ impl<'c> Simulation<'c> {
             let robot = &mut self.robots[request.robot];
             robot.updated.vision = true;
             if let Some(turret) = &mut robot.panoramic {
-                turret.model.accept(luminance, &mut turret.output);
+                turret.model.accept_unkept(luminance, &mut turret.output);
             } else if let Some(camera) = &mut robot.linear_camera {
                 camera.model.accept(luminance, &mut camera.output);
             }
