@@ -66,7 +66,9 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         .install(|| run_here(args, color))
 }
 
-fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
+fn run_here(mut args: Args, color: bool) -> anyhow::Result<Outcome> {
+    // A run exports nothing: its robots' grouping nodes are never made.
+    args.options.for_run = true;
     let variations = args.vary.all()?;
     let mut loaded = if variations.is_empty() {
         crate::world::load(&args.world, &args.options, color)?
@@ -80,8 +82,6 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
         args.options.lenient,
     )?;
     crate::webots::prepare_run(&mut loaded, &args.controllers, args.options.lenient)?;
-    // A run exports nothing: its robots' grouping nodes go (most of a crowd's render graph).
-    loaded.compiled.graph.release_exported_groups();
     let compiled = &loaded.compiled;
     let name = crate::world::world_name(&args.world);
     let mut simulation =

@@ -453,43 +453,6 @@ impl RenderGraph {
             .iter()
             .fold(Aabb::EMPTY, |b, &p| b.union(self.primitives[p].bounds))
     }
-
-    /// Drops the grouping nodes that only exporters read, for a run: every group but those
-    /// a static primitive stands in and their ancestors, which name what a robot touches
-    /// (`Simulation::obstacle_names`). A crowd's groups are mostly its robots' parts' (17
-    /// per Khepera, 3.6 MB at 1000 robots). Handles are renumbered; a primitive, light or
-    /// line whose group is gone has none. The renderers never read groups.
-    pub fn release_exported_groups(&mut self) {
-        let mut keep = vec![false; self.groups.len()];
-        for primitive in self.primitives.iter().filter(|p| p.owner == Owner::Static) {
-            let mut group = primitive.group;
-            while let Some(g) = group {
-                if std::mem::replace(&mut keep[g], true) {
-                    break;
-                }
-                group = self.groups[g].parent;
-            }
-        }
-        let mut renumbered = vec![None; self.groups.len()];
-        let mut next = 0;
-        for (g, &kept) in keep.iter().enumerate() {
-            if kept {
-                renumbered[g] = Some(next);
-                next += 1;
-            }
-        }
-        let mut index = 0;
-        self.groups.retain(|_| {
-            index += 1;
-            keep[index - 1]
-        });
-        self.groups.shrink_to_fit();
-        let map = |group: &mut Option<GroupId>| *group = group.and_then(|g| renumbered[g]);
-        self.groups.iter_mut().for_each(|g| map(&mut g.parent));
-        self.primitives.iter_mut().for_each(|p| map(&mut p.group));
-        self.lights.iter_mut().for_each(|l| map(&mut l.group));
-        self.lines.iter_mut().for_each(|l| map(&mut l.group));
-    }
 }
 
 /// Builds the static BVH over the graph's static primitives.

@@ -75,9 +75,22 @@ pub struct Compiled {
 
 /// Compiles a scene.
 pub fn compile(scene: &Scene) -> Compiled {
+    compile_with(scene, true)
+}
+
+/// [`compile`] for a run, which exports nothing: without the grouping nodes inside robots
+/// (17 per Khepera, the largest part of a crowd's render graph), which only exporters read.
+/// A robot's parts stand in its own group; the static groups (what a robot touches is named
+/// after) are all kept.
+pub fn compile_for_run(scene: &Scene) -> Compiled {
+    compile_with(scene, false)
+}
+
+fn compile_with(scene: &Scene, robot_groups: bool) -> Compiled {
     let settings = world_settings(scene);
     let mut compiler = Compiler {
         scene,
+        robot_groups,
         time_step: settings.time_step,
         graph: RenderGraph {
             primitives: Vec::new(),
@@ -168,6 +181,8 @@ struct Compiler<'s> {
     body: Authoring,
     /// The robots' names so far (a second robot of a name gets a warning).
     robot_names: std::collections::HashSet<String>,
+    /// Whether the grouping nodes inside robots are kept ([`compile_for_run`]).
+    robot_groups: bool,
 }
 
 /// A frame turned by an axis-angle rotation (`None`: unchanged).
@@ -381,6 +396,9 @@ impl Compiler<'_> {
         owner: Owner,
         robot: Option<usize>,
     ) -> Option<GroupId> {
+        if !self.robot_groups && owner != Owner::Static {
+            return self.group;
+        }
         self.graph.groups.push(Group {
             name: group_name(self.scene, node),
             parent: self.group,
