@@ -81,7 +81,7 @@ pub fn compile(scene: &Scene) -> Compiled {
 /// [`compile`] for a run, which exports nothing: without the grouping nodes inside robots
 /// (17 per Khepera, the largest part of a crowd's render graph), which only exporters read.
 /// A robot's parts stand in its own group; the static groups (what a robot touches is named
-/// after) are all kept.
+/// after) are all kept. Equal materials are one entry.
 pub fn compile_for_run(scene: &Scene) -> Compiled {
     compile_with(scene, false)
 }
@@ -181,7 +181,8 @@ struct Compiler<'s> {
     body: Authoring,
     /// The robots' names so far (a second robot of a name gets a warning).
     robot_names: std::collections::HashSet<String>,
-    /// Whether the grouping nodes inside robots are kept ([`compile_for_run`]).
+    /// Whether the grouping nodes inside robots are kept and equal materials kept apart
+    /// ([`compile_for_run`]).
     robot_groups: bool,
 }
 
@@ -435,6 +436,14 @@ impl Compiler<'_> {
                 material = Material::WHITE;
             }
             std::mem::swap(&mut material.maps, &mut maps);
+        }
+        // A run shares equal materials: a swarm's robots have a few between them.
+        let equal = (!self.robot_groups)
+            .then(|| self.graph.materials.iter().position(|m| *m == material))
+            .flatten();
+        if let Some(index) = equal {
+            self.materials.push((key, index));
+            return index;
         }
         self.graph.materials.push(material);
         let index = self.graph.materials.len() - 1;

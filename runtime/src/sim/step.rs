@@ -175,8 +175,8 @@ impl<'c> Simulation<'c> {
                     ..Contacts::default()
                 },
                 visits: Visits {
-                    sequence: Vec::with_capacity(64),
-                    times: Vec::with_capacity(64),
+                    sequence: Vec::with_capacity(16),
+                    times: Vec::with_capacity(16),
                     inside: Vec::with_capacity(4),
                 },
                 nearby: Vec::with_capacity(16),

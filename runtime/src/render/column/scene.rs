@@ -184,6 +184,9 @@ impl<'g> ColumnScene<'g> {
         }
         frame.others.clear();
         frame.own.clear();
+        // One entry per robot part, every step: no room to spare (a crowd has thousands).
+        frame.others.reserve_exact(self.robot_parts.len());
+        frame.own.reserve_exact(self.robot_parts.len());
         frame.robot_at.clear();
         frame
             .robot_at
