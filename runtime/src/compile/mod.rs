@@ -133,6 +133,7 @@ fn compile_with(scene: &Scene, robot_groups: bool) -> Compiled {
     compiler.graph.groups.shrink_to_fit();
     compiler.graph.materials.shrink_to_fit();
     compiler.rig.robots.shrink_to_fit();
+    compiler.rig.share_sensors();
     Compiled {
         graph: compiler.graph,
         rig: compiler.rig,
@@ -666,8 +667,8 @@ impl Compiler<'_> {
                         control_steps as f64 * time_step,
                     )
                 }),
-            distance_sensors: Vec::new(),
-            light_sensors: Vec::new(),
+            distance_sensors: Default::default(),
+            light_sensors: Default::default(),
             turret: None,
             cameras: Vec::new(),
         });
@@ -761,7 +762,7 @@ impl Compiler<'_> {
                         scene.float(node, "aperture"),
                     )),
                 };
-                self.rig.robots[robot].distance_sensors.push(rig);
+                Arc::make_mut(&mut self.rig.robots[robot].distance_sensors).push(rig);
             }
             "LightSensor" => {
                 let (position, direction) = device_pose(scene, node, frame);
@@ -773,7 +774,7 @@ impl Compiler<'_> {
                     occlusion: scene.bool(node, "occlusion"),
                     period: scene.float(node, "samplingPeriod"),
                 };
-                self.rig.robots[robot].light_sensors.push(rig);
+                Arc::make_mut(&mut self.rig.robots[robot].light_sensors).push(rig);
             }
             "Camera" => self.camera(node, frame, robot),
             _ => self.turret(node, robot),
