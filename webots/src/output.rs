@@ -35,6 +35,7 @@ pub struct Output {
     echo: bool,
     partial: Vec<u8>,
     chunk: Vec<u8>,
+    buffer: Vec<u8>,
 }
 
 impl Output {
@@ -57,6 +58,7 @@ impl Output {
                 echo,
                 partial: Vec::new(),
                 chunk: Vec::new(),
+                buffer: vec![0; 8192],
             },
             Stdio::from(writer),
             Stdio::from(second),
@@ -68,12 +70,13 @@ impl Output {
     pub fn drain(&mut self, time: f64, lines: &mut Vec<ProgramLine>) {
         // Plain reads until the end: one system call a step when nothing was printed
         // (`read_to_end` would ask the file's size first).
+        // The buffer is kept: zeroing a fresh one each step cost more than the rest of the
+        // exchange.
         self.chunk.clear();
-        let mut buffer = [0u8; 8192];
         loop {
-            match self.file.read(&mut buffer) {
+            match self.file.read(&mut self.buffer) {
                 Ok(0) | Err(_) => break,
-                Ok(n) => self.chunk.extend_from_slice(&buffer[..n]),
+                Ok(n) => self.chunk.extend_from_slice(&self.buffer[..n]),
             }
         }
         let mut rest = &self.chunk[..];
