@@ -39,7 +39,7 @@ pub fn plan_programs(
     loaded: &mut Loaded,
     world: &std::path::Path,
     overrides: &ControllerOverride,
-    lenient: bool,
+    _lenient: bool,
 ) -> anyhow::Result<Programs> {
     if overrides.builtin_only || world == std::path::Path::new("-") {
         return Ok(Programs::default());
@@ -71,25 +71,6 @@ pub fn plan_programs(
         &project,
         &overridden,
     )?;
-    planned.retain(|item| {
-        let robot = &names[item.robot];
-        match &item.program {
-            regatta_webots::Program::C { .. } => true,
-            other => {
-                let message = format!(
-                    "robot '{robot}': its controller \"{}\" is written in {}, which this version of regatta does not run yet (C controllers run)",
-                    loaded.compiled.rig.robots[item.robot].controller,
-                    other.language()
-                );
-                if lenient {
-                    eprintln!("warning: {message}");
-                } else {
-                    eprintln!("error: {message}");
-                }
-                false
-            }
-        }
-    });
     regatta_webots::prepare(&mut loaded.compiled, &planned);
     // A supervisor reads the typed scene, which the run would otherwise release.
     let scene = planned
@@ -131,12 +112,17 @@ pub fn start_programs<'c>(
     for item in planned {
         let robot = simulation.compiled.rig.robots[item.robot].name.clone();
         let started = std::time::Instant::now();
-        let (executable, built) = regatta_webots::compile::compile(&item.program, &cache)
+        let (launch, built) = regatta_webots::runnable(&item.program, &cache)
             .map_err(|e| anyhow::anyhow!("robot '{robot}': {e}"))?;
-        let start = item.start(executable);
+        let start = item.start_with(&launch);
         if built {
             eprintln!(
-                "note: compiled controller \"{}\" in {:.2} s",
+                "note: {} \"{}\" in {:.2} s",
+                match item.program {
+                    regatta_webots::Program::C { .. } => "compiled controller",
+                    regatta_webots::Program::Python { .. } =>
+                        "built the Python controller library for",
+                },
                 start.controller,
                 started.elapsed().as_secs_f64()
             );

@@ -22,6 +22,11 @@ pub enum WebotsError {
         controller: String,
         language: &'static str,
     },
+    #[error("controller \"{controller}\" is written in Python: no Python interpreter \"{interpreter}\" is installed (install Python 3, or name one with REGATTA_PYTHON=/path/to/python3)")]
+    NoPython {
+        controller: String,
+        interpreter: String,
+    },
     #[error("cannot run the C compiler \"{compiler}\" ({source}); install one (e.g. apt-get install gcc) or set CC")]
     Compiler {
         compiler: String,

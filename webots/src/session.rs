@@ -53,6 +53,8 @@ pub struct Start {
     pub executable: PathBuf,
     pub folder: PathBuf,
     pub args: Vec<String>,
+    /// Environment variables added to the controller's (a Python controller's `PYTHONPATH`).
+    pub env: Vec<(std::ffi::OsString, std::ffi::OsString)>,
     /// Its devices, in tag order ([`crate::devices::devices`]).
     pub devices: Vec<Device>,
     /// Whether the world's file is z-up (positions answer in the file's axes).
@@ -228,6 +230,7 @@ impl<'c> Controllers<'c> {
             .map_err(|source| WebotsError::io(&path, source))?;
         let mut child = Command::new(&start.executable)
             .args(&start.args)
+            .envs(start.env.iter().map(|(k, v)| (k, v)))
             .current_dir(&start.folder)
             .env("REGATTA_CONTROLLER_URL", &path)
             .env("WEBOTS_ROBOT_NAME", &robot_name)
