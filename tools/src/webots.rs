@@ -65,7 +65,7 @@ pub fn plan_programs(
         }
     }
     let project = regatta_webots::project_of(world);
-    let mut planned = regatta_webots::plan(
+    let planned = regatta_webots::plan(
         &loaded.compiled,
         &loaded.checked.scene,
         &project,
