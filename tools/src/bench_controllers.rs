@@ -82,21 +82,21 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         "{} simulated s a run, {} runs each, median steps/s; peak memory of a run's largest process",
         args.duration, args.runs
     );
-    for (i, world) in args.worlds.iter().enumerate() {
+    let labels: Vec<String> = args
+        .worlds
+        .iter()
+        .map(|w| format!("{} (its controllers)", w.display()))
+        .chain([format!("{} (built-in {})", first.display(), args.builtin)])
+        .collect();
+    let width = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0);
+    for (i, label) in labels.iter().enumerate() {
         println!(
-            "  {:<40} {:>12.0} steps/s  {:>6.3}× the built-in  {:>6.1} MB",
-            format!("{} (its controllers)", world.display()),
+            "  {label:<width$} {:>10.0} steps/s  {:>6.3}× the built-in  {:>6.1} MB",
             medians[i],
             medians[i] / b,
             peaks[i] as f64 / 1024.0
         );
     }
-    println!(
-        "  {:<40} {b:>12.0} steps/s  {:>6.3}× the built-in  {:>6.1} MB",
-        format!("{} (built-in {})", first.display(), args.builtin),
-        1.0,
-        peaks[args.worlds.len()] as f64 / 1024.0
-    );
     Ok(Outcome::Clean)
 }
 

@@ -278,3 +278,30 @@ fn a_batch_of_a_python_controllers_world_reproduces_its_single_runs() {
         );
     }
 }
+
+#[test]
+fn a_batchs_python_exception_is_quoted_in_its_error() {
+    // A batch does not show its controllers' output: the error quotes the traceback's end.
+    let world = project(
+        "boom",
+        "from controller import Robot\nrobot = Robot()\nwhile robot.step(32) != -1:\n    if robot.getTime() > 0.3:\n        raise ValueError('bad value')\n",
+    );
+    let output = regatta()
+        .env("REGATTA_CACHE_DIR", cache())
+        .env_remove("REGATTA_PYTHON")
+        .args(["batch", world.to_str().unwrap()])
+        .args(["--seeds", "1..2", "--duration", "2", "--json"])
+        .output()
+        .unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(text.contains("robot 'e-puck': controller \"boom\" failed at t = 0.320 s: it exited with status 1; its last words:"), "{text}");
+    assert!(text.contains("ValueError: bad value"), "{text}");
+    assert!(
+        text.contains("Traceback (most recent call last):"),
+        "{text}"
+    );
+}

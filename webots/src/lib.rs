@@ -26,6 +26,7 @@ pub mod radio;
 pub mod rays;
 pub mod session;
 pub mod supervisor;
+mod tail;
 
 use std::path::{Path, PathBuf};
 

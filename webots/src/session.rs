@@ -130,6 +130,8 @@ struct Driven {
     wake: u64,
     senses: Arc<AtomicU8>,
     echo: Vec<std::thread::JoinHandle<()>>,
+    /// Its standard error's last lines, when they are not echoed.
+    tail: Option<crate::tail::Tail>,
     frame: Vec<u8>,
     /// The controller is done (it called `wb_robot_cleanup`, or exited with status 0): its
     /// robot stands still from then on.
@@ -240,11 +242,7 @@ impl<'c> Controllers<'c> {
             } else {
                 Stdio::null()
             })
-            .stderr(if options.echo {
-                Stdio::piped()
-            } else {
-                Stdio::null()
-            })
+            .stderr(Stdio::piped())
             .spawn()
             .map_err(|source| WebotsError::Spawn {
                 robot: robot_name.clone(),
@@ -252,6 +250,10 @@ impl<'c> Controllers<'c> {
                 source: Arc::new(source),
             })?;
         let mut echo = Vec::new();
+        let mut tail = None;
+        if !options.echo {
+            tail = child.stderr.take().map(crate::tail::Tail::keep);
+        }
         if options.echo {
             if let Some(out) = child.stdout.take() {
                 echo.push(echo_lines(out, robot_name.clone()));
@@ -280,8 +282,9 @@ impl<'c> Controllers<'c> {
                             controller: start.controller.clone(),
                             time: 0.0,
                             what: format!(
-                                "it {} before connecting (did it call wb_robot_init?)",
-                                describe_exit(status)
+                                "it {} before connecting (did it call wb_robot_init?){}",
+                                describe_exit(status),
+                                tail.as_mut().map(|t| t.last_words()).unwrap_or_default()
                             ),
                         });
                     }
@@ -356,6 +359,7 @@ impl<'c> Controllers<'c> {
             wake: 0,
             senses,
             echo,
+            tail,
             frame: Vec::new(),
             finished: false,
         };
@@ -960,7 +964,13 @@ fn lost(driven: &mut Driven, time: f64, error: std::io::Error) -> WebotsError {
     let deadline = Instant::now() + Duration::from_millis(500);
     let what = loop {
         match driven.child.try_wait() {
-            Ok(Some(status)) => break format!("it {}", describe_exit(status)),
+            Ok(Some(status)) => {
+                let words = match &mut driven.tail {
+                    Some(tail) if !status.success() => tail.last_words(),
+                    _ => String::new(),
+                };
+                break format!("it {}{words}", describe_exit(status));
+            }
             Ok(None) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(1)),
             _ => break format!("its connection broke ({error})"),
         }

@@ -1,6 +1,9 @@
 """Obstacle avoidance for the e-puck, in Python: the same Braitenberg vehicle as
 controllers/epuck_avoid/epuck_avoid.c, computed in the same order, so that both drive the
-e-puck along the same path."""
+e-puck along the same path. `$EPUCK_STOP_S`, when set, is a simulated time at which it
+stops (exits), for measurements of the controller process alone (callgrind)."""
+
+import os
 
 from controller import Robot
 
@@ -23,7 +26,8 @@ right.setVelocity(0.0)
 # The front LED blinks once a second.
 front = robot.getDevice('led9')
 steps = 0
-while robot.step(TIME_STEP) != -1:
+stop = float(os.environ.get('EPUCK_STOP_S', 'inf'))
+while robot.step(TIME_STEP) != -1 and robot.getTime() < stop:
     if steps % 16 == 0:
         front.set(0 if front.get() else 1)
     l = 0.5 * MAX_SPEED
