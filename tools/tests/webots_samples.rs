@@ -193,3 +193,51 @@ fn khepera_sample_runs_braitenberg_without_touching_the_boxes() {
     assert!(s.distance("khepera") > 0.1, "{}", s.summary);
     assert_eq!(s.robot("khepera")["contacts"]["events"], 0, "{}", s.summary);
 }
+
+#[test]
+fn the_python_twins_of_the_c_samples_drive_as_the_c_ones_do() {
+    // distance_sensor and light_sensor have a C and a Python controller; regatta runs the C
+    // one. Their Python controllers, alone in a copy of the project, drive the same way.
+    let Some(webots) = shared() else {
+        return;
+    };
+    let devices = webots.join("projects/samples/devices");
+    let dir = common::temp_dir("python-twins");
+    std::fs::create_dir_all(dir.join("worlds")).unwrap();
+    for name in ["distance_sensor", "light_sensor"] {
+        let world = format!("worlds/{name}.wbt");
+        std::fs::copy(devices.join(&world), dir.join(&world)).unwrap();
+        let folder = dir.join("controllers").join(name);
+        std::fs::create_dir_all(&folder).unwrap();
+        std::fs::copy(
+            devices.join(format!("controllers/{name}/{name}.py")),
+            folder.join(format!("{name}.py")),
+        )
+        .unwrap();
+        let c = sample(&format!("projects/samples/devices/{world}")).unwrap();
+        let cache =
+            std::env::temp_dir().join(format!("regatta-samples-cache-{}", std::process::id()));
+        let output = regatta()
+            .env("REGATTA_CACHE_DIR", cache)
+            .env_remove("REGATTA_PYTHON")
+            .args(["run", "--lenient"])
+            .arg(dir.join(&world))
+            .args(["--duration", "60", "--json"])
+            .output()
+            .unwrap();
+        let python = Sample {
+            summary: serde_json::from_slice(&output.stdout).unwrap(),
+            stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
+        };
+        python.runs_its_own("MyBot", "Python");
+        let (a, b) = (c.robot("MyBot"), python.robot("MyBot"));
+        for key in ["x", "z"] {
+            let (a, b) = (
+                a["final_pose"][key].as_f64().unwrap(),
+                b["final_pose"][key].as_f64().unwrap(),
+            );
+            assert!((a - b).abs() < 0.02, "{name}: C ends at {a}, Python at {b}");
+        }
+        assert!(python.distance("MyBot") > 1.0, "{}", python.summary);
+    }
+}
