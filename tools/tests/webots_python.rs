@@ -145,6 +145,25 @@ fn a_python_supervisor_resets_and_moves_a_robot_and_packets_reach_a_python_recei
         "{stderr}"
     );
     assert_ne!(ends[2][1..3], ends[0][1..3], "{stderr}");
+    // The e-puck's camera through getImage (BGRA bytes), getImageArray ([x][y][rgb]) and
+    // imageGetGray, which agree on the centre pixel.
+    let camera = stderr
+        .lines()
+        .find_map(|l| {
+            l.strip_prefix("[e-puck] camera 52x39: 8112 bytes, array 52x39x3, centre grey ")
+        })
+        .unwrap_or_else(|| panic!("{stderr}"));
+    let numbers: Vec<u32> = camera
+        .split(|c: char| !c.is_ascii_digit())
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    assert_eq!(numbers.len(), 4, "{camera}");
+    assert!(numbers[0] > 0, "the camera sees the lit floor: {camera}");
+    assert_eq!(
+        numbers[0],
+        (numbers[1] + numbers[2] + numbers[3]) / 3,
+        "{camera}"
+    );
     // The listener read the packets as text and as floats, two a step.
     assert!(stderr.contains("[listener] text t=0.032"), "{stderr}");
     assert!(stderr.contains("[listener] floats 0.032 0.064"), "{stderr}");
