@@ -108,6 +108,30 @@ fn numbers_after(stderr: &str, prefix: &str) -> Vec<Vec<f64>> {
 
 #[test]
 fn a_python_supervisor_resets_and_moves_a_robot_and_packets_reach_a_python_receiver() {
+    // Three Python processes in lock-step: the same log on any thread count.
+    let dir = temp_dir("python-supervised");
+    let mut logs = Vec::new();
+    for threads in ["1", "2"] {
+        let log = dir.join(format!("run{threads}.mcap"));
+        let output = run(
+            &root().join(SUPERVISED),
+            &[
+                "--duration",
+                "10",
+                "--threads",
+                threads,
+                "--log",
+                log.to_str().unwrap(),
+            ],
+        );
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        logs.push(std::fs::read(&log).unwrap());
+    }
+    assert!(logs[0] == logs[1], "the logs of 1 and 2 threads differ");
     let output = run(&root().join(SUPERVISED), &["--duration", "10"]);
     let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
     assert!(output.status.success(), "{stderr}");
