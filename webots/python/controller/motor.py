@@ -39,6 +39,13 @@ for _name, _res, _args in (
     _f[_name] = function('wb_motor_' + _name, _res, *_args)
 
 _set_position = _f['set_position']
+
+
+def _joint_type(kind):
+    """Webots' Python joint type (ROTATIONAL 0, LINEAR 1) of the C library's answer, which
+    is the motor's node type."""
+    from .node import NODE_TYPE
+    return {NODE_TYPE['ROTATIONAL_MOTOR']: 0, NODE_TYPE['LINEAR_MOTOR']: 1, 0: 0, 1: 1}.get(kind, kind)
 _set_velocity = _f['set_velocity']
 
 
@@ -95,7 +102,8 @@ class Motor(Device):
         return _f['get_torque_feedback'](self._tag)
 
     def getType(self):
-        return _f['get_type'](self._tag)
+        """ROTATIONAL (0) or LINEAR (1)."""
+        return _joint_type(_f['get_type'](self._tag))
 
     def getTargetPosition(self):
         return _f['get_target_position'](self._tag)

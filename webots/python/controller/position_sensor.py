@@ -18,7 +18,9 @@ class PositionSensor(Sensor):
         return _get_value(self._tag)
 
     def getType(self):
-        return _get_type(self._tag)
+        """ROTATIONAL (0) or LINEAR (1)."""
+        from .motor import _joint_type
+        return _joint_type(_get_type(self._tag))
 
     def getMotor(self):
         from .robot import device_of
