@@ -275,6 +275,19 @@ fn a_missing_python_is_one_clear_error_naming_the_robot_and_controller() {
 }
 
 #[test]
+fn a_python_script_that_never_creates_its_robot_is_named() {
+    let world = project("idle", "print('no robot here')\n");
+    let output = run(&world, &["--duration", "1"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(stderr.contains("[e-puck] no robot here"), "{stderr}");
+    assert!(
+        stderr.contains("robot 'e-puck': controller \"idle\" failed at t = 0.000 s: it exited with status 0 before connecting (did it call wb_robot_init, or create its Robot in Python?)"),
+        "{stderr}"
+    );
+}
+
+#[test]
 fn a_controller_that_imports_a_module_that_is_not_there_is_named() {
     let world = project("needs", "import no_such_module_here\n");
     let output = run(&world, &["--duration", "1"]);

@@ -282,7 +282,7 @@ impl<'c> Controllers<'c> {
                             controller: start.controller.clone(),
                             time: 0.0,
                             what: format!(
-                                "it {} before connecting (did it call wb_robot_init?){}",
+                                "it {} before connecting (did it call wb_robot_init, or create its Robot in Python?){}",
                                 describe_exit(status),
                                 tail.as_mut().map(|t| t.last_words()).unwrap_or_default()
                             ),
