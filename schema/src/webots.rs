@@ -46,6 +46,20 @@ pub enum Objects {
     /// Webots from R2022a in a z-up world: x forward, y left, z up; Cylinder along z; cameras
     /// and viewpoints look along +x.
     Flu,
+    /// Webots from R2022a in a world that declares itself y-up (`coordinateSystem "NUE"` or
+    /// `"EUN"`, as Webots' own API tests do): geometry, cameras, viewpoints and Webots'
+    /// PROTOs (regatta's stand-ins) are FLU as in any R2022a file, and the file turns them
+    /// where it wants them; but the world's up is y, so a generic `Robot` stands with its y up
+    /// and +x forward.
+    FluYUp,
+}
+
+impl Objects {
+    /// Whether geometry axes (Cylinder, Cone, Capsule, Plane, ElevationGrid), cameras and
+    /// viewpoints are FLU.
+    pub fn flu_geometry(self) -> bool {
+        matches!(self, Objects::Flu | Objects::FluYUp)
+    }
 }
 
 /// The rotation (axis, angle) that maps coordinates written by `to` into those of `from`:
@@ -60,7 +74,10 @@ pub fn turn(from: Authoring, to: Authoring, objects: Objects) -> Option<[f64; 4]
                 None
             }
             (Authoring::WebotsRobot, Objects::Legacy) => Some([0.0, 1.0, 0.0, FRAC_PI_2]),
-            (Authoring::Regatta | Authoring::Webots | Authoring::WebotsRobot, Objects::Flu)
+            (
+                Authoring::Regatta | Authoring::Webots | Authoring::WebotsRobot,
+                Objects::Flu | Objects::FluYUp,
+            )
             | (Authoring::WebotsFlu, _) => Some([1.0, 0.0, 0.0, FRAC_PI_2]),
         }
     }

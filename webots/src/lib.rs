@@ -10,7 +10,8 @@
 //! - finding a controller in its project and compiling it into a cache ([`compile`]);
 //! - a robot's devices as Webots names them ([`devices`]);
 //! - emitters and receivers: packets between robots ([`radio`]);
-//! - a generic robot's distance sensors, cast in 3-D ([`rays`]);
+//! - a generic robot's distance sensors, cast in 3-D ([`rays`]), and the red spots its
+//!   lasers draw on camera images ([`laser`]);
 //! - a supervisor's view of the world ([`supervisor`]);
 //! - the processes in lock-step with a simulation ([`session`]).
 //!
@@ -20,6 +21,7 @@
 pub mod compile;
 pub mod devices;
 mod error;
+pub mod laser;
 pub mod protocol;
 pub mod python;
 pub mod radio;

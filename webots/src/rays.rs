@@ -14,7 +14,7 @@ use glam::DVec3;
 use regatta_runtime::compile::plan::Plan;
 use regatta_runtime::compile::Compiled;
 use regatta_runtime::geometry::Ray;
-use regatta_runtime::render::raycast::{Prepared, RayCaster};
+use regatta_runtime::render::raycast::{Hit, Prepared, RayCaster};
 use regatta_runtime::render::Poses;
 use regatta_runtime::sim::noise::Stream;
 use regatta_runtime::sim::sensors::lookup;
@@ -73,6 +73,33 @@ impl<'c> Rays<'c> {
                 .collect(),
         };
         self.caster.prepare(&self.plan, &poses, Some(robot))
+    }
+
+    /// Where the axis of `sensor` on robot `robot` first meets something within `far` (a
+    /// laser's spot).
+    pub fn first_hit(
+        &self,
+        prepared: &Prepared,
+        simulation: &Simulation,
+        robot: usize,
+        sensor: &RaySensor,
+        far: f64,
+    ) -> Option<Hit> {
+        let state = &simulation.robots[robot];
+        let floor = simulation.compiled.rig.robots[robot].floor_y;
+        let origin = state.pose.to_world(sensor.position, floor);
+        let direction = state
+            .pose
+            .frame(floor)
+            .apply_vector(sensor.direction)
+            .normalize_or(DVec3::X);
+        self.caster
+            .trace(prepared, &Ray { origin, direction }, far.max(0.0))
+    }
+
+    /// The first thing `ray` meets within `far`, in the world as `prepared` places it.
+    pub fn trace(&self, prepared: &Prepared, ray: &Ray, far: f64) -> Option<Hit> {
+        self.caster.trace(prepared, ray, far)
     }
 
     /// One reading of `sensor` on robot `robot`, through `table` (rows: distance, value,

@@ -154,6 +154,8 @@ pub struct Controllers<'c> {
     real_time: Option<(Instant, f64)>,
     /// The ray caster of generic robots' distance sensors, when one has any.
     rays: Option<crate::rays::Rays<'c>>,
+    /// This step's laser spots (enabled laser sensors' hits), which cameras see.
+    spots: Vec<crate::laser::Spot>,
 }
 
 /// Webots' steps for `ms` milliseconds at a basic time step of `step_ms`: whole steps,
@@ -189,6 +191,7 @@ impl<'c> Controllers<'c> {
             supervisor: None,
             real_time: None,
             rays: None,
+            spots: Vec::new(),
         };
         let compiled = simulation.compiled;
         if starts
@@ -415,6 +418,7 @@ impl<'c> Controllers<'c> {
         if !self.in_flight.is_empty() {
             self.deliver(simulation);
         }
+        self.find_spots(simulation);
         let mut due = Vec::new();
         for index in 0..self.driven.len() {
             if !self.driven[index].finished && self.driven[index].wake <= step {
@@ -435,6 +439,43 @@ impl<'c> Controllers<'c> {
         }
         self.pace(simulation.time);
         Ok(())
+    }
+
+    /// The spots of the enabled laser sensors, when some camera is enabled to see them.
+    fn find_spots(&mut self, simulation: &Simulation) {
+        self.spots.clear();
+        let Some(rays) = &self.rays else { return };
+        let enabled = |driven: &Driven, wanted: fn(&Source) -> bool| {
+            driven
+                .devices
+                .iter()
+                .zip(&driven.sampling)
+                .any(|(device, sampling)| sampling.period > 0 && wanted(&device.source))
+        };
+        let is_laser = |source: &Source| matches!(source, Source::Ray(s) if s.medium == 3);
+        let is_camera = |source: &Source| matches!(source, Source::Camera(_));
+        if !self.driven.iter().any(|d| enabled(d, is_camera)) {
+            return;
+        }
+        for driven in self.driven.iter().filter(|d| enabled(d, is_laser)) {
+            let prepared = rays.prepare(simulation, driven.robot);
+            for (device, sampling) in driven.devices.iter().zip(&driven.sampling) {
+                if let (Source::Ray(sensor), true) = (&device.source, sampling.period > 0) {
+                    if sensor.medium != 3 {
+                        continue;
+                    }
+                    let far = device.table.last().map_or(0.0, |row| row[0]);
+                    self.spots.extend(crate::laser::spot_of(
+                        rays,
+                        &prepared,
+                        simulation,
+                        driven.robot,
+                        sensor,
+                        far,
+                    ));
+                }
+            }
+        }
     }
 
     /// In real-time mode (a supervisor's `wb_supervisor_simulation_set_mode`), the run waits
@@ -556,7 +597,23 @@ impl<'c> Controllers<'c> {
                     .and_then(|r| r.light.get(i).copied())
                     .unwrap_or(f64::NAN)),
                 Source::Camera(i) => match robot.cameras.get(i) {
-                    Some(camera) => Reading::Bytes(bgra(&camera.image.rgb)),
+                    Some(camera) => {
+                        let mut image = bgra(&camera.image.rgb);
+                        if let (Some(rays), false) = (&self.rays, self.spots.is_empty()) {
+                            let prepared = prepared
+                                .get_or_insert_with(|| rays.prepare(simulation, driven.robot));
+                            crate::laser::paint(
+                                &mut image,
+                                &rig.cameras[i],
+                                rays,
+                                prepared,
+                                simulation,
+                                driven.robot,
+                                &self.spots,
+                            );
+                        }
+                        Reading::Bytes(image)
+                    }
                     None => continue,
                 },
                 Source::Gps(offset) => {

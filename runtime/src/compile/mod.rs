@@ -186,9 +186,20 @@ fn turned(frame: &Frame, turn: Option<[f64; 4]>) -> Frame {
     }
 }
 
-/// For nodes whose axes carry meaning (robots, cameras, cylinder-like geometry): the rotation
-/// from regatta's frame for them (y up, +x forward) to the frame a world in FLU writes them in.
+/// For nodes whose axes carry meaning (cameras, viewpoints, cylinder-like geometry): the
+/// rotation from regatta's frame for them (y up, +x forward) to the frame a world in FLU
+/// writes them in.
 fn flu_to_regatta(scene: &Scene, body: Authoring) -> Option<[f64; 4]> {
+    (body == Authoring::World && scene.objects.flu_geometry()).then_some([
+        1.0,
+        0.0,
+        0.0,
+        std::f64::consts::FRAC_PI_2,
+    ])
+}
+
+/// The same for a robot's body: turned only in z-up FLU worlds (in a y-up one its y is up).
+fn flu_robot_to_regatta(scene: &Scene, body: Authoring) -> Option<[f64; 4]> {
     (body == Authoring::World && scene.objects == Objects::Flu).then_some([
         1.0,
         0.0,
@@ -540,7 +551,7 @@ impl Compiler<'_> {
             DVec3::ZERO,
         ));
         let body = turned(&own, scene.turn(axes.own, axes.body));
-        let to_regatta = flu_to_regatta(scene, axes.body);
+        let to_regatta = flu_robot_to_regatta(scene, axes.body);
         // A generic Webots robot moves when its wheels make a drive; it looks where they roll.
         let generic = scene.type_name(node) == "Robot";
         let drive = generic
@@ -759,7 +770,9 @@ impl Compiler<'_> {
         let scene = self.scene;
         // Webots cameras look along -z before R2022a, along +x (z up) from then.
         let look = match (scene.node(node).axes.body, scene.objects) {
-            (Authoring::World, Objects::Flu) => Some([1.0, 0.0, 0.0, std::f64::consts::FRAC_PI_2]),
+            (Authoring::World, Objects::Flu | Objects::FluYUp) => {
+                Some([1.0, 0.0, 0.0, std::f64::consts::FRAC_PI_2])
+            }
             (Authoring::World, Objects::Legacy) => {
                 Some([0.0, 1.0, 0.0, std::f64::consts::FRAC_PI_2])
             }
@@ -777,7 +790,10 @@ impl Compiler<'_> {
         let robot_name = self.rig.robots[robot].name.clone();
         let width = scene.int(node, "width").max(1) as usize;
         let height = scene.int(node, "height").max(1) as usize;
-        if height == 1 {
+        // A generic Webots Robot's cameras are cameras whatever their size (Webots' API tests
+        // use 1×1 ones); on a robot regatta knows, one pixel high is the K213 turret.
+        let generic = scene.type_name(self.rig.robots[robot].node) == "Robot";
+        if height == 1 && !generic {
             let forward = device.apply_vector(DVec3::X).normalize_or(DVec3::X);
             if forward.y.abs() > 1e-6 || forward.x < 1.0 - 1e-6 {
                 self.warnings.push(format!(

@@ -91,6 +91,7 @@ impl<'c> Lowerer<'c> {
         };
         self.objects = match (self.up_axis, version) {
             (UpAxis::Z, Some(v)) if v >= (2022, 'a') => crate::webots::Objects::Flu,
+            (UpAxis::Y, Some(v)) if v >= (2022, 'a') => crate::webots::Objects::FluYUp,
             _ => crate::webots::Objects::Legacy,
         };
     }
