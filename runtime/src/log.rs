@@ -34,11 +34,13 @@ mod cdr;
 mod channels;
 mod error;
 mod foxglove;
+mod programs;
 
 pub use cdr::{Cdr, CdrReader, ShortMessage};
 pub use channels::{is_ros2_topic, robot_tokens, sanitize, Channel, Channels, UnknownChannel};
 pub use error::LogError;
 pub use foxglove::SCHEMAS as FOXGLOVE_SCHEMAS;
+pub use programs::PROGRAM_SCHEMAS;
 
 /// What a run needs to be repeated, stored in the log.
 #[derive(Clone, Debug, PartialEq)]
@@ -171,6 +173,17 @@ pub struct Recorder<W: Write + Seek> {
     cdr: Cdr,
     /// Simulated time at which the open chunk is closed and written out.
     chunk_closes_at: f64,
+    /// The channels the log holds, the robots' topic tokens and names (for the channels of
+    /// controller programs, made on first use).
+    wanted: Channels,
+    tokens: Vec<String>,
+    robot_names: Vec<String>,
+    programs: [programs::Lazy; 2],
+}
+
+/// Simulated seconds as a log time (ns).
+fn ns(seconds: f64) -> u64 {
+    (seconds.max(0.0) * 1e9).round() as u64
 }
 
 /// Simulated seconds a chunk covers at most: a crash or a full disk loses at most this much
@@ -324,6 +337,10 @@ impl<W: Write + Seek> Recorder<W> {
             sequence,
             cdr,
             chunk_closes_at: simulation.time + CHUNK_SECONDS,
+            wanted,
+            robot_names: simulation.robots.iter().map(|r| r.name.clone()).collect(),
+            tokens,
+            programs: Default::default(),
         })
     }
 
@@ -350,7 +367,6 @@ impl<W: Write + Seek> Recorder<W> {
         // Sensors were read at the start of the step, the pose is the end of it.
         let t = simulation.time;
         let read_at = t - simulation.time_step;
-        let ns = |seconds: f64| (seconds.max(0.0) * 1e9).round() as u64;
         for (index, robot) in simulation.robots.iter().enumerate() {
             let rig = &simulation.compiled.rig.robots[index];
             let channels = &self.robots[index];

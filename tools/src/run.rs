@@ -84,8 +84,13 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
     let name = crate::world::world_name(&args.world);
     let mut simulation =
         Simulation::new(compiled, args.seed).with_context(|| format!("cannot run {name}"))?;
-    let mut programs =
-        crate::webots::start_programs(&mut simulation, programs, &args.world, &args.controllers)?;
+    let mut programs = crate::webots::start_programs(
+        &mut simulation,
+        programs,
+        &args.world,
+        &args.controllers,
+        args.log.is_some(),
+    )?;
     let backend = crate::vision::backend(args.renderer, compiled, &args.world)?;
     let vision = backend.as_ref().map(|b| b.describe());
     if let Some(backend) = backend {
@@ -145,7 +150,13 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
         if let Some(error) = &simulation.vision_error {
             anyhow::bail!("step {}: {error}", simulation.steps);
         }
-        let logged = recorder.as_mut().map_or(Ok(()), |r| r.record(&simulation));
+        let logged = recorder.as_mut().map_or(Ok(()), |r| {
+            r.record(&simulation)?;
+            match &mut programs {
+                Some(programs) => record_programs(r, programs.take_records()),
+                None => Ok(()),
+            }
+        });
         if let Err(error) = logged {
             let error = anyhow::Error::new(error)
                 .context(format!("while logging step {}", simulation.steps));
@@ -190,7 +201,10 @@ fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
     }
     // The controllers end as in Webots: their last wb_robot_step returns -1.
     if let Some(programs) = programs.take() {
-        programs.finish(&simulation);
+        let last = programs.finish(&simulation);
+        if let Some(recorder) = &mut recorder {
+            record_programs(recorder, last).context("cannot write the log")?;
+        }
     }
     let was_interrupted = stop.requested();
     let log_line = match (recorder, args.log.as_deref()) {
@@ -326,4 +340,18 @@ fn progress_bar(steps: u64) -> Option<indicatif::ProgressBar> {
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     Some(bar)
+}
+
+/// Writes what controller programs printed and their LEDs' changes into the log.
+fn record_programs<W: std::io::Write + std::io::Seek>(
+    recorder: &mut regatta_runtime::log::Recorder<W>,
+    records: regatta_webots::Records,
+) -> Result<(), regatta_runtime::log::LogError> {
+    for line in &records.lines {
+        recorder.record_output(line.robot, line.time, &line.line)?;
+    }
+    for state in &records.leds {
+        recorder.record_leds(state.robot, state.time, &state.leds)?;
+    }
+    Ok(())
 }

@@ -102,6 +102,7 @@ pub fn start_programs<'c>(
     programs: Programs,
     world: &std::path::Path,
     overrides: &ControllerOverride,
+    record: bool,
 ) -> anyhow::Result<Option<regatta_webots::Controllers<'c>>> {
     let Programs { planned, scene } = programs;
     if planned.is_empty() {
@@ -132,6 +133,7 @@ pub fn start_programs<'c>(
     let options = regatta_webots::Options {
         timeout: std::time::Duration::from_secs_f64(overrides.controller_timeout),
         echo: true,
+        record,
     };
     let project = regatta_webots::project_of(world);
     let controllers =

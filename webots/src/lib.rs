@@ -13,7 +13,8 @@
 //! - a generic robot's distance sensors, cast in 3-D ([`rays`]), and the red spots its
 //!   lasers draw on camera images ([`laser`]);
 //! - a supervisor's view of the world ([`supervisor`]);
-//! - the processes in lock-step with a simulation ([`session`]).
+//! - the processes in lock-step with a simulation ([`session`]), and what they print
+//!   ([`output`]).
 //!
 //! Running a world's controllers runs its project's code: [`plan`] finds which robots would,
 //! and the command line says so before it starts them.
@@ -22,13 +23,13 @@ pub mod compile;
 pub mod devices;
 mod error;
 pub mod laser;
+pub mod output;
 pub mod protocol;
 pub mod python;
 pub mod radio;
 pub mod rays;
 pub mod session;
 pub mod supervisor;
-mod tail;
 
 use std::path::{Path, PathBuf};
 
@@ -42,7 +43,8 @@ pub fn programs_of(world: &Path) -> impl Fn(&str) -> bool {
     let project = (world != Path::new("-")).then(|| project_of(world));
     move |name: &str| project.as_deref().is_some_and(|p| is_program(p, name))
 }
-pub use session::{Controllers, Options, Start};
+pub use output::ProgramLine;
+pub use session::{Controllers, LedState, Options, Records, Start};
 
 /// A robot whose controller is its project's own program.
 #[derive(Clone, Debug)]

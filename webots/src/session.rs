@@ -21,6 +21,7 @@ use regatta_runtime::sim::Simulation;
 
 use crate::devices::{with_resolution, Device, Source};
 use crate::error::WebotsError;
+use crate::output::{Output, ProgramLine};
 use crate::protocol::{self, kind, op, status, Command as StepCommand, Writer};
 use crate::radio::{Delivered, Listener, Packet, Radio};
 use crate::supervisor::{Supervisor, MODE_REAL_TIME};
@@ -32,6 +33,8 @@ pub struct Options {
     pub timeout: Duration,
     /// Where controllers' output goes: each line prefixed by the robot's name.
     pub echo: bool,
+    /// Whether controllers' output lines and LEDs are kept for a log ([`Controllers::take_records`]).
+    pub record: bool,
 }
 
 impl Default for Options {
@@ -39,6 +42,7 @@ impl Default for Options {
         Options {
             timeout: Duration::from_secs(10),
             echo: true,
+            record: false,
         }
     }
 }
@@ -129,9 +133,13 @@ struct Driven {
     /// The step at which the controller's `wb_robot_step` returns.
     wake: u64,
     senses: Arc<AtomicU8>,
-    echo: Vec<std::thread::JoinHandle<()>>,
-    /// Its standard error's last lines, when they are not echoed.
-    tail: Option<crate::tail::Tail>,
+    /// Its standard output and error (kept quietly when neither echoed nor recorded, so
+    /// that an error can quote its last lines: a batch's Python traceback).
+    output: Option<Output>,
+    /// Whether its output is echoed (else the error that ends its run quotes it).
+    echo: bool,
+    /// Whether a command changed an LED since its state was last recorded.
+    leds_changed: bool,
     frame: Vec<u8>,
     /// The controller is done (it called `wb_robot_cleanup`, or exited with status 0): its
     /// robot stands still from then on.
@@ -156,6 +164,25 @@ pub struct Controllers<'c> {
     rays: Option<crate::rays::Rays<'c>>,
     /// This step's laser spots (enabled laser sensors' hits), which cameras see.
     spots: Vec<crate::laser::Spot>,
+    /// Whether output and LEDs are kept, and what was kept since the last `take_records`.
+    record: bool,
+    records: Records,
+}
+
+/// What controllers printed and how their robots' LEDs changed, for a log.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Records {
+    pub lines: Vec<ProgramLine>,
+    pub leds: Vec<LedState>,
+}
+
+/// A robot's LEDs after a step in which its controller changed one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LedState {
+    pub robot: usize,
+    pub time: f64,
+    /// Each LED's name and value (0 off).
+    pub leds: Vec<(String, i32)>,
 }
 
 /// Webots' steps for `ms` milliseconds at a basic time step of `step_ms`: whole steps,
@@ -192,6 +219,8 @@ impl<'c> Controllers<'c> {
             real_time: None,
             rays: None,
             spots: Vec::new(),
+            record: options.record,
+            records: Records::default(),
         };
         let compiled = simulation.compiled;
         if starts
@@ -233,6 +262,11 @@ impl<'c> Controllers<'c> {
         listener
             .set_nonblocking(true)
             .map_err(|source| WebotsError::io(&path, source))?;
+        // Kept even when neither echoed nor recorded: an error quotes its last lines.
+        let file = self.sockets.join(format!("{}.out", start.robot));
+        let (output, stdout, stderr) =
+            Output::create(&file, start.robot, &robot_name, options.echo)?;
+        let mut output = Some(output);
         let mut child = Command::new(&start.executable)
             .args(&start.args)
             .envs(start.env.iter().map(|(k, v)| (k, v)))
@@ -240,31 +274,14 @@ impl<'c> Controllers<'c> {
             .env("REGATTA_CONTROLLER_URL", &path)
             .env("WEBOTS_ROBOT_NAME", &robot_name)
             .stdin(Stdio::null())
-            .stdout(if options.echo {
-                Stdio::piped()
-            } else {
-                Stdio::null()
-            })
-            .stderr(Stdio::piped())
+            .stdout(stdout)
+            .stderr(stderr)
             .spawn()
             .map_err(|source| WebotsError::Spawn {
                 robot: robot_name.clone(),
                 controller: start.controller.clone(),
                 source: Arc::new(source),
             })?;
-        let mut echo = Vec::new();
-        let mut tail = None;
-        if !options.echo {
-            tail = child.stderr.take().map(crate::tail::Tail::keep);
-        }
-        if options.echo {
-            if let Some(out) = child.stdout.take() {
-                echo.push(echo_lines(out, robot_name.clone()));
-            }
-            if let Some(err) = child.stderr.take() {
-                echo.push(echo_lines(err, robot_name.clone()));
-            }
-        }
         let failure = |child: &mut Child, what: String| WebotsError::Controller {
             robot: robot_name.clone(),
             controller: start.controller.clone(),
@@ -280,14 +297,15 @@ impl<'c> Controllers<'c> {
                 Ok((stream, _)) => break stream,
                 Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
                     if let Ok(Some(status)) = child.try_wait() {
+                        // What it printed says why (shown when echoing, else quoted).
+                        let words = last_words(output.as_mut(), options.echo, 0.0);
                         return Err(WebotsError::Controller {
                             robot: robot_name.clone(),
                             controller: start.controller.clone(),
                             time: 0.0,
                             what: format!(
-                                "it {} before connecting (did it call wb_robot_init, or create its Robot in Python?){}",
+                                "it {} before connecting (did it call wb_robot_init, or create its Robot in Python?){words}",
                                 describe_exit(status),
-                                tail.as_mut().map(|t| t.last_words()).unwrap_or_default()
                             ),
                         });
                     }
@@ -361,8 +379,9 @@ impl<'c> Controllers<'c> {
             north: start.north,
             wake: 0,
             senses,
-            echo,
-            tail,
+            output,
+            echo: options.echo,
+            leds_changed: false,
             frame: Vec::new(),
             finished: false,
         };
@@ -702,6 +721,9 @@ impl<'c> Controllers<'c> {
         loop {
             if !receive_frame(driven, time, self.timeout)? {
                 driven.finished = true;
+                if let Some(output) = &mut driven.output {
+                    output.finish(time, &mut self.records.lines);
+                }
                 return Ok(());
             }
             if driven.frame.first() != Some(&protocol::frame::REQUEST) {
@@ -721,6 +743,10 @@ impl<'c> Controllers<'c> {
                 .map_err(|e| protocol_error(driven, time, e))?;
             let answer = self.writer.finish().to_vec();
             send(driven, &answer, time)?;
+        }
+        // What it printed before asking for this step.
+        if let Some(output) = &mut driven.output {
+            output.drain(time, &mut self.records.lines);
         }
         let duration = protocol::read_step(&driven.frame, &mut self.commands)
             .map_err(|e| protocol_error(driven, time, e))?;
@@ -763,7 +789,11 @@ impl<'c> Controllers<'c> {
                 (op::MOTOR_VELOCITY, Source::Wheel { .. } | Source::Inert) => {
                     driven.motors[d - 1].velocity = command.value;
                 }
-                (op::LED_SET, _) => driven.leds[d - 1] = command.value as i32,
+                (op::LED_SET, _) => {
+                    let value = command.value as i32;
+                    driven.leds_changed |= driven.leds[d - 1] != value;
+                    driven.leds[d - 1] = value;
+                }
                 (op::EMITTER_SEND, Source::Emitter(offset)) => {
                     let robot = &simulation.robots[driven.robot];
                     let rig = &simulation.compiled.rig.robots[driven.robot];
@@ -809,7 +839,30 @@ impl<'c> Controllers<'c> {
         }
         driven.senses.store(bits, Ordering::Relaxed);
         driven.wake = step + steps_for(duration as f64, time_step_ms);
+        if std::mem::take(&mut driven.leds_changed) && self.record {
+            let leds = driven
+                .devices
+                .iter()
+                .zip(&driven.leds)
+                .filter(|(device, _)| matches!(device.source, Source::Led))
+                .map(|(device, &value)| (device.name.clone(), value))
+                .collect();
+            self.records.leds.push(LedState {
+                robot: driven.robot,
+                time,
+                leds,
+            });
+        }
+        if !self.record {
+            self.records.lines.clear();
+        }
         Ok(())
+    }
+
+    /// What controllers printed and their LEDs' changes since the last call, in the order
+    /// they happened (robot by robot within a step).
+    pub fn take_records(&mut self) -> Records {
+        std::mem::take(&mut self.records)
     }
 
     /// Whether every controller is done (each called `wb_robot_cleanup` or exited with
@@ -819,9 +872,13 @@ impl<'c> Controllers<'c> {
     }
 
     /// Ends every controller as Webots does: `wb_robot_step` returns −1, and a controller
-    /// still running a second later is killed.
-    pub fn finish(mut self, simulation: &Simulation) {
+    /// still running a second later is killed. Returns what they printed last.
+    pub fn finish(mut self, simulation: &Simulation) -> Records {
         self.quit(Some(simulation));
+        if !self.record {
+            self.records.lines.clear();
+        }
+        std::mem::take(&mut self.records)
     }
 
     fn quit(&mut self, simulation: Option<&Simulation>) {
@@ -845,8 +902,8 @@ impl<'c> Controllers<'c> {
                     }
                 }
             }
-            for handle in driven.echo.drain(..) {
-                let _ = handle.join();
+            if let Some(output) = &mut driven.output {
+                output.finish(simulation.map_or(0.0, |s| s.time), &mut self.records.lines);
             }
         }
         self.driven.clear();
@@ -1015,6 +1072,27 @@ fn is_timeout(error: &std::io::Error) -> bool {
     )
 }
 
+/// What a controller whose output is not shown printed last (a Python traceback), quoted
+/// for the error that ends its run: its last lines after a colon, each on a line of its own;
+/// empty when its output is echoed (the lines are shown) or it printed nothing.
+fn last_words(output: Option<&mut Output>, echo: bool, time: f64) -> String {
+    const LINES: usize = 16;
+    let Some(output) = output.filter(|_| !echo) else {
+        return String::new();
+    };
+    let mut lines = Vec::new();
+    output.finish(time, &mut lines);
+    if lines.is_empty() {
+        return String::new();
+    }
+    let mut words = String::from("; its last words:");
+    for line in &lines[lines.len().saturating_sub(LINES)..] {
+        words.push_str("\n    ");
+        words.push_str(&line.line);
+    }
+    words
+}
+
 /// The connection broke: the controller ended (how, if it has) or closed its socket.
 fn lost(driven: &mut Driven, time: f64, error: std::io::Error) -> WebotsError {
     // A process that closed its socket is ending: give it a moment to be reaped.
@@ -1022,9 +1100,10 @@ fn lost(driven: &mut Driven, time: f64, error: std::io::Error) -> WebotsError {
     let what = loop {
         match driven.child.try_wait() {
             Ok(Some(status)) => {
-                let words = match &mut driven.tail {
-                    Some(tail) if !status.success() => tail.last_words(),
-                    _ => String::new(),
+                let words = if status.success() {
+                    String::new()
+                } else {
+                    last_words(driven.output.as_mut(), driven.echo, time)
                 };
                 break format!("it {}{words}", describe_exit(status));
             }
@@ -1069,18 +1148,6 @@ fn signal_name(signal: i32) -> &'static str {
         15 => " (SIGTERM)",
         _ => "",
     }
-}
-
-/// Copies a controller's output to standard error, each line behind the robot's name.
-fn echo_lines(pipe: impl Read + Send + 'static, robot: String) -> std::thread::JoinHandle<()> {
-    std::thread::spawn(move || {
-        use std::io::BufRead;
-        let reader = std::io::BufReader::new(pipe);
-        for line in reader.split(b'\n') {
-            let Ok(line) = line else { break };
-            eprintln!("[{robot}] {}", String::from_utf8_lossy(&line).trim_end());
-        }
-    })
 }
 
 fn absolute(path: &Path) -> PathBuf {
