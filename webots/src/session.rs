@@ -1072,17 +1072,17 @@ fn is_timeout(error: &std::io::Error) -> bool {
     )
 }
 
-/// What a controller whose output is not shown printed last (a Python traceback), quoted
-/// for the error that ends its run: its last lines after a colon, each on a line of its own;
-/// empty when its output is echoed (the lines are shown) or it printed nothing.
+/// What a controller printed last (a Python traceback), for the error that ends its run: when
+/// its output is echoed, the lines are shown now and nothing is quoted; else its last lines
+/// after a colon, each on a line of its own (empty when it printed nothing).
 fn last_words(output: Option<&mut Output>, echo: bool, time: f64) -> String {
     const LINES: usize = 16;
-    let Some(output) = output.filter(|_| !echo) else {
+    let Some(output) = output else {
         return String::new();
     };
     let mut lines = Vec::new();
     output.finish(time, &mut lines);
-    if lines.is_empty() {
+    if echo || lines.is_empty() {
         return String::new();
     }
     let mut words = String::from("; its last words:");
@@ -1100,10 +1100,10 @@ fn lost(driven: &mut Driven, time: f64, error: std::io::Error) -> WebotsError {
     let what = loop {
         match driven.child.try_wait() {
             Ok(Some(status)) => {
-                let words = if status.success() {
+                let words = if status.success() || driven.echo {
                     String::new()
                 } else {
-                    last_words(driven.output.as_mut(), driven.echo, time)
+                    last_words(driven.output.as_mut(), false, time)
                 };
                 break format!("it {}{words}", describe_exit(status));
             }
