@@ -23,6 +23,7 @@ mod plot;
 mod render;
 mod run;
 mod schema;
+mod sdk;
 mod serial;
 mod signals;
 mod test_webots;
@@ -103,6 +104,9 @@ enum Command {
     /// Run Webots' own API tests (a Webots installation's tests/api) against regatta and print
     /// a table: test, result, first failure, time.
     TestWebots(test_webots::Args),
+    /// Write regatta's Webots C API (headers and controller library) into a folder, to build
+    /// controllers by hand (an `<extern>` controller).
+    WebotsSdk(sdk::Args),
 }
 
 /// Piping into `head` closes our standard output early: like other Unix tools, end quietly
@@ -197,6 +201,7 @@ fn run() -> ExitCode {
         Command::Plot(args) => plot::plot(args),
         Command::View(args) => view::run(args, color),
         Command::TestWebots(args) => test_webots::run(args),
+        Command::WebotsSdk(args) => sdk::run(args),
     };
     match result {
         Ok(Outcome::Clean) => ExitCode::SUCCESS,

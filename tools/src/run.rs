@@ -343,7 +343,7 @@ fn progress_bar(steps: u64) -> Option<indicatif::ProgressBar> {
 }
 
 /// Writes what controller programs printed and their LEDs' changes into the log.
-fn record_programs<W: std::io::Write + std::io::Seek>(
+pub fn record_programs<W: std::io::Write + std::io::Seek>(
     recorder: &mut regatta_runtime::log::Recorder<W>,
     records: regatta_webots::Records,
 ) -> Result<(), regatta_runtime::log::LogError> {

@@ -136,6 +136,13 @@ impl Pace {
 
 fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
     let mut loaded = crate::world::load(&args.world, &args.options, color)?;
+    // A project's own controllers run as in `run`, started again at each reset.
+    let programs = crate::webots::plan_programs(
+        &mut loaded,
+        &args.world,
+        &args.controllers,
+        args.options.lenient,
+    )?;
     crate::webots::prepare_run(&mut loaded, &args.controllers, args.options.lenient)?;
     let compiled = &loaded.compiled;
     let name = crate::world::world_name(&args.world);
@@ -149,6 +156,13 @@ fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
         Ok(simulation)
     };
     let mut simulation = start(args.seed)?;
+    let mut running = crate::webots::start_programs(
+        &mut simulation,
+        programs.clone(),
+        &args.world,
+        &args.controllers,
+        args.log.is_some(),
+    )?;
     let limit = crate::world::step_limit(args.steps, args.duration, simulation.time_step)?;
     let mut recorder = args
         .log
@@ -214,7 +228,17 @@ fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
             match apply(control, &mut pace, finished, logging, &simulation) {
                 Applied::Note(note) => viewer.update_status(|s| s.note = note),
                 Applied::Reset(seed) => {
+                    if let Some(old) = running.take() {
+                        old.finish(&simulation);
+                    }
                     simulation = start(seed.or(args.seed))?;
+                    running = crate::webots::start_programs(
+                        &mut simulation,
+                        programs.clone(),
+                        &args.world,
+                        &args.controllers,
+                        false,
+                    )?;
                     finished = limit == Some(0);
                     pace.restart(0.0);
                     viewer.restart(&simulation);
@@ -233,7 +257,16 @@ fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
         if idle {
             continue;
         }
-        simulation.step();
+        match running.as_mut() {
+            Some(controllers) => {
+                simulation.sense();
+                if let Err(error) = controllers.exchange(&mut simulation) {
+                    failure = Some(error.to_string());
+                }
+                simulation.act();
+            }
+            None => simulation.step(),
+        }
         if let Some(error) = &simulation.vision_error {
             anyhow::bail!("step {}: {error}", simulation.steps);
         }
@@ -241,6 +274,10 @@ fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
             recorder
                 .record(&simulation)
                 .with_context(|| format!("while logging step {}", simulation.steps))?;
+            if let Some(controllers) = running.as_mut() {
+                crate::run::record_programs(recorder, controllers.take_records())
+                    .with_context(|| format!("while logging step {}", simulation.steps))?;
+            }
         }
         viewer.after_step(&simulation);
         if let Some(robot) = simulation
@@ -264,6 +301,12 @@ fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
                 viewer.publish(&simulation);
             }
         }
+        if failure.is_some() && running.is_some() {
+            // A failed controller is done; the others end with it, as in `run`.
+            if let Some(old) = running.take() {
+                old.finish(&simulation);
+            }
+        }
         if failure.is_some() || limit.is_some_and(|l| simulation.steps >= l) {
             finished = true;
             viewer.publish(&simulation);
@@ -276,6 +319,12 @@ fn live(args: Args, bind: IpAddr, color: bool) -> anyhow::Result<Outcome> {
         stepping += since.elapsed();
     }
     let wall = stepping.as_secs_f64();
+    if let Some(controllers) = running.take() {
+        let last = controllers.finish(&simulation);
+        if let Some(recorder) = recorder.as_mut() {
+            crate::run::record_programs(recorder, last).context("cannot write the log")?;
+        }
+    }
     let log_line = match (recorder, args.log.as_deref()) {
         (Some(recorder), Some(path)) => {
             let stats = recorder

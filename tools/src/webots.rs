@@ -77,7 +77,10 @@ pub fn plan_programs(
         .iter()
         .any(|p| p.supervisor)
         .then(|| loaded.checked.scene.clone());
-    for item in &planned {
+    for item in planned
+        .iter()
+        .filter(|p| !matches!(p.program, regatta_webots::Program::Extern { .. }))
+    {
         eprintln!(
             "note: robot '{}' runs its project's controller {} ({}): this runs the project's code (--builtin-only runs none)",
             names[item.robot],
@@ -89,7 +92,7 @@ pub fn plan_programs(
 }
 
 /// The robots that run their project's programs, and the scene a supervisor among them reads.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct Programs {
     planned: Vec<regatta_webots::Planned>,
     scene: Option<regatta_schema::Scene>,
@@ -112,6 +115,10 @@ pub fn start_programs<'c>(
     let mut starts = Vec::new();
     for item in planned {
         let robot = simulation.compiled.rig.robots[item.robot].name.clone();
+        if let regatta_webots::Program::Extern { .. } = item.program {
+            starts.push(item.start(None));
+            continue;
+        }
         let started = std::time::Instant::now();
         let (launch, built) = regatta_webots::runnable(&item.program, &cache)
             .map_err(|e| anyhow::anyhow!("robot '{robot}': {e}"))?;
@@ -120,9 +127,9 @@ pub fn start_programs<'c>(
             eprintln!(
                 "note: {} \"{}\" in {:.2} s",
                 match item.program {
-                    regatta_webots::Program::C { .. } => "compiled controller",
                     regatta_webots::Program::Python { .. } =>
                         "built the Python controller library for",
+                    _ => "compiled controller",
                 },
                 start.controller,
                 started.elapsed().as_secs_f64()

@@ -410,3 +410,121 @@ fn a_batch_of_a_c_controllers_world_reproduces_its_single_runs() {
         );
     }
 }
+
+#[test]
+fn an_extern_controller_started_by_hand_drives_its_robot() {
+    use std::io::BufRead;
+    let dir = temp_dir("webots-extern");
+    std::fs::create_dir_all(dir.join("worlds")).unwrap();
+    let world = dir.join("worlds").join("w.wbt");
+    std::fs::write(
+        &world,
+        r#"#VRML_SIM R2023b utf8
+EXTERNPROTO "webots://projects/robots/gctronic/e-puck/protos/E-puck.proto"
+WorldInfo {
+  basicTimeStep 32
+}
+E-puck {
+  controller "<extern>"
+}
+"#,
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("drive.c"),
+        r#"#include <math.h>
+#include <stdio.h>
+#include <webots/motor.h>
+#include <webots/robot.h>
+int main() {
+  wb_robot_init();
+  WbDeviceTag l = wb_robot_get_device("left wheel motor");
+  WbDeviceTag r = wb_robot_get_device("right wheel motor");
+  wb_motor_set_position(l, INFINITY);
+  wb_motor_set_position(r, INFINITY);
+  wb_motor_set_velocity(l, 3.0);
+  wb_motor_set_velocity(r, 3.0);
+  int steps = 0;
+  while (wb_robot_step(32) != -1)
+    steps++;
+  printf("stepped %d times\n", steps);
+  return 0;
+}
+"#,
+    )
+    .unwrap();
+    // The SDK a user builds an extern controller with.
+    let sdk = dir.join("sdk");
+    let output = regatta().arg("webots-sdk").arg(&sdk).output().unwrap();
+    assert!(output.status.success());
+    let compiled = std::process::Command::new("cc")
+        .args(["-O2", "-I"])
+        .arg(sdk.join("include"))
+        .arg(dir.join("drive.c"))
+        .arg(sdk.join("regatta_controller.c"))
+        .args(["-lm", "-o"])
+        .arg(dir.join("drive"))
+        .status()
+        .unwrap();
+    assert!(compiled.success());
+    let mut run = regatta()
+        .arg("run")
+        .arg(&world)
+        .args(["--duration", "2"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = std::io::BufReader::new(run.stderr.take().unwrap());
+    let mut url = None;
+    let mut line = String::new();
+    while stderr.read_line(&mut line).unwrap() > 0 {
+        if let Some(at) = line.find("REGATTA_CONTROLLER_URL=") {
+            let rest = &line[at + "REGATTA_CONTROLLER_URL=".len()..];
+            url = rest.split_whitespace().next().map(str::to_owned);
+            break;
+        }
+        line.clear();
+    }
+    let url = url.expect("the run says where the extern controller connects");
+    let controller = std::process::Command::new(dir.join("drive"))
+        .env("REGATTA_CONTROLLER_URL", &url)
+        .output()
+        .unwrap();
+    assert!(controller.status.success());
+    // 2 s of simulated time in 32 ms steps: the run ends at its 63rd step.
+    assert_eq!(
+        String::from_utf8_lossy(&controller.stdout).trim(),
+        "stepped 62 times"
+    );
+    let output = run.wait_with_output().unwrap();
+    assert!(output.status.success());
+    let (x, _, _) = pose(&String::from_utf8_lossy(&output.stdout), "e-puck");
+    // 3 rad/s on the e-puck's 20.5 mm wheels for 2.016 s.
+    assert!((x - 3.0 * 0.0205 * 2.016).abs() < 0.01, "x = {x}");
+}
+
+#[test]
+fn view_runs_a_projects_controller_as_run_does() {
+    let world = root().join(EPUCK);
+    let output = regatta()
+        .env("REGATTA_CACHE_DIR", cache())
+        .arg("view")
+        .arg(&world)
+        .args([
+            "--exit",
+            "--duration",
+            "3",
+            "--speed",
+            "fast",
+            "--port",
+            "0",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{stderr}");
+    assert!(stderr.contains("runs its project's controller"), "{stderr}");
+    assert!(stdout.contains("simulated 3.008 s in 94 steps"), "{stdout}");
+}

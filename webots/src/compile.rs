@@ -75,13 +75,18 @@ pub enum Program {
     },
     /// A Python controller (`NAME.py`), run by the user's Python 3 ([`crate::python`]).
     Python { name: String, folder: PathBuf },
+    /// `<extern>`: a program the user starts, which connects by itself (its folder: the
+    /// project's).
+    Extern { folder: PathBuf },
 }
 
 impl Program {
     /// The controller's folder: its working directory when it runs.
     pub fn folder(&self) -> &Path {
         match self {
-            Program::C { folder, .. } | Program::Python { folder, .. } => folder,
+            Program::C { folder, .. }
+            | Program::Python { folder, .. }
+            | Program::Extern { folder } => folder,
         }
     }
 
@@ -89,6 +94,7 @@ impl Program {
     pub fn name(&self) -> &str {
         match self {
             Program::C { name, .. } | Program::Python { name, .. } => name,
+            Program::Extern { .. } => "<extern>",
         }
     }
 
@@ -97,6 +103,7 @@ impl Program {
         match self {
             Program::C { .. } => "C",
             Program::Python { .. } => "Python",
+            Program::Extern { .. } => "extern",
         }
     }
 }
@@ -235,6 +242,15 @@ pub fn sdk(cache: &Path) -> Result<PathBuf, WebotsError> {
     if dir.join("complete").is_file() {
         return Ok(dir);
     }
+    write_sdk(&dir)?;
+    let mark = dir.join("complete");
+    std::fs::write(&mark, b"").map_err(|source| WebotsError::io(&mark, source))?;
+    Ok(dir)
+}
+
+/// Writes the headers (`dir/include/webots/`) and the controller library's sources
+/// (`dir/regatta_controller.c`, which includes `dir/supervisor.c`) into `dir`.
+pub fn write_sdk(dir: &Path) -> Result<(), WebotsError> {
     let include = dir.join("include").join("webots");
     std::fs::create_dir_all(&include).map_err(|source| WebotsError::io(&include, source))?;
     for (name, text) in HEADERS {
@@ -245,9 +261,7 @@ pub fn sdk(cache: &Path) -> Result<PathBuf, WebotsError> {
     std::fs::write(&library, LIBRARY).map_err(|source| WebotsError::io(&library, source))?;
     let part = dir.join("supervisor.c");
     std::fs::write(&part, LIBRARY_SUPERVISOR).map_err(|source| WebotsError::io(&part, source))?;
-    let mark = dir.join("complete");
-    std::fs::write(&mark, b"").map_err(|source| WebotsError::io(&mark, source))?;
-    Ok(dir)
+    Ok(())
 }
 
 /// Compiles a C controller (or finds it compiled), returning the executable's path and

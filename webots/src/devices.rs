@@ -50,6 +50,11 @@ pub enum Source {
     /// axes.
     InertialUnit(glam::DMat3),
     Compass(glam::DMat3),
+    /// An accelerometer: its rotation relative to the robot node (file axes) and its position
+    /// in the robot's frame (regatta's), whose motion it reads.
+    Accelerometer(glam::DMat3, DVec3),
+    /// A gyro: its rotation relative to the robot node (file axes).
+    Gyro(glam::DMat3),
     /// An emitter or a receiver, at its position in the robot's frame.
     Emitter(DVec3),
     Receiver(DVec3),
@@ -89,6 +94,7 @@ pub fn devices(scene: &Scene, rig: &RobotRig) -> Vec<Device> {
         sensor_devices(rig, &mut devices);
         let model = scene.node(rig.node).proto_names.first().map(String::as_str);
         stand_in_leds(model.unwrap_or(""), &mut devices);
+        stand_in_accelerometer(model.unwrap_or(""), &mut devices);
     }
     let mut walk = Walk {
         scene,
@@ -137,6 +143,23 @@ fn drive_devices(rig: &RobotRig, devices: &mut Vec<Device>) {
             source: Source::WheelAngle { left, sign: 1.0 },
         });
     }
+}
+
+/// The e-puck's accelerometer (`accelerometer`, at the body's centre, axes along the robot's,
+/// ±4 g with 0.5 % noise as Webots' model gives it): Webots' own e-puck controller reads it.
+fn stand_in_accelerometer(model: &str, devices: &mut Vec<Device>) {
+    if !matches!(model, "E-puck" | "E-puck_enu") {
+        return;
+    }
+    devices.push(Device {
+        kind: kind::ACCELEROMETER,
+        name: "accelerometer".to_owned(),
+        model: String::new(),
+        params: Vec::new(),
+        table: vec![[-39.24, -39.24, 0.005], [39.24, 39.24, 0.005]],
+        resolution: -1.0,
+        source: Source::Accelerometer(glam::DMat3::IDENTITY, DVec3::ZERO),
+    });
 }
 
 /// The LEDs of Webots' models that regatta's stand-ins leave out of their bodies (they are
@@ -378,17 +401,21 @@ impl Walk<'_> {
                 });
             }
             "Accelerometer" | "Gyro" | "Compass" | "InertialUnit" | "TouchSensor" => {
-                let relative = frame.then(&local_frame(scene, node)).linear;
+                let at = frame.then(&local_frame(scene, node));
+                let relative = at.linear;
                 let (kind, table, source) = match scene.type_name(node) {
                     "Accelerometer" => (
                         kind::ACCELEROMETER,
                         lookup_table(scene, node),
-                        Source::Fixed(f64::NAN),
+                        Source::Accelerometer(
+                            relative,
+                            self.rig.body_to_robot.then(&at).translation,
+                        ),
                     ),
                     "Gyro" => (
                         kind::GYRO,
                         lookup_table(scene, node),
-                        Source::Fixed(f64::NAN),
+                        Source::Gyro(relative),
                     ),
                     "Compass" => (
                         kind::COMPASS,
@@ -550,6 +577,15 @@ pub fn north_for(system: &str, z_up: bool) -> glam::DVec3 {
         _ if z_up => glam::DVec3::Y,
         _ => glam::DVec3::X,
     }
+}
+
+/// `WorldInfo.gravity` (m/s²; Webots' 9.81 when the world has no WorldInfo).
+pub fn gravity_of(scene: &regatta_schema::Scene) -> f64 {
+    scene
+        .roots
+        .iter()
+        .find(|&&n| scene.type_name(n) == "WorldInfo")
+        .map_or(9.81, |&n| scene.float(n, "gravity"))
 }
 
 /// A reading with Webots' `resolution`: rounded to a multiple of it (0 or less: as is).

@@ -17,7 +17,7 @@ pub enum WebotsError {
     OutsideProject { controller: String, path: PathBuf },
     #[error("controller \"{controller}\": {folder} holds no C source (NAME.c) or Python script (NAME.py)")]
     NoSources { controller: String, folder: PathBuf },
-    #[error("controller \"{controller}\" is written in {language}, which this version of regatta does not run yet (C controllers run)")]
+    #[error("controller \"{controller}\" ({language}) is not one regatta starts this way")]
     Unsupported {
         controller: String,
         language: &'static str,

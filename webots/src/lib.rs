@@ -8,7 +8,8 @@
 //! - the controller protocol ([`protocol`]): the frames a controller process and regatta
 //!   exchange over a Unix socket;
 //! - finding a controller in its project and compiling it into a cache ([`compile`]);
-//! - a robot's devices as Webots names them ([`devices`]);
+//! - a robot's devices as Webots names them ([`devices`]), and what its inertial devices
+//!   read from its motion ([`motion`]);
 //! - emitters and receivers: packets between robots ([`radio`]);
 //! - a generic robot's distance sensors, cast in 3-D ([`rays`]), and the red spots its
 //!   lasers draw on camera images ([`laser`]);
@@ -23,6 +24,7 @@ pub mod compile;
 pub mod devices;
 mod error;
 pub mod laser;
+pub mod motion;
 pub mod output;
 pub mod protocol;
 pub mod python;
@@ -65,19 +67,24 @@ pub struct Planned {
     pub start_rotation: glam::DMat3,
     /// The world's north in the file's axes (from `WorldInfo.coordinateSystem`).
     pub north: glam::DVec3,
+    /// `WorldInfo.gravity` (m/s²), which accelerometers read.
+    pub gravity: f64,
 }
 
 impl Planned {
-    /// What [`Controllers::start`] needs to run it, from its compiled `executable`.
-    pub fn start(&self, executable: PathBuf) -> Start {
+    /// What [`Controllers::start`] needs to run it, from its compiled `executable` (none for
+    /// an `<extern>` controller).
+    pub fn start(&self, executable: Option<PathBuf>) -> Start {
         Start {
             robot: self.robot,
-            controller: self
-                .program
-                .folder()
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default(),
+            controller: match &self.program {
+                Program::Extern { .. } => "<extern>".to_owned(),
+                program => program
+                    .folder()
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+            },
             executable,
             folder: self.program.folder().to_path_buf(),
             args: self.args.clone(),
@@ -88,6 +95,7 @@ impl Planned {
             custom_data: self.custom_data.clone(),
             start_rotation: self.start_rotation,
             north: self.north,
+            gravity: self.gravity,
         }
     }
 }
@@ -95,7 +103,7 @@ impl Planned {
 impl Planned {
     /// What [`Controllers::start`] needs to run it as `launch` says ([`runnable`]).
     pub fn start_with(&self, launch: &python::Launch) -> Start {
-        let mut start = self.start(launch.executable.clone());
+        let mut start = self.start(Some(launch.executable.clone()));
         let mut args = launch.args.clone();
         args.append(&mut start.args);
         start.args = args;
@@ -120,6 +128,11 @@ pub fn runnable(program: &Program, cache: &Path) -> Result<(python::Launch, bool
             ))
         }
         Program::Python { .. } => python::launch(program, cache),
+        // The user starts it: nothing to make (`Planned::start(None)`).
+        Program::Extern { .. } => Err(WebotsError::Unsupported {
+            controller: program.name().to_owned(),
+            language: program.language(),
+        }),
     }
 }
 
@@ -138,7 +151,14 @@ pub fn plan(
         if skip.contains(&robot) {
             continue;
         }
-        if let Some(program) = compile::find(project, &rig.controller)? {
+        let program = if rig.controller == "<extern>" {
+            Some(Program::Extern {
+                folder: project.to_path_buf(),
+            })
+        } else {
+            compile::find(project, &rig.controller)?
+        };
+        if let Some(program) = program {
             planned.push(Planned {
                 robot,
                 program,
@@ -161,6 +181,7 @@ pub fn plan(
                 )
                 .linear,
                 north,
+                gravity: devices::gravity_of(scene),
             });
         }
     }
@@ -173,6 +194,15 @@ pub fn plan(
 pub fn prepare(compiled: &mut Compiled, planned: &[Planned]) {
     for item in planned {
         let rig = &mut compiled.rig.robots[item.robot];
+        rig.program = Some(format!(
+            "{} ({})",
+            if let Program::Extern { .. } = item.program {
+                "<extern>".to_owned()
+            } else {
+                rig.controller.clone()
+            },
+            item.program.language()
+        ));
         rig.controller = "none".to_owned();
         rig.controller_args.clear();
         for sensor in &mut rig.distance_sensors {

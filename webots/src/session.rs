@@ -53,8 +53,9 @@ pub struct Start {
     pub robot: usize,
     /// The controller's name, as the world gives it.
     pub controller: String,
-    /// The executable, and the folder it runs in.
-    pub executable: PathBuf,
+    /// The executable, and the folder it runs in; no executable for an `<extern>` controller,
+    /// which the user starts.
+    pub executable: Option<PathBuf>,
     pub folder: PathBuf,
     pub args: Vec<String>,
     /// Environment variables added to the controller's (a Python controller's `PYTHONPATH`).
@@ -69,6 +70,8 @@ pub struct Start {
     /// Its rotation as written and the world's north, in the file's axes.
     pub start_rotation: glam::DMat3,
     pub north: glam::DVec3,
+    /// Gravity (m/s²), which accelerometers read.
+    pub gravity: f64,
 }
 
 /// The sensors a controller enabled, as the runtime's controller interface declares them.
@@ -113,7 +116,8 @@ struct Driven {
     robot: usize,
     robot_name: String,
     controller: String,
-    child: Child,
+    /// The process, unless it is an `<extern>` controller the user started.
+    child: Option<Child>,
     stream: UnixStream,
     devices: Vec<Device>,
     sampling: Vec<Sampling>,
@@ -130,6 +134,10 @@ struct Driven {
     start_rotation: glam::DMat3,
     start_heading: f64,
     north: glam::DVec3,
+    gravity: f64,
+    /// The robot's poses at the last three steps, newest last (what accelerometers and gyros
+    /// differentiate).
+    trail: Vec<regatta_runtime::compile::rig::Pose2>,
     /// The step at which the controller's `wb_robot_step` returns.
     wake: u64,
     senses: Arc<AtomicU8>,
@@ -267,21 +275,35 @@ impl<'c> Controllers<'c> {
         let (output, stdout, stderr) =
             Output::create(&file, start.robot, &robot_name, options.echo)?;
         let mut output = Some(output);
-        let mut child = Command::new(&start.executable)
-            .args(&start.args)
-            .envs(start.env.iter().map(|(k, v)| (k, v)))
-            .current_dir(&start.folder)
-            .env("REGATTA_CONTROLLER_URL", &path)
-            .env("WEBOTS_ROBOT_NAME", &robot_name)
-            .stdin(Stdio::null())
-            .stdout(stdout)
-            .stderr(stderr)
-            .spawn()
-            .map_err(|source| WebotsError::Spawn {
-                robot: robot_name.clone(),
-                controller: start.controller.clone(),
-                source: Arc::new(source),
-            })?;
+        let mut child = match &start.executable {
+            Some(executable) => Some(
+                Command::new(executable)
+                    .args(&start.args)
+                    .envs(start.env.iter().map(|(k, v)| (k, v)))
+                    .current_dir(&start.folder)
+                    .env("REGATTA_CONTROLLER_URL", &path)
+                    .env("WEBOTS_ROBOT_NAME", &robot_name)
+                    .stdin(Stdio::null())
+                    .stdout(stdout)
+                    .stderr(stderr)
+                    .spawn()
+                    .map_err(|source| WebotsError::Spawn {
+                        robot: robot_name.clone(),
+                        controller: start.controller.clone(),
+                        source: Arc::new(source),
+                    })?,
+            ),
+            None => {
+                // Webots' extern controllers: the user starts the program, which finds the
+                // robot through the environment.
+                output = None;
+                eprintln!(
+                    "note: robot '{robot_name}' waits for its <extern> controller: start it with REGATTA_CONTROLLER_URL={} (or WEBOTS_CONTROLLER_URL)",
+                    path.display()
+                );
+                None
+            }
+        };
         let failure = |child: &mut Child, what: String| WebotsError::Controller {
             robot: robot_name.clone(),
             controller: start.controller.clone(),
@@ -296,6 +318,11 @@ impl<'c> Controllers<'c> {
             match listener.accept() {
                 Ok((stream, _)) => break stream,
                 Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                    // An extern controller is waited for as Webots waits, without limit.
+                    let Some(child) = child.as_mut() else {
+                        std::thread::sleep(Duration::from_millis(5));
+                        continue;
+                    };
                     if let Ok(Some(status)) = child.try_wait() {
                         // What it printed says why (shown when echoing, else quoted).
                         let words = last_words(output.as_mut(), options.echo, 0.0);
@@ -312,7 +339,7 @@ impl<'c> Controllers<'c> {
                     if started.elapsed() > options.timeout {
                         let _ = child.kill();
                         return Err(failure(
-                            &mut child,
+                            child,
                             format!(
                                 "it did not connect within {} s",
                                 options.timeout.as_secs_f64()
@@ -328,8 +355,9 @@ impl<'c> Controllers<'c> {
         stream
             .set_nonblocking(false)
             .map_err(|source| WebotsError::io(&path, source))?;
+        // An extern controller may be paused in a debugger: it is waited for.
         stream
-            .set_read_timeout(Some(options.timeout))
+            .set_read_timeout(child.is_some().then_some(options.timeout))
             .map_err(|source| WebotsError::io(&path, source))?;
         let senses = Arc::new(AtomicU8::new(0));
         simulation.set_controller(start.robot, Box::new(Listening(senses.clone())));
@@ -377,6 +405,8 @@ impl<'c> Controllers<'c> {
             start_rotation: start.start_rotation,
             start_heading: simulation.robots[start.robot].pose.heading,
             north: start.north,
+            gravity: start.gravity,
+            trail: Vec::new(),
             wake: 0,
             senses,
             output,
@@ -438,6 +468,12 @@ impl<'c> Controllers<'c> {
             self.deliver(simulation);
         }
         self.find_spots(simulation);
+        for driven in &mut self.driven {
+            if driven.trail.len() == 3 {
+                driven.trail.remove(0);
+            }
+            driven.trail.push(simulation.robots[driven.robot].pose);
+        }
         let mut due = Vec::new();
         for index in 0..self.driven.len() {
             if !self.driven[index].finished && self.driven[index].wake <= step {
@@ -654,6 +690,44 @@ impl<'c> Controllers<'c> {
                     Reading::Values(
                         angles
                             .map(|v| with_resolution(v, device.resolution))
+                            .to_vec(),
+                    )
+                }
+                Source::Accelerometer(relative, offset) => {
+                    let force = crate::motion::specific_force(
+                        &driven.trail,
+                        offset,
+                        rig.floor_y,
+                        simulation.time_step,
+                        driven.gravity,
+                    );
+                    let force = crate::motion::to_file_axes(force, driven.z_up);
+                    let values = ((rotation * relative).transpose() * force).to_array();
+                    let stream = &mut driven.streams[d];
+                    Reading::Values(
+                        values
+                            .map(|v| {
+                                let v = crate::motion::through_table(v, &device.table, stream);
+                                with_resolution(v, device.resolution)
+                            })
+                            .to_vec(),
+                    )
+                }
+                Source::Gyro(relative) => {
+                    let up = if driven.z_up {
+                        glam::DVec3::Z
+                    } else {
+                        glam::DVec3::Y
+                    };
+                    let turning = crate::motion::turn_rate(&driven.trail, simulation.time_step);
+                    let values = ((rotation * relative).transpose() * (up * turning)).to_array();
+                    let stream = &mut driven.streams[d];
+                    Reading::Values(
+                        values
+                            .map(|v| {
+                                let v = crate::motion::through_table(v, &device.table, stream);
+                                with_resolution(v, device.resolution)
+                            })
                             .to_vec(),
                     )
                 }
@@ -889,15 +963,15 @@ impl<'c> Controllers<'c> {
         }
         let deadline = Instant::now() + Duration::from_secs(1);
         for driven in &mut self.driven {
-            loop {
-                match driven.child.try_wait() {
+            while let Some(child) = driven.child.as_mut() {
+                match child.try_wait() {
                     Ok(Some(_)) | Err(_) => break,
                     Ok(None) if Instant::now() < deadline => {
                         std::thread::sleep(Duration::from_millis(2))
                     }
                     Ok(None) => {
-                        let _ = driven.child.kill();
-                        let _ = driven.child.wait();
+                        let _ = child.kill();
+                        let _ = child.wait();
                         break;
                     }
                 }
@@ -915,7 +989,9 @@ impl Drop for Controllers<'_> {
     fn drop(&mut self) {
         if !self.driven.is_empty() {
             for driven in &mut self.driven {
-                let _ = driven.child.kill();
+                if let Some(child) = driven.child.as_mut() {
+                    let _ = child.kill();
+                }
             }
             self.quit(None);
         }
@@ -1023,7 +1099,9 @@ fn receive_frame(driven: &mut Driven, time: f64, timeout: Duration) -> Result<bo
             return Ok(false);
         }
         return Err(if is_timeout(&e) {
-            let _ = driven.child.kill();
+            if let Some(child) = driven.child.as_mut() {
+                let _ = child.kill();
+            }
             WebotsError::Controller {
                 robot: driven.robot_name.clone(),
                 controller: driven.controller.clone(),
@@ -1053,11 +1131,15 @@ fn receive_frame(driven: &mut Driven, time: f64, timeout: Duration) -> Result<bo
     Ok(true)
 }
 
-/// Whether the controller has exited with status 0 (waiting a moment for it to be reaped).
+/// Whether the controller has exited with status 0 (waiting a moment for it to be reaped);
+/// an extern controller that closes its connection is done.
 fn exited_cleanly(driven: &mut Driven) -> bool {
     let deadline = Instant::now() + Duration::from_millis(500);
+    let Some(child) = driven.child.as_mut() else {
+        return true;
+    };
     loop {
-        match driven.child.try_wait() {
+        match child.try_wait() {
             Ok(Some(status)) => return status.success(),
             Ok(None) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(1)),
             _ => return false,
@@ -1098,7 +1180,10 @@ fn lost(driven: &mut Driven, time: f64, error: std::io::Error) -> WebotsError {
     // A process that closed its socket is ending: give it a moment to be reaped.
     let deadline = Instant::now() + Duration::from_millis(500);
     let what = loop {
-        match driven.child.try_wait() {
+        let Some(child) = driven.child.as_mut() else {
+            break format!("its connection broke ({error})");
+        };
+        match child.try_wait() {
             Ok(Some(status)) => {
                 let words = if status.success() || driven.echo {
                     String::new()

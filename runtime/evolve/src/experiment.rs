@@ -833,7 +833,10 @@ impl Observer {
                 let contacts = &robot.contacts;
                 RobotSummary {
                     name: robot.name.clone(),
-                    controller: compiled.rig.robots[index].controller.clone(),
+                    controller: compiled.rig.robots[index]
+                        .program
+                        .clone()
+                        .unwrap_or_else(|| compiled.rig.robots[index].controller.clone()),
                     final_pose: PoseSummary {
                         x: robot.pose.x,
                         z: robot.pose.z,

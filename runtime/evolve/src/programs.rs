@@ -9,7 +9,7 @@ use regatta_runtime::compile::Compiled;
 use regatta_runtime::sim::Simulation;
 use regatta_schema::Scene;
 use regatta_webots::python::Launch;
-use regatta_webots::{Controllers, Options, Planned};
+use regatta_webots::{Controllers, Options, Planned, Program};
 
 /// The programs of a world's robots, compiled.
 #[derive(Clone, Debug, Default)]
@@ -41,6 +41,12 @@ impl Programs {
         let cache = regatta_webots::compile::cache_dir();
         let mut robots = Vec::new();
         for item in planned {
+            if let Program::Extern { .. } = item.program {
+                return Err(format!(
+                    "robot '{}' has an <extern> controller, which a batch cannot start (run the world with `regatta run` and start the controller by hand)",
+                    compiled.rig.robots[item.robot].name
+                ));
+            }
             let (launch, _) = regatta_webots::runnable(&item.program, &cache)
                 .map_err(|e| format!("robot '{}': {e}", compiled.rig.robots[item.robot].name))?;
             robots.push((item, launch));

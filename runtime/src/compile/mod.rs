@@ -632,6 +632,7 @@ impl Compiler<'_> {
             body_height: field("bodyHeight", GENERIC_BODY_RADIUS),
             controller: scene.string(node, "controller").to_owned(),
             controller_args: scene.strings(node, "controllerArgs").to_vec(),
+            program: None,
             floors: Vec::new(),
             drive: drive.map(|(_, drive)| drive),
             body_to_robot: children_frame,

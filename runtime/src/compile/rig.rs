@@ -311,6 +311,9 @@ pub struct RobotRig {
     pub body_height: f64,
     pub controller: String,
     pub controller_args: Vec<String>,
+    /// The program of the world's project that drives it instead of a built-in controller
+    /// (a Webots controller, as `NAME (C)`), which summaries name; `controller` is then `none`.
+    pub program: Option<String>,
     /// Horizontal extents (x0, z0, x1, z1) of the floors the robot starts on; leaving all of
     /// them is falling off the world. Empty: no floor under it, nothing is checked.
     pub floors: Vec<[f64; 4]>,

@@ -1,4 +1,4 @@
-"""Webots' `Gyro` (regatta's robots are kinematic: its values are NaN)."""
+"""Webots' `Gyro`: the robot's planar motion (regatta's robots are kinematic)."""
 
 from . import _wb
 from ._wb import c_double_p, c_int, c_ushort, function
