@@ -241,3 +241,31 @@ fn the_python_twins_of_the_c_samples_drive_as_the_c_ones_do() {
         assert!(python.distance("MyBot") > 1.0, "{}", python.summary);
     }
 }
+
+#[test]
+fn e_puck_sample_avoids_the_boxes_and_reads_gravity_and_odometry() {
+    let Some(s) = sample("projects/robots/gctronic/e-puck/worlds/e-puck.wbt") else {
+        return;
+    };
+    s.runs_its_own("e-puck", "C");
+    assert_eq!(s.robot("e-puck")["contacts"]["events"], 0, "{}", s.summary);
+    // Its accelerometer reads gravity (noise aside), and its odometry grows to what it drove.
+    let values = |prefix: &str| -> Vec<Vec<f64>> {
+        s.stderr
+            .lines()
+            .filter_map(|l| l.strip_prefix(&format!("[e-puck] {prefix}")))
+            .map(|rest| {
+                rest.split_whitespace()
+                    .filter_map(|w| w.trim_end_matches('.').parse().ok())
+                    .collect()
+            })
+            .collect()
+    };
+    let gravity = values("accelerometer values = ");
+    assert!(gravity.len() > 50, "{}", s.stderr);
+    let mean = gravity.iter().map(|v| v[2]).sum::<f64>() / gravity.len() as f64;
+    assert!((mean - 9.81).abs() < 0.1, "mean z {mean}");
+    let left = values("estimated distance covered by left wheel: ");
+    let last = left.last().unwrap()[0];
+    assert!(last > 1.0 && last < s.distance("e-puck") * 1.5, "{last} m");
+}
