@@ -361,3 +361,77 @@ fn a_batchs_python_exception_is_quoted_in_its_error() {
         "{text}"
     );
 }
+
+#[test]
+fn an_extern_python_controller_started_by_hand_drives_its_robot() {
+    // What people who wrap Webots by hand do: their own Python process drives the robot,
+    // with the `controller` package of `regatta webots-sdk`.
+    use std::io::BufRead;
+    let dir = temp_dir("python-extern");
+    std::fs::create_dir_all(dir.join("worlds")).unwrap();
+    let world = dir.join("worlds").join("w.wbt");
+    std::fs::write(
+        &world,
+        "#VRML_SIM R2023b utf8\nEXTERNPROTO \"webots://projects/robots/gctronic/e-puck/protos/E-puck.proto\"\nWorldInfo {\n  basicTimeStep 32\n}\nE-puck {\n  controller \"<extern>\"\n}\n",
+    )
+    .unwrap();
+    let sdk = dir.join("sdk");
+    let output = regatta().arg("webots-sdk").arg(&sdk).output().unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(String::from_utf8_lossy(&output.stdout).contains("PYTHONPATH="));
+    std::fs::write(
+        dir.join("drive.py"),
+        "from controller import Robot\nrobot = Robot()\nfor name in ('left wheel motor', 'right wheel motor'):\n    motor = robot.getDevice(name)\n    motor.setPosition(float('inf'))\n    motor.setVelocity(3.0)\nsteps = 0\nwhile robot.step(32) != -1:\n    steps += 1\nprint('stepped %d times' % steps)\n",
+    )
+    .unwrap();
+    let mut run = regatta()
+        .arg("run")
+        .arg(&world)
+        .args(["--duration", "2"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = std::io::BufReader::new(run.stderr.take().unwrap());
+    let mut url = None;
+    let mut line = String::new();
+    while stderr.read_line(&mut line).unwrap() > 0 {
+        if let Some(at) = line.find("REGATTA_CONTROLLER_URL=") {
+            let rest = &line[at + "REGATTA_CONTROLLER_URL=".len()..];
+            url = rest.split_whitespace().next().map(str::to_owned);
+            break;
+        }
+        line.clear();
+    }
+    let url = url.expect("the run says where the extern controller connects");
+    let controller = std::process::Command::new("python3")
+        .arg(dir.join("drive.py"))
+        .env("REGATTA_CONTROLLER_URL", &url)
+        .env("PYTHONPATH", sdk.join("python"))
+        .output()
+        .unwrap();
+    assert!(
+        controller.status.success(),
+        "{}",
+        String::from_utf8_lossy(&controller.stderr)
+    );
+    assert_eq!(
+        String::from_utf8_lossy(&controller.stdout).trim(),
+        "stepped 62 times"
+    );
+    let output = run.wait_with_output().unwrap();
+    assert!(output.status.success());
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let x: f64 = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("e-puck: at x "))
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|w| w.parse().ok())
+        .unwrap_or_else(|| panic!("{stdout}"));
+    // 3 rad/s on the e-puck's 20.5 mm wheels for 2.016 s, as the C twin of this test drives.
+    assert!((x - 3.0 * 0.0205 * 2.016).abs() < 0.01, "x = {x}");
+}

@@ -81,6 +81,9 @@ pub const PACKAGE: &[(&str, &str)] = &[
     ),
 ];
 
+/// How the library is built.
+const FLAGS: [&str; 5] = ["-shared", "-fPIC", "-O2", "-std=gnu11", "-w"];
+
 /// The shared library's file name inside the package.
 pub const LIBRARY_FILE: &str = "libregatta_controller.so";
 
@@ -98,10 +101,9 @@ pub struct Launch {
 pub fn package(cache: &Path) -> Result<(PathBuf, bool), WebotsError> {
     let sdk = compile::sdk(cache)?;
     let cc = compile::compiler();
-    let flags = ["-shared", "-fPIC", "-O2", "-std=gnu11", "-w"];
     let mut hash = Sha256::new();
     hash.update(cc.as_bytes());
-    for flag in flags {
+    for flag in FLAGS {
         hash.update(flag.as_bytes());
     }
     hash.update(sdk.as_os_str().as_encoded_bytes());
@@ -119,33 +121,9 @@ pub fn package(cache: &Path) -> Result<(PathBuf, bool), WebotsError> {
         cache
             .join("python")
             .join(format!(".partial.{}.{}", std::process::id(), unique()));
-    let package = partial.join("controller");
-    std::fs::create_dir_all(&package).map_err(|source| WebotsError::io(&package, source))?;
-    for (name, text) in PACKAGE {
-        let path = package.join(name);
-        std::fs::write(&path, text).map_err(|source| WebotsError::io(&path, source))?;
-    }
-    let output = Command::new(&cc)
-        .args(flags)
-        .arg("-I")
-        .arg(sdk.join("include"))
-        .arg(sdk.join("regatta_controller.c"))
-        .arg("-o")
-        .arg(package.join(LIBRARY_FILE))
-        .arg("-lm")
-        .output()
-        .map_err(|source| WebotsError::Compiler {
-            compiler: cc.clone(),
-            source: std::sync::Arc::new(source),
-        })?;
-    if !output.status.success() {
+    if let Err(e) = build_package(&sdk, &partial) {
         let _ = std::fs::remove_dir_all(&partial);
-        return Err(WebotsError::DoesNotCompile {
-            controller: "(regatta's Python controller library)".to_owned(),
-            messages: String::from_utf8_lossy(&output.stderr)
-                .trim_end()
-                .to_owned(),
-        });
+        return Err(e);
     }
     if std::fs::rename(&partial, &dir).is_err() {
         // Another run put it there first.
@@ -158,6 +136,49 @@ pub fn package(cache: &Path) -> Result<(PathBuf, bool), WebotsError> {
         }
     }
     Ok((dir, true))
+}
+
+/// Writes `controller/` with its library, built from the SDK in `sdk` (headers and library
+/// sources), into `dir`.
+fn build_package(sdk: &Path, dir: &Path) -> Result<(), WebotsError> {
+    let cc = compile::compiler();
+    let package = dir.join("controller");
+    std::fs::create_dir_all(&package).map_err(|source| WebotsError::io(&package, source))?;
+    for (name, text) in PACKAGE {
+        let path = package.join(name);
+        std::fs::write(&path, text).map_err(|source| WebotsError::io(&path, source))?;
+    }
+    let output = Command::new(&cc)
+        .args(FLAGS)
+        .arg("-I")
+        .arg(sdk.join("include"))
+        .arg(sdk.join("regatta_controller.c"))
+        .arg("-o")
+        .arg(package.join(LIBRARY_FILE))
+        .arg("-lm")
+        .output()
+        .map_err(|source| WebotsError::Compiler {
+            compiler: cc.clone(),
+            source: std::sync::Arc::new(source),
+        })?;
+    if !output.status.success() {
+        return Err(WebotsError::DoesNotCompile {
+            controller: "(regatta's Python controller library)".to_owned(),
+            messages: String::from_utf8_lossy(&output.stderr)
+                .trim_end()
+                .to_owned(),
+        });
+    }
+    Ok(())
+}
+
+/// The Python part of `regatta webots-sdk DIR`: `DIR/python/controller/` with its library
+/// built (the C SDK must be in `DIR` already), for an `<extern>` Python controller started by
+/// hand with `PYTHONPATH=DIR/python`. Returns `DIR/python`.
+pub fn write_sdk(dir: &Path) -> Result<PathBuf, WebotsError> {
+    let python = dir.join("python");
+    build_package(dir, &python)?;
+    Ok(python)
 }
 
 fn unique() -> u32 {
