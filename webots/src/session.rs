@@ -141,10 +141,9 @@ struct Driven {
     /// The step at which the controller's `wb_robot_step` returns.
     wake: u64,
     senses: Arc<AtomicU8>,
-    /// Its standard output and error (kept quietly when neither echoed nor recorded, so
-    /// that an error can quote its last lines: a batch's Python traceback).
+    /// Its standard output and error (kept even when neither echoed nor recorded).
     output: Option<Output>,
-    /// Whether its output is echoed (else the error that ends its run quotes it).
+    /// Whether its output is echoed (else an error quotes it).
     echo: bool,
     /// Whether a command changed an LED since its state was last recorded.
     leds_changed: bool,
@@ -325,7 +324,10 @@ impl<'c> Controllers<'c> {
                     };
                     if let Ok(Some(status)) = child.try_wait() {
                         // What it printed says why (shown when echoing, else quoted).
-                        let words = last_words(output.as_mut(), options.echo, 0.0);
+                        let words = output
+                            .as_mut()
+                            .map(|o| o.last_words(0.0))
+                            .unwrap_or_default();
                         return Err(WebotsError::Controller {
                             robot: robot_name.clone(),
                             controller: start.controller.clone(),
@@ -1154,27 +1156,6 @@ fn is_timeout(error: &std::io::Error) -> bool {
     )
 }
 
-/// What a controller printed last (a Python traceback), for the error that ends its run: when
-/// its output is echoed, the lines are shown now and nothing is quoted; else its last lines
-/// after a colon, each on a line of its own (empty when it printed nothing).
-fn last_words(output: Option<&mut Output>, echo: bool, time: f64) -> String {
-    const LINES: usize = 16;
-    let Some(output) = output else {
-        return String::new();
-    };
-    let mut lines = Vec::new();
-    output.finish(time, &mut lines);
-    if echo || lines.is_empty() {
-        return String::new();
-    }
-    let mut words = String::from("; its last words:");
-    for line in &lines[lines.len().saturating_sub(LINES)..] {
-        words.push_str("\n    ");
-        words.push_str(&line.line);
-    }
-    words
-}
-
 /// The connection broke: the controller ended (how, if it has) or closed its socket.
 fn lost(driven: &mut Driven, time: f64, error: std::io::Error) -> WebotsError {
     // A process that closed its socket is ending: give it a moment to be reaped.
@@ -1185,10 +1166,9 @@ fn lost(driven: &mut Driven, time: f64, error: std::io::Error) -> WebotsError {
         };
         match child.try_wait() {
             Ok(Some(status)) => {
-                let words = if status.success() || driven.echo {
-                    String::new()
-                } else {
-                    last_words(driven.output.as_mut(), false, time)
+                let words = match &mut driven.output {
+                    Some(o) if !status.success() && !driven.echo => o.last_words(time),
+                    _ => String::new(),
                 };
                 break format!("it {}{words}", describe_exit(status));
             }
