@@ -63,7 +63,7 @@ fn summary(checked: &regatta_schema::Checked, compiled: &Compiled) -> String {
             r.body_radius,
             r.controller
         );
-        for d in &r.distance_sensors {
+        for d in r.distance_sensors.iter() {
             let _ = writeln!(
                 out,
                 "  {} at {:?} looking {:?}",

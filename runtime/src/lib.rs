@@ -25,4 +25,4 @@ pub mod tessellate;
 mod test_random;
 pub mod vision;
 
-pub use compile::{compile, Compiled};
+pub use compile::{compile, compile_for_run, Compiled};

@@ -504,6 +504,59 @@ impl<W: Write + Seek> Recorder<W> {
         Ok(())
     }
 
+    /// Records a line that robot `robot`'s controller program printed at simulated time `t`
+    /// (`/{robot}/output`, with the `controller` channel).
+    pub fn record_output(&mut self, robot: usize, t: f64, line: &str) -> Result<(), LogError> {
+        let Some(channel) = self.program_channel(robot, 0)? else {
+            return Ok(());
+        };
+        self.cdr.start();
+        self.cdr.f64(t);
+        self.cdr.string(line);
+        self.write(Some(channel), ns(t))
+    }
+
+    /// Records robot `robot`'s LEDs (name and value each) after its controller program
+    /// changed one at time `t` (`/{robot}/leds`, with the `controller` channel).
+    pub fn record_leds(
+        &mut self,
+        robot: usize,
+        t: f64,
+        leds: &[(String, i32)],
+    ) -> Result<(), LogError> {
+        let Some(channel) = self.program_channel(robot, 1)? else {
+            return Ok(());
+        };
+        self.cdr.start();
+        self.cdr.f64(t);
+        self.cdr.u32(leds.len() as u32);
+        for (name, _) in leds {
+            self.cdr.string(name);
+        }
+        self.cdr.u32(leds.len() as u32);
+        for (_, value) in leds {
+            self.cdr.i32(*value);
+        }
+        self.write(Some(channel), ns(t))
+    }
+
+    /// A program's channel of kind `kind` for `robot`; `None` when the log does not hold
+    /// the `controller` channel or there is no such robot.
+    fn program_channel(&mut self, robot: usize, kind: usize) -> Result<Option<u16>, LogError> {
+        if !self.wanted.contains(Channel::Controller) || robot >= self.tokens.len() {
+            return Ok(None);
+        }
+        self.programs[kind]
+            .channel(
+                &mut self.writer,
+                kind,
+                robot,
+                &self.tokens[robot],
+                &self.robot_names[robot],
+            )
+            .map(Some)
+    }
+
     /// Closes the log with its end record.
     pub fn finish(
         mut self,

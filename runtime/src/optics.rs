@@ -300,11 +300,46 @@ impl Panoramic {
         floor_y: f64,
         out: &mut RetinaOutput,
     ) {
+        // The photocurrents go straight to the output: every optics writes all the pixels.
+        let mut luminance = std::mem::take(&mut out.luminance);
+        self.render_of(renderer, view, pose, floor_y, &mut luminance, out);
+        self.process_photocurrents(&luminance, out);
+        out.luminance = luminance;
+    }
+
+    /// [`Panoramic::update_of`] for a simulation, whose readers (controllers, logs) never
+    /// read the photocurrents: they go to a buffer of the thread's and `out.luminance` stays
+    /// empty (a crowd's retinas keep 1.2 kB less each). Every other output is the same.
+    pub fn update_of_unkept(
+        &mut self,
+        renderer: &Renderer,
+        view: ViewOf,
+        pose: Pose2,
+        floor_y: f64,
+        out: &mut RetinaOutput,
+    ) {
+        PHOTOCURRENTS.with(|cell| {
+            let mut luminance = cell.take();
+            self.render_of(renderer, view, pose, floor_y, &mut luminance, out);
+            self.process_photocurrents(&luminance, out);
+            cell.set(luminance);
+        });
+        out.luminance.clear();
+    }
+
+    /// Renders the photocurrents of the eye at `pose` into `luminance`.
+    fn render_of(
+        &mut self,
+        renderer: &Renderer,
+        view: ViewOf,
+        pose: Pose2,
+        floor_y: f64,
+        luminance: &mut Vec<f64>,
+        out: &mut RetinaOutput,
+    ) {
         let eye = DVec3::new(pose.x, floor_y + self.rig.height, pose.z);
         out.flat_views.clear();
         out.warped.clear();
-        // The photocurrents go straight to the output: every optics writes all the pixels.
-        let mut luminance = std::mem::take(&mut out.luminance);
         luminance.clear();
         luminance.resize(PIXELS, 0.0);
         match self.rig.optics {
@@ -318,7 +353,7 @@ impl Panoramic {
                     stride: self.rig.stride,
                     crowd_distance: self.rig.crowd_distance,
                 },
-                &mut luminance,
+                luminance,
             ),
             Optics::Paper => paper(
                 renderer,
@@ -327,27 +362,44 @@ impl Panoramic {
                 pose.heading,
                 self.rig.samples,
                 self.rig.quantize_views,
-                &mut luminance,
+                luminance,
                 out,
             ),
         }
-        out.luminance = luminance;
-        self.process(out);
     }
 
     /// One update from photocurrents a batched backend rendered (no flat views kept).
     pub fn accept(&mut self, luminance: &[f64], out: &mut RetinaOutput) {
-        out.flat_views.clear();
-        out.warped.clear();
         out.luminance.clear();
         out.luminance.extend_from_slice(luminance);
-        self.process(out);
+        self.accept_unkept(luminance, out);
+    }
+
+    /// [`Panoramic::accept`] without keeping the photocurrents (see
+    /// [`Panoramic::update_of_unkept`]).
+    pub fn accept_unkept(&mut self, luminance: &[f64], out: &mut RetinaOutput) {
+        out.flat_views.clear();
+        out.warped.clear();
+        self.process_photocurrents(luminance, out);
     }
 
     /// Photodetectors to digital, from `out.luminance`.
     pub fn process(&self, out: &mut RetinaOutput) {
-        out.analog.resize(out.luminance.len(), 0.0);
-        out.dark = !normalize(&out.luminance, &mut out.analog);
+        let luminance = std::mem::take(&mut out.luminance);
+        self.process_photocurrents(&luminance, out);
+        out.luminance = luminance;
+    }
+
+    /// Photodetectors to digital, from `luminance`.
+    fn process_photocurrents(&self, luminance: &[f64], out: &mut RetinaOutput) {
+        out.analog.resize(luminance.len(), 0.0);
+        out.dark = !normalize(luminance, &mut out.analog);
+        self.refilter(out);
+    }
+
+    /// The filters and the converter again, from `out.analog` (what a change of the filter
+    /// settings changes).
+    pub fn refilter(&self, out: &mut RetinaOutput) {
         // Buffers are reused from update to update: no allocation once warm.
         out.filtered
             .resize_with(self.i_bda.len(), || (FilterKind::Raw, Vec::new()));
@@ -379,6 +431,11 @@ impl Panoramic {
             );
         }
     }
+}
+
+thread_local! {
+    /// The photocurrents of [`Panoramic::update_of_unkept`], one buffer per thread.
+    static PHOTOCURRENTS: std::cell::Cell<Vec<f64>> = const { std::cell::Cell::new(Vec::new()) };
 }
 
 /// The EDI retina's strip, built once and shared by every Panoramic turret.

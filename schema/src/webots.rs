@@ -47,10 +47,11 @@ pub enum Objects {
     /// and viewpoints look along +x.
     Flu,
     /// Webots from R2022a in a world that declares itself y-up (`coordinateSystem "NUE"` or
-    /// `"EUN"`, as Webots' own API tests do): geometry, cameras, viewpoints and Webots'
-    /// PROTOs (regatta's stand-ins) are FLU as in any R2022a file, and the file turns them
-    /// where it wants them; but the world's up is y, so a generic `Robot` stands with its y up
-    /// and +x forward.
+    /// `"EUN"`) and its PROTOs (`EXTERNPROTO`), as Webots' own API tests do: geometry, cameras,
+    /// viewpoints and Webots' PROTOs (regatta's stand-ins) are FLU as in any R2022a file, and
+    /// the file turns them where it wants them; but the world's up is y, so a generic `Robot`
+    /// stands with its y up and +x forward, and regatta's own PROTOs (written y-up) need no
+    /// turn.
     FluYUp,
 }
 
@@ -70,14 +71,12 @@ pub fn turn(from: Authoring, to: Authoring, objects: Objects) -> Option<[f64; 4]
     fn from_world(a: Authoring, objects: Objects) -> Option<[f64; 4]> {
         use std::f64::consts::FRAC_PI_2;
         match (a, objects) {
-            (Authoring::World, _) | (Authoring::Regatta | Authoring::Webots, Objects::Legacy) => {
-                None
-            }
+            (Authoring::World, _)
+            | (Authoring::Regatta | Authoring::Webots, Objects::Legacy)
+            | (Authoring::Regatta, Objects::FluYUp) => None,
             (Authoring::WebotsRobot, Objects::Legacy) => Some([0.0, 1.0, 0.0, FRAC_PI_2]),
-            (
-                Authoring::Regatta | Authoring::Webots | Authoring::WebotsRobot,
-                Objects::Flu | Objects::FluYUp,
-            )
+            (Authoring::Regatta | Authoring::Webots | Authoring::WebotsRobot, Objects::Flu)
+            | (Authoring::Webots | Authoring::WebotsRobot, Objects::FluYUp)
             | (Authoring::WebotsFlu, _) => Some([1.0, 0.0, 0.0, FRAC_PI_2]),
         }
     }

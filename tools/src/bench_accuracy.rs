@@ -220,10 +220,10 @@ fn load(args: &Args, step_ms: Option<f64>) -> anyhow::Result<Experiment> {
         .with_context(|| format!("cannot load {}", args.world.display()))?;
     if let Some(ms) = args.sensor_period {
         for robot in &mut experiment.compiled.rig.robots {
-            for s in &mut robot.distance_sensors {
+            for s in std::sync::Arc::make_mut(&mut robot.distance_sensors).iter_mut() {
                 s.period = ms / 1000.0;
             }
-            for s in &mut robot.light_sensors {
+            for s in std::sync::Arc::make_mut(&mut robot.light_sensors).iter_mut() {
                 s.period = ms / 1000.0;
             }
         }

@@ -66,7 +66,9 @@ pub fn run(args: Args, color: bool) -> anyhow::Result<Outcome> {
         .install(|| run_here(args, color))
 }
 
-fn run_here(args: Args, color: bool) -> anyhow::Result<Outcome> {
+fn run_here(mut args: Args, color: bool) -> anyhow::Result<Outcome> {
+    // A run exports nothing: its robots' grouping nodes are never made.
+    args.options.for_run = true;
     let variations = args.vary.all()?;
     let mut loaded = if variations.is_empty() {
         crate::world::load(&args.world, &args.options, color)?

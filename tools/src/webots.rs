@@ -25,6 +25,11 @@ pub struct ControllerOverride {
     /// people you do not trust: running a project's controllers runs its code.
     #[arg(long)]
     pub builtin_only: bool,
+    /// Wait for the controllers of `<extern>` robots, started by hand with the
+    /// REGATTA_CONTROLLER_URL the run prints (as Webots' extern controllers); without it such
+    /// a robot is refused, or with --lenient runs a built-in controller.
+    #[arg(long = "extern")]
+    pub extern_controllers: bool,
     /// How long a project's controller may take to start or to ask for its next step before
     /// the run ends with an error (wall-clock seconds).
     #[arg(long, value_name = "SECONDS", default_value_t = 10.0)]
@@ -65,12 +70,18 @@ pub fn plan_programs(
         }
     }
     let project = regatta_webots::project_of(world);
-    let planned = regatta_webots::plan(
+    let mut planned = regatta_webots::plan(
         &loaded.compiled,
         &loaded.checked.scene,
         &project,
         &overridden,
     )?;
+    // An <extern> robot is left to the controller resolution (refused, or a built-in)
+    // unless asked for.
+    planned.retain(|item| match &item.program {
+        regatta_webots::Program::Extern { .. } => overrides.extern_controllers,
+        _ => true,
+    });
     regatta_webots::prepare(&mut loaded.compiled, &planned);
     // A supervisor reads the typed scene, which the run would otherwise release.
     let scene = planned

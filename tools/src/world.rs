@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context};
 use regatta_parser::SourceText;
 use regatta_runtime::log::{Recorder, RunInfo};
-use regatta_runtime::{compile, Compiled};
+use regatta_runtime::{compile, compile_for_run, Compiled};
 use regatta_schema::{check, check_path, Checked, FileAccess, FileDiagnostic, Limits, Options};
 
 /// How a world is read: the flags shared by every command that reads one.
@@ -26,6 +26,10 @@ pub struct WorldOptions {
     /// nodes (1000000), file-size (256M).
     #[arg(long = "limit", value_name = "KEY=N", value_parser = parse_limit)]
     pub limits: Vec<String>,
+    /// Compile for a run, which exports nothing ([`regatta_runtime::compile_for_run`]):
+    /// set by `run`, not a flag.
+    #[arg(skip)]
+    pub for_run: bool,
 }
 
 /// Checks `--limit KEY=N` when the command line is read (a bad one is a usage error).
@@ -52,6 +56,7 @@ impl From<LogWorldOptions> for WorldOptions {
             lenient: false,
             allow_paths: options.allow_paths,
             limits: options.limits,
+            for_run: false,
         }
     }
 }
@@ -230,7 +235,11 @@ fn finish_load(
             world_name(path)
         );
     }
-    let compiled = compile(&checked.scene);
+    let compiled = if world.for_run {
+        compile_for_run(&checked.scene)
+    } else {
+        compile(&checked.scene)
+    };
     for warning in &compiled.warnings {
         eprintln!("warning: {warning}");
     }

@@ -408,9 +408,10 @@ fn bench_crowd_measures_error_against_every_robot_drawn() {
         analog(&rows[1]) > 0.0,
         "leaving every robot out changed nothing: {csv}"
     );
-    assert_eq!(
-        analog(&rows[2]),
-        0.0,
+    // 9 m reaches every robot of a 2 m arena: only the parts no photodiode sees and the
+    // tucked wheels are left out (docs/crowd.md), far less than every robot.
+    assert!(
+        analog(&rows[2]) < 0.02 && analog(&rows[2]) < analog(&rows[1]) / 10.0,
         "9 m reaches every robot of a 2 m arena: {csv}"
     );
     assert!(std::fs::read(dir.join("crowd.png"))

@@ -470,7 +470,7 @@ int main() {
     let mut run = regatta()
         .arg("run")
         .arg(&world)
-        .args(["--duration", "2"])
+        .args(["--duration", "2", "--extern"])
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
         .spawn()

@@ -24,6 +24,7 @@ pub mod compile;
 pub mod devices;
 mod error;
 pub mod laser;
+mod link;
 pub mod motion;
 pub mod output;
 pub mod protocol;
@@ -205,10 +206,10 @@ pub fn prepare(compiled: &mut Compiled, planned: &[Planned]) {
         ));
         rig.controller = "none".to_owned();
         rig.controller_args.clear();
-        for sensor in &mut rig.distance_sensors {
+        for sensor in std::sync::Arc::make_mut(&mut rig.distance_sensors).iter_mut() {
             sensor.period = 0.0;
         }
-        for sensor in &mut rig.light_sensors {
+        for sensor in std::sync::Arc::make_mut(&mut rig.light_sensors).iter_mut() {
             sensor.period = 0.0;
         }
         for camera in &mut rig.cameras {

@@ -1,4 +1,5 @@
-//! What inertial devices read from a robot's exact planar motion: an accelerometer's specific
+//! What inertial devices read from a robot's exact planar motion (and an inertial unit's
+//! angles of an orientation): an accelerometer's specific
 //! force (the acceleration of its point, with gravity's reaction) and a gyro's turn rate, by
 //! finite differences of the poses of the last steps, so that they agree with the motion the
 //! simulation made rather than with the commands.
@@ -61,6 +62,26 @@ pub fn through_table(value: f64, table: &[[f64; 3]], stream: &mut Stream) -> f64
         return mean;
     }
     mean * (1.0 + noise * stream.gaussian())
+}
+
+/// Webots' roll, pitch and yaw of a rotation: about x, y and z in a z-up (ENU) world
+/// (`R = Rz(yaw)·Ry(pitch)·Rx(roll)`), about x, z and y in a y-up (NUE) one
+/// (`R = Ry(yaw)·Rz(pitch)·Rx(roll)`).
+pub fn roll_pitch_yaw(m: glam::DMat3, z_up: bool) -> [f64; 3] {
+    let at = |row: usize, column: usize| m.col(column)[row];
+    if z_up {
+        [
+            libm::atan2(at(2, 1), at(2, 2)),
+            -libm::asin(at(2, 0).clamp(-1.0, 1.0)),
+            libm::atan2(at(1, 0), at(0, 0)),
+        ]
+    } else {
+        [
+            libm::atan2(-at(1, 2), at(1, 1)),
+            libm::asin(at(1, 0).clamp(-1.0, 1.0)),
+            libm::atan2(-at(2, 0), at(0, 0)),
+        ]
+    }
 }
 
 #[cfg(test)]

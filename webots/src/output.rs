@@ -66,9 +66,15 @@ impl Output {
     /// The complete lines printed since the last call, stamped `time`, into `lines` (and onto
     /// standard error behind the robot's name when echoing).
     pub fn drain(&mut self, time: f64, lines: &mut Vec<ProgramLine>) {
+        // Plain reads until the end: one system call a step when nothing was printed
+        // (`read_to_end` would ask the file's size first).
         self.chunk.clear();
-        if self.file.read_to_end(&mut self.chunk).is_err() {
-            return;
+        let mut buffer = [0u8; 8192];
+        loop {
+            match self.file.read(&mut buffer) {
+                Ok(0) | Err(_) => break,
+                Ok(n) => self.chunk.extend_from_slice(&buffer[..n]),
+            }
         }
         let mut rest = &self.chunk[..];
         while let Some(end) = rest.iter().position(|&b| b == b'\n') {

@@ -8,8 +8,7 @@
 //! robot, so a run is the same whatever the machine's load. Nothing is timed by the wall
 //! clock except the timeout that ends a run whose controller stopped answering.
 
-use std::io::{Read, Write};
-use std::os::unix::net::{UnixListener, UnixStream};
+use std::os::unix::net::UnixListener;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicU8, Ordering};
@@ -21,6 +20,7 @@ use regatta_runtime::sim::Simulation;
 
 use crate::devices::{with_resolution, Device, Source};
 use crate::error::WebotsError;
+use crate::link::{absolute, describe_exit, socket_folder, Link};
 use crate::output::{Output, ProgramLine};
 use crate::protocol::{self, kind, op, status, Command as StepCommand, Writer};
 use crate::radio::{Delivered, Listener, Packet, Radio};
@@ -114,11 +114,8 @@ struct Motor {
 /// One controller process and its robot.
 struct Driven {
     robot: usize,
-    robot_name: String,
-    controller: String,
-    /// The process, unless it is an `<extern>` controller the user started.
-    child: Option<Child>,
-    stream: UnixStream,
+    /// The process and its connection.
+    link: Link,
     devices: Vec<Device>,
     sampling: Vec<Sampling>,
     /// One per device (used by the motors).
@@ -147,7 +144,6 @@ struct Driven {
     echo: bool,
     /// Whether a command changed an LED since its state was last recorded.
     leds_changed: bool,
-    frame: Vec<u8>,
     /// The controller is done (it called `wb_robot_cleanup`, or exited with status 0): its
     /// robot stands still from then on.
     finished: bool,
@@ -375,10 +371,13 @@ impl<'c> Controllers<'c> {
             .collect();
         let mut driven = Driven {
             robot: start.robot,
-            robot_name,
-            controller: start.controller,
-            child,
-            stream,
+            link: Link {
+                robot_name,
+                controller: start.controller,
+                child,
+                stream,
+                frame: Vec::new(),
+            },
             sampling: vec![Sampling::default(); devices.len()],
             leds: vec![0; devices.len()],
             streams: (0..devices.len())
@@ -414,7 +413,6 @@ impl<'c> Controllers<'c> {
             output,
             echo: options.echo,
             leds_changed: false,
-            frame: Vec::new(),
             finished: false,
         };
         self.hello(&mut driven, simulation, world, project)?;
@@ -458,7 +456,7 @@ impl<'c> Controllers<'c> {
             }
         }
         let frame = w.finish().to_vec();
-        send(driven, &frame, 0.0)
+        driven.link.send(&frame, 0.0)
     }
 
     /// The step's exchange, between [`Simulation::sense`] and [`Simulation::act`]: replies to
@@ -688,7 +686,7 @@ impl<'c> Controllers<'c> {
                 }
                 Source::InertialUnit(relative) => {
                     let m = rotation * relative;
-                    let angles = roll_pitch_yaw(m, driven.z_up);
+                    let angles = crate::motion::roll_pitch_yaw(m, driven.z_up);
                     Reading::Values(
                         angles
                             .map(|v| with_resolution(v, device.resolution))
@@ -785,7 +783,8 @@ impl<'c> Controllers<'c> {
             }
         }
         let frame = w.finish().to_vec();
-        send(driven, &frame, simulation.time)
+        let sent = driven.link.send(&frame, simulation.time);
+        sent.map_err(|e| with_last_words(driven, e))
     }
 
     /// Reads a controller's next step request and applies it.
@@ -795,37 +794,40 @@ impl<'c> Controllers<'c> {
         let time_step_ms = self.time_step_ms;
         let driven = &mut self.driven[index];
         loop {
-            if !receive_frame(driven, time, self.timeout)? {
+            let received = driven.link.receive(time, self.timeout);
+            if !received.map_err(|e| with_last_words(driven, e))? {
                 driven.finished = true;
                 if let Some(output) = &mut driven.output {
                     output.finish(time, &mut self.records.lines);
                 }
                 return Ok(());
             }
-            if driven.frame.first() != Some(&protocol::frame::REQUEST) {
+            if driven.link.frame.first() != Some(&protocol::frame::REQUEST) {
                 break;
             }
             // A supervisor's request, answered at once.
             let Some(supervisor) = self.supervisor.as_mut().filter(|_| driven.supervisor) else {
-                return Err(protocol_error(driven, time, protocol::FrameError::Short(0)));
+                return Err(driven
+                    .link
+                    .protocol_error(time, protocol::FrameError::Short(0)));
             };
             supervisor
                 .answer(
-                    &driven.frame[1..],
+                    &driven.link.frame[1..],
                     driven.robot,
                     simulation,
                     &mut self.writer,
                 )
-                .map_err(|e| protocol_error(driven, time, e))?;
+                .map_err(|e| driven.link.protocol_error(time, e))?;
             let answer = self.writer.finish().to_vec();
-            send(driven, &answer, time)?;
+            driven.link.send(&answer, time)?;
         }
         // What it printed before asking for this step.
         if let Some(output) = &mut driven.output {
             output.drain(time, &mut self.records.lines);
         }
-        let duration = protocol::read_step(&driven.frame, &mut self.commands)
-            .map_err(|e| protocol_error(driven, time, e))?;
+        let duration = protocol::read_step(&driven.link.frame, &mut self.commands)
+            .map_err(|e| driven.link.protocol_error(time, e))?;
         if duration < 0 {
             // wb_robot_cleanup: the controller is done.
             driven.finished = true;
@@ -833,8 +835,9 @@ impl<'c> Controllers<'c> {
         }
         for command in &self.commands {
             if command.op == op::CUSTOM_DATA {
-                let text = String::from_utf8_lossy(&driven.frame[command.data.0..command.data.1])
-                    .into_owned();
+                let text =
+                    String::from_utf8_lossy(&driven.link.frame[command.data.0..command.data.1])
+                        .into_owned();
                 if let Some(supervisor) = &mut self.supervisor {
                     supervisor.custom_data[driven.robot] = text.clone();
                 }
@@ -843,11 +846,9 @@ impl<'c> Controllers<'c> {
             }
             let d = command.tag as usize;
             let Some(device) = d.checked_sub(1).and_then(|d| driven.devices.get(d)) else {
-                return Err(protocol_error(
-                    driven,
-                    time,
-                    protocol::FrameError::NoDevice(command.tag),
-                ));
+                return Err(driven
+                    .link
+                    .protocol_error(time, protocol::FrameError::NoDevice(command.tag)));
             };
             match (command.op, device.source) {
                 (op::ENABLE, _) => {
@@ -880,7 +881,7 @@ impl<'c> Controllers<'c> {
                         channel: radio.channel,
                         range: radio.range,
                         from: robot.pose.to_world(offset, rig.floor_y),
-                        data: driven.frame[command.data.0..command.data.1].to_vec(),
+                        data: driven.link.frame[command.data.0..command.data.1].to_vec(),
                     });
                 }
                 (op::EMITTER_CHANNEL, Source::Emitter(_))
@@ -891,8 +892,7 @@ impl<'c> Controllers<'c> {
                     driven.radios[d - 1].range = command.value;
                 }
                 (op, _) => {
-                    return Err(protocol_error(
-                        driven,
+                    return Err(driven.link.protocol_error(
                         time,
                         protocol::FrameError::UnknownOp {
                             op,
@@ -965,7 +965,7 @@ impl<'c> Controllers<'c> {
         }
         let deadline = Instant::now() + Duration::from_secs(1);
         for driven in &mut self.driven {
-            while let Some(child) = driven.child.as_mut() {
+            while let Some(child) = driven.link.child.as_mut() {
                 match child.try_wait() {
                     Ok(Some(_)) | Err(_) => break,
                     Ok(None) if Instant::now() < deadline => {
@@ -991,12 +991,38 @@ impl Drop for Controllers<'_> {
     fn drop(&mut self) {
         if !self.driven.is_empty() {
             for driven in &mut self.driven {
-                if let Some(child) = driven.child.as_mut() {
+                if let Some(child) = driven.link.child.as_mut() {
                     let _ = child.kill();
                 }
             }
             self.quit(None);
         }
+    }
+}
+
+/// A failed controller's error, with what it printed last when its output is not shown (a
+/// batch's Python traceback).
+fn with_last_words(driven: &mut Driven, error: WebotsError) -> WebotsError {
+    match error {
+        WebotsError::Controller {
+            robot,
+            controller,
+            time,
+            mut what,
+        } if !driven.echo
+            && (what.starts_with("it exited") || what.starts_with("it was killed")) =>
+        {
+            if let Some(output) = &mut driven.output {
+                what.push_str(&output.last_words(time));
+            }
+            WebotsError::Controller {
+                robot,
+                controller,
+                time,
+                what,
+            }
+        }
+        other => other,
     }
 }
 
@@ -1012,26 +1038,6 @@ fn orientation(driven: &Driven, heading: f64, supervisor: Option<&Supervisor>) -
         .and_then(|s| s.orientation(driven.robot))
         .unwrap_or((driven.start_rotation, driven.start_heading));
     glam::DMat3::from_quat(glam::DQuat::from_axis_angle(up, heading - since)) * rotation
-}
-
-/// Webots' roll, pitch and yaw of a rotation: about x, y and z in a z-up (ENU) world
-/// (`R = Rz(yaw)·Ry(pitch)·Rx(roll)`), about x, z and y in a y-up (NUE) one
-/// (`R = Ry(yaw)·Rz(pitch)·Rx(roll)`).
-fn roll_pitch_yaw(m: glam::DMat3, z_up: bool) -> [f64; 3] {
-    let at = |row: usize, column: usize| m.col(column)[row];
-    if z_up {
-        [
-            libm::atan2(at(2, 1), at(2, 2)),
-            -libm::asin(at(2, 0).clamp(-1.0, 1.0)),
-            libm::atan2(at(1, 0), at(0, 0)),
-        ]
-    } else {
-        [
-            libm::atan2(-at(1, 2), at(1, 1)),
-            libm::asin(at(1, 0).clamp(-1.0, 1.0)),
-            libm::atan2(-at(2, 0), at(0, 0)),
-        ]
-    }
 }
 
 enum Reading {
@@ -1083,161 +1089,6 @@ fn drive(driven: &Driven, simulation: &mut Simulation) {
     // (the motion itself uses the exact speeds above).
     let pulses = |v: f64| regatta_runtime::khepera::to_command(v * rig.encoder_resolution / 100.0);
     robot.command = (pulses(left), pulses(right));
-}
-
-fn send(driven: &mut Driven, frame: &[u8], time: f64) -> Result<(), WebotsError> {
-    if let Err(e) = driven.stream.write_all(frame) {
-        return Err(lost(driven, time, e));
-    }
-    Ok(())
-}
-
-/// Reads a controller's next frame into `driven.frame`; `Ok(false)` when the controller
-/// ended with status 0 instead (a controller that returns from `main`).
-fn receive_frame(driven: &mut Driven, time: f64, timeout: Duration) -> Result<bool, WebotsError> {
-    let mut length = [0u8; 4];
-    if let Err(e) = driven.stream.read_exact(&mut length) {
-        if e.kind() == std::io::ErrorKind::UnexpectedEof && exited_cleanly(driven) {
-            return Ok(false);
-        }
-        return Err(if is_timeout(&e) {
-            if let Some(child) = driven.child.as_mut() {
-                let _ = child.kill();
-            }
-            WebotsError::Controller {
-                robot: driven.robot_name.clone(),
-                controller: driven.controller.clone(),
-                time,
-                what: format!(
-                    "it stopped answering: no wb_robot_step within {} s",
-                    timeout.as_secs_f64()
-                ),
-            }
-        } else {
-            lost(driven, time, e)
-        });
-    }
-    let length = u32::from_le_bytes(length) as usize;
-    if length > 64 << 20 {
-        return Err(protocol_error(
-            driven,
-            time,
-            protocol::FrameError::Short(length),
-        ));
-    }
-    driven.frame.resize(length, 0);
-    let mut frame = std::mem::take(&mut driven.frame);
-    let read = driven.stream.read_exact(&mut frame);
-    driven.frame = frame;
-    read.map_err(|e| lost(driven, time, e))?;
-    Ok(true)
-}
-
-/// Whether the controller has exited with status 0 (waiting a moment for it to be reaped);
-/// an extern controller that closes its connection is done.
-fn exited_cleanly(driven: &mut Driven) -> bool {
-    let deadline = Instant::now() + Duration::from_millis(500);
-    let Some(child) = driven.child.as_mut() else {
-        return true;
-    };
-    loop {
-        match child.try_wait() {
-            Ok(Some(status)) => return status.success(),
-            Ok(None) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(1)),
-            _ => return false,
-        }
-    }
-}
-
-fn is_timeout(error: &std::io::Error) -> bool {
-    matches!(
-        error.kind(),
-        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-    )
-}
-
-/// The connection broke: the controller ended (how, if it has) or closed its socket.
-fn lost(driven: &mut Driven, time: f64, error: std::io::Error) -> WebotsError {
-    // A process that closed its socket is ending: give it a moment to be reaped.
-    let deadline = Instant::now() + Duration::from_millis(500);
-    let what = loop {
-        let Some(child) = driven.child.as_mut() else {
-            break format!("its connection broke ({error})");
-        };
-        match child.try_wait() {
-            Ok(Some(status)) => {
-                let words = match &mut driven.output {
-                    Some(o) if !status.success() && !driven.echo => o.last_words(time),
-                    _ => String::new(),
-                };
-                break format!("it {}{words}", describe_exit(status));
-            }
-            Ok(None) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(1)),
-            _ => break format!("its connection broke ({error})"),
-        }
-    };
-    WebotsError::Controller {
-        robot: driven.robot_name.clone(),
-        controller: driven.controller.clone(),
-        time,
-        what,
-    }
-}
-
-fn protocol_error(driven: &Driven, time: f64, error: protocol::FrameError) -> WebotsError {
-    WebotsError::Controller {
-        robot: driven.robot_name.clone(),
-        controller: driven.controller.clone(),
-        time,
-        what: format!("it sent a malformed request ({error})"),
-    }
-}
-
-/// How a process ended, in words.
-fn describe_exit(status: std::process::ExitStatus) -> String {
-    use std::os::unix::process::ExitStatusExt;
-    match (status.code(), status.signal()) {
-        (Some(code), _) => format!("exited with status {code}"),
-        (None, Some(signal)) => format!("was killed by signal {signal}{}", signal_name(signal)),
-        _ => "ended".to_owned(),
-    }
-}
-
-fn signal_name(signal: i32) -> &'static str {
-    match signal {
-        4 => " (SIGILL)",
-        6 => " (SIGABRT)",
-        8 => " (SIGFPE)",
-        9 => " (SIGKILL)",
-        11 => " (SIGSEGV: the controller crashed)",
-        15 => " (SIGTERM)",
-        _ => "",
-    }
-}
-
-fn absolute(path: &Path) -> PathBuf {
-    std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
-}
-
-/// A private folder (mode 0700) for the run's sockets.
-fn socket_folder() -> Result<PathBuf, WebotsError> {
-    use std::os::unix::fs::DirBuilderExt;
-    static COUNTER: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
-    let base = std::env::var_os("XDG_RUNTIME_DIR")
-        .map(PathBuf::from)
-        .filter(|p| p.is_dir())
-        .unwrap_or_else(std::env::temp_dir);
-    let name = format!(
-        "regatta-{}-{}",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    );
-    let dir = base.join(name);
-    std::fs::DirBuilder::new()
-        .mode(0o700)
-        .create(&dir)
-        .map_err(|source| WebotsError::io(&dir, source))?;
-    Ok(dir)
 }
 
 #[cfg(test)]

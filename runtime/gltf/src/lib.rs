@@ -738,7 +738,7 @@ impl<'a> Builder<'a> {
                 let node = builder.add_rigid(anchor, anchor, name, robot_world.then(&frame));
                 builder.nodes[node].insert("extras".into(), extras);
             };
-            for sensor in &robot_rig.distance_sensors {
+            for sensor in robot_rig.distance_sensors.iter() {
                 add(
                     self,
                     &sensor.name,
@@ -753,7 +753,7 @@ impl<'a> Builder<'a> {
                     }),
                 );
             }
-            for sensor in &robot_rig.light_sensors {
+            for sensor in robot_rig.light_sensors.iter() {
                 add(
                     self,
                     &sensor.name,

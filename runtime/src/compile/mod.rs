@@ -75,9 +75,22 @@ pub struct Compiled {
 
 /// Compiles a scene.
 pub fn compile(scene: &Scene) -> Compiled {
+    compile_with(scene, true)
+}
+
+/// [`compile`] for a run, which exports nothing: without the grouping nodes inside robots
+/// (17 per Khepera, the largest part of a crowd's render graph), which only exporters read.
+/// A robot's parts stand in its own group; the static groups (what a robot touches is named
+/// after) are all kept. Equal materials are one entry.
+pub fn compile_for_run(scene: &Scene) -> Compiled {
+    compile_with(scene, false)
+}
+
+fn compile_with(scene: &Scene, robot_groups: bool) -> Compiled {
     let settings = world_settings(scene);
     let mut compiler = Compiler {
         scene,
+        robot_groups,
         time_step: settings.time_step,
         graph: RenderGraph {
             primitives: Vec::new(),
@@ -120,6 +133,7 @@ pub fn compile(scene: &Scene) -> Compiled {
     compiler.graph.groups.shrink_to_fit();
     compiler.graph.materials.shrink_to_fit();
     compiler.rig.robots.shrink_to_fit();
+    compiler.rig.share_sensors();
     Compiled {
         graph: compiler.graph,
         rig: compiler.rig,
@@ -168,6 +182,9 @@ struct Compiler<'s> {
     body: Authoring,
     /// The robots' names so far (a second robot of a name gets a warning).
     robot_names: std::collections::HashSet<String>,
+    /// Whether the grouping nodes inside robots are kept and equal materials kept apart
+    /// ([`compile_for_run`]).
+    robot_groups: bool,
 }
 
 /// A frame turned by an axis-angle rotation (`None`: unchanged).
@@ -392,6 +409,9 @@ impl Compiler<'_> {
         owner: Owner,
         robot: Option<usize>,
     ) -> Option<GroupId> {
+        if !self.robot_groups && owner != Owner::Static {
+            return self.group;
+        }
         self.graph.groups.push(Group {
             name: group_name(self.scene, node),
             parent: self.group,
@@ -428,6 +448,14 @@ impl Compiler<'_> {
                 material = Material::WHITE;
             }
             std::mem::swap(&mut material.maps, &mut maps);
+        }
+        // A run shares equal materials: a swarm's robots have a few between them.
+        let equal = (!self.robot_groups)
+            .then(|| self.graph.materials.iter().position(|m| *m == material))
+            .flatten();
+        if let Some(index) = equal {
+            self.materials.push((key, index));
+            return index;
         }
         self.graph.materials.push(material);
         let index = self.graph.materials.len() - 1;
@@ -651,8 +679,8 @@ impl Compiler<'_> {
                         control_steps as f64 * time_step,
                     )
                 }),
-            distance_sensors: Vec::new(),
-            light_sensors: Vec::new(),
+            distance_sensors: Default::default(),
+            light_sensors: Default::default(),
             turret: None,
             cameras: Vec::new(),
         });
@@ -746,7 +774,7 @@ impl Compiler<'_> {
                         scene.float(node, "aperture"),
                     )),
                 };
-                self.rig.robots[robot].distance_sensors.push(rig);
+                Arc::make_mut(&mut self.rig.robots[robot].distance_sensors).push(rig);
             }
             "LightSensor" => {
                 let (position, direction) = device_pose(scene, node, frame);
@@ -758,7 +786,7 @@ impl Compiler<'_> {
                     occlusion: scene.bool(node, "occlusion"),
                     period: scene.float(node, "samplingPeriod"),
                 };
-                self.rig.robots[robot].light_sensors.push(rig);
+                Arc::make_mut(&mut self.rig.robots[robot].light_sensors).push(rig);
             }
             "Camera" => self.camera(node, frame, robot),
             _ => self.turret(node, robot),

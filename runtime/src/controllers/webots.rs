@@ -120,8 +120,15 @@ pub fn resolve_robot(
         }
         Resolution::External(how) => {
             let message = format!(
-                "robot '{}' has controller \"{name}\": {how}; `regatta serve WORLD --robot {}` drives it over the Khepera serial protocol, Python's `regatta.World(WORLD, control=[\"{}\"])` by actions, or --controller chooses a built-in one",
-                robot.name, robot.name, robot.name
+                "robot '{}' has controller \"{name}\": {how}; {}`regatta serve WORLD --robot {}` drives it over the Khepera serial protocol, Python's `regatta.World(WORLD, control=[\"{}\"])` by actions, or --controller chooses a built-in one",
+                robot.name,
+                if name == "<extern>" {
+                    "`regatta run --extern` waits for a Webots controller started by hand, "
+                } else {
+                    ""
+                },
+                robot.name,
+                robot.name
             );
             if !lenient {
                 return Err(message);

@@ -4,9 +4,10 @@
 //! added when a robot's first message comes, so that a run without programs writes the same
 //! bytes as before.
 
+use std::collections::BTreeMap;
 use std::io::{Seek, Write};
 
-use super::{Channel, LogError, Recorder};
+use super::error::LogError;
 
 /// The `ros2msg` schemas of these channels.
 pub const PROGRAM_SCHEMAS: &[(&str, &str)] = &[
@@ -20,87 +21,47 @@ pub const PROGRAM_SCHEMAS: &[(&str, &str)] = &[
     ),
 ];
 
-/// The channels of one kind, per robot, made on first use.
+/// The channels of one kind (an index into [`PROGRAM_SCHEMAS`]), per robot, made on first use.
 #[derive(Default)]
 pub(super) struct Lazy {
     schema: Option<u16>,
     channels: Vec<Option<u16>>,
 }
 
-impl<W: Write + Seek> Recorder<W> {
-    /// Records a line that robot `robot`'s controller printed at simulated time `t`.
-    pub fn record_output(&mut self, robot: usize, t: f64, line: &str) -> Result<(), LogError> {
-        let Some(channel) = self.program_channel(robot, 0)? else {
-            return Ok(());
-        };
-        self.cdr.start();
-        self.cdr.f64(t);
-        self.cdr.string(line);
-        self.write(Some(channel), super::ns(t))
-    }
-
-    /// Records robot `robot`'s LEDs (name and value each) after a change at time `t`.
-    pub fn record_leds(
+impl Lazy {
+    /// Robot `robot`'s channel of kind `kind` (0 output, 1 LEDs), added to `writer` on first
+    /// use as `/{token}/output` or `/{token}/leds`.
+    pub(super) fn channel<W: Write + Seek>(
         &mut self,
+        writer: &mut mcap::Writer<W>,
+        kind: usize,
         robot: usize,
-        t: f64,
-        leds: &[(String, i32)],
-    ) -> Result<(), LogError> {
-        let Some(channel) = self.program_channel(robot, 1)? else {
-            return Ok(());
-        };
-        self.cdr.start();
-        self.cdr.f64(t);
-        self.cdr.u32(leds.len() as u32);
-        for (name, _) in leds {
-            self.cdr.string(name);
+        token: &str,
+        robot_name: &str,
+    ) -> Result<u16, LogError> {
+        if self.channels.len() <= robot {
+            self.channels.resize(robot + 1, None);
         }
-        self.cdr.u32(leds.len() as u32);
-        for (_, value) in leds {
-            self.cdr.i32(*value);
-        }
-        self.write(Some(channel), super::ns(t))
-    }
-
-    /// The channel of kind `kind` (0 output, 1 LEDs) for `robot`, added on first use; `None`
-    /// when the log does not hold the `controller` channel or there is no such robot.
-    fn program_channel(&mut self, robot: usize, kind: usize) -> Result<Option<u16>, LogError> {
-        if !self.wanted.contains(Channel::Controller) || robot >= self.tokens.len() {
-            return Ok(None);
-        }
-        let lazy = &mut self.programs[kind];
-        if lazy.channels.len() < self.tokens.len() {
-            lazy.channels.resize(self.tokens.len(), None);
-        }
-        if let Some(channel) = lazy.channels[robot] {
-            return Ok(Some(channel));
+        if let Some(channel) = self.channels[robot] {
+            return Ok(channel);
         }
         let (name, text) = PROGRAM_SCHEMAS[kind];
-        let schema = match lazy.schema {
+        let schema = match self.schema {
             Some(schema) => schema,
             None => {
-                let schema = self
-                    .writer
+                let schema = writer
                     .add_schema(name, "ros2msg", text.as_bytes())
                     .map_err(LogError::Write)?;
-                lazy.schema = Some(schema);
+                self.schema = Some(schema);
                 schema
             }
         };
-        let topic = format!(
-            "/{}/{}",
-            self.tokens[robot],
-            if kind == 0 { "output" } else { "leds" }
-        );
-        let owner = std::collections::BTreeMap::from([(
-            "robot".to_owned(),
-            self.robot_names[robot].clone(),
-        )]);
-        let channel = self
-            .writer
+        let topic = format!("/{token}/{}", if kind == 0 { "output" } else { "leds" });
+        let owner = BTreeMap::from([("robot".to_owned(), robot_name.to_owned())]);
+        let channel = writer
             .add_channel(schema, &topic, "cdr", &owner)
             .map_err(LogError::Write)?;
-        self.programs[kind].channels[robot] = Some(channel);
-        Ok(Some(channel))
+        self.channels[robot] = Some(channel);
+        Ok(channel)
     }
 }

@@ -27,7 +27,7 @@ impl BroadPhase {
         let max_radius = rigs.iter().map(|r| r.body_radius).fold(0.0, f64::max);
         let ir_reach = rigs
             .iter()
-            .flat_map(|r| &r.distance_sensors)
+            .flat_map(|r| r.distance_sensors.iter())
             .map(|s| DVec2::new(s.position.x, s.position.z).length() + s.range)
             .fold(0.0, f64::max);
         // A cell about as wide as what one robot's sensors and body reach: a query touches a

@@ -122,8 +122,8 @@ impl PanoramicState {
         change(&mut rig);
         self.model.reconfigure(rig);
         // Filters depend on analog[] alone: recompute them now rather than at the next update.
-        if !self.output.luminance.is_empty() {
-            self.model.process(&mut self.output);
+        if !self.output.analog.is_empty() {
+            self.model.refilter(&mut self.output);
         }
     }
 }

@@ -214,9 +214,13 @@ impl SenseShared<'_, '_> {
         if let Some(turret) = &mut robot.panoramic {
             if due(&mut turret.due, t, turret.model.rig.period) {
                 robot.updated.vision = true;
-                turret
-                    .model
-                    .update_of(renderer, view, robot.pose, rig.floor_y, &mut turret.output);
+                turret.model.update_of_unkept(
+                    renderer,
+                    view,
+                    robot.pose,
+                    rig.floor_y,
+                    &mut turret.output,
+                );
             }
         }
         if let Some(camera) = &mut robot.linear_camera {

@@ -91,7 +91,18 @@ impl<'c> Lowerer<'c> {
         };
         self.objects = match (self.up_axis, version) {
             (UpAxis::Z, Some(v)) if v >= (2022, 'a') => crate::webots::Objects::Flu,
-            (UpAxis::Y, Some(v)) if v >= (2022, 'a') => crate::webots::Objects::FluYUp,
+            // A y-up file of R2022a or later is Webots' when it declares its PROTOs (Webots
+            // writes an EXTERNPROTO line for each since R2022b, as its API tests have); one
+            // without any is written by hand in the y-up convention (regatta's own worlds).
+            (UpAxis::Y, Some(v))
+                if v >= (2022, 'a')
+                    && parsed
+                        .items
+                        .iter()
+                        .any(|item| matches!(item, Item::ExternProto(_))) =>
+            {
+                crate::webots::Objects::FluYUp
+            }
             _ => crate::webots::Objects::Legacy,
         };
     }

@@ -171,6 +171,11 @@ impl ColumnScene<'_> {
                 0.0
             },
             extent: strip.extent().unwrap_or((f64::NEG_INFINITY, f64::INFINITY)),
+            out_of_band: if detail.crowd_distance.is_finite() {
+                strip.tan_half_band
+            } else {
+                f64::INFINITY
+            },
         };
         self.look_into(frame, viewer, eye, heading, reach, look);
         let look = &*look;

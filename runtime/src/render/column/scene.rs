@@ -14,6 +14,7 @@ use super::footprint::{corner_hiders, upright_of, Hider, Upright};
 use super::shading::{FastShade, Shades};
 use crate::compile::graph::{Owner, RenderGraph};
 use crate::compile::plan::Plan;
+use crate::geometry::Footprint;
 
 /// The upright objects of a graph. Immutable once built, so every viewer of a step can render
 /// from it at once; each thread keeps its own working buffers ([`Workspace`]).
@@ -40,7 +41,15 @@ pub struct ColumnScene<'g> {
     /// Per static object, whether an eye may leave it out when it is behind the strip: no
     /// corner test names it (robot parts always may).
     pub(super) cullable: Vec<bool>,
+    /// Per entry of `robot_parts`, whether the part is tucked under its robot's body: within
+    /// [`TUCK`] of the body's round footprint and no higher than it (a Khepera's wheels). The
+    /// crowd level of detail leaves such parts of other robots out.
+    pub(super) tucked: Vec<bool>,
 }
+
+/// How far (m) a tucked part may reach beyond its robot's body: a Khepera's wheel corners
+/// stick out 1.6 mm.
+pub(super) const TUCK: f64 = 0.002;
 
 /// The world placed for one step: the static objects, and every robot's parts placed once —
 /// as other robots see them, and as their own turret does. Shared by every viewer of the step.
@@ -96,6 +105,7 @@ impl<'g> ColumnScene<'g> {
             })
             .collect();
         let parts_of = contiguous_parts(&robot_parts);
+        let tucked = tucked_parts(graph, &robot_parts);
         // With every light static, lighting is the same each frame: shade once.
         let static_lights = plan
             .lights
@@ -132,6 +142,7 @@ impl<'g> ColumnScene<'g> {
             robot_parts,
             parts_of,
             cached,
+            tucked,
         }
     }
 
@@ -173,6 +184,9 @@ impl<'g> ColumnScene<'g> {
         }
         frame.others.clear();
         frame.own.clear();
+        // One entry per robot part, every step: no room to spare (a crowd has thousands).
+        frame.others.reserve_exact(self.robot_parts.len());
+        frame.own.reserve_exact(self.robot_parts.len());
         frame.robot_at.clear();
         frame
             .robot_at
@@ -224,6 +238,57 @@ impl<'g> ColumnScene<'g> {
         };
         frame.all_fast = statics_fast && frame.others.iter().chain(&frame.own).flatten().all(fast);
     }
+}
+
+/// Per entry of `parts` (primitive, robot), whether it is tucked under its robot's body, the
+/// robot's part with the widest round footprint: its footprint within [`TUCK`] of the body's
+/// and its top no higher. Robot parts are placed in the robot's frame: the relation holds in
+/// every pose.
+fn tucked_parts(graph: &RenderGraph, parts: &[(usize, usize)]) -> Vec<bool> {
+    // Placed twice rather than kept: a large swarm's parts would raise the peak memory.
+    let local = |p: usize| upright_of(graph, p, &graph.primitives[p].frame);
+    let mut body: Vec<Option<(DVec2, f64, f64)>> = Vec::new();
+    for &(p, robot) in parts {
+        if body.len() <= robot {
+            body.resize(robot + 1, None);
+        }
+        if let Some(Upright {
+            footprint: Footprint::Circle { center, radius },
+            y1,
+            side: true,
+            ..
+        }) = local(p)
+        {
+            if body[robot].is_none_or(|(_, widest, _)| radius > widest) {
+                body[robot] = Some((center, radius, y1));
+            }
+        }
+    }
+    parts
+        .iter()
+        .map(|&(p, robot)| {
+            let (Some((center, radius, top)), Some(part)) = (body[robot], local(p)) else {
+                return false;
+            };
+            let within = |point: DVec2| point.distance(center) <= radius + TUCK;
+            let inside = match part.footprint {
+                Footprint::Circle {
+                    center: c,
+                    radius: r,
+                } => r < radius && c.distance(center) + r <= radius + TUCK,
+                Footprint::Rect {
+                    center: c,
+                    u,
+                    v,
+                    half_u,
+                    half_v,
+                } => [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)]
+                    .iter()
+                    .all(|&(a, b)| within(c + u * (a * half_u) + v * (b * half_v))),
+            };
+            inside && part.y1 <= top
+        })
+        .collect()
 }
 
 /// Each robot's range of entries in `parts` (primitive, robot), when each robot's entries are

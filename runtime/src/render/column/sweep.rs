@@ -357,6 +357,11 @@ pub(super) struct Reach {
     pub(super) impostor_width: f64,
     /// The strip's relative azimuths: impostors wholly outside are left out.
     pub(super) extent: (f64, f64),
+    /// With a crowd distance, the band's half-height (tangent): robot parts and static
+    /// objects no corner test names that lie wholly below or above the band, seen from
+    /// anywhere on their footprint, face no photodiode and are left out (a robot's wheels,
+    /// another robot nearer than about 17 cm, the viewer's own body). Infinite: none are.
+    pub(super) out_of_band: f64,
 }
 
 impl Reach {
@@ -366,7 +371,19 @@ impl Reach {
         crowd_distance: f64::INFINITY,
         impostor_width: 0.0,
         extent: (f64::NEG_INFINITY, f64::INFINITY),
+        out_of_band: f64::INFINITY,
     };
+}
+
+/// Whether `object`, seen from `eye`, lies wholly outside the band of half-height
+/// `tan_half`: its top below the band's lower edge (or its bottom above the upper) even at its
+/// footprint's farthest point. Its columns then show nothing of it.
+pub(super) fn out_of_band(object: &Upright, eye: DVec3, tan_half: f64) -> bool {
+    let (center, radius) = object.footprint.bounding_circle();
+    // The farthest point, with a margin for rounding: never more than the object's extent.
+    let farthest = (center - DVec2::new(eye.x, eye.z)).length() + radius;
+    let reach = farthest * tan_half * (1.0 + 1e-9) + 1e-12;
+    object.y1 - eye.y < -reach || object.y0 - eye.y > reach
 }
 
 /// The azimuth sector a strip covers, as the rays bounding its complement: a robot part whose
@@ -548,6 +565,14 @@ impl ColumnScene<'_> {
                             }
                         }
                     }
+                    if may_leave
+                        && reach.out_of_band.is_finite()
+                        && out_of_band(object, eye, reach.out_of_band)
+                    {
+                        // Stacked pieces of its footprint are tested each on its own.
+                        previous = None;
+                        return;
+                    }
                     if let Some(sector) = sector.filter(|_| may_leave) {
                         let (center, radius) = object.footprint.bounding_circle();
                         let offset = center - eye2;
@@ -627,10 +652,21 @@ impl ColumnScene<'_> {
         };
         match &self.parts_of {
             Some(parts_of) if reach.crowd_distance.is_finite() => {
-                let grid = frame.crowd.get_or_init(|| {
-                    Box::new(CrowdGrid::new(&frame.robot_at, reach.crowd_distance))
-                });
-                grid.within(&frame.robot_at, eye2, reach.crowd_distance, near);
+                if frame.robot_at.len() <= FEW {
+                    // A few robots: tested each, the grid's answer without building it.
+                    let limit = reach.crowd_distance * reach.crowd_distance;
+                    near.clear();
+                    near.extend(
+                        (0..frame.robot_at.len() as u32).filter(|&r| {
+                            frame.robot_at[r as usize].distance_squared(eye2) <= limit
+                        }),
+                    );
+                } else {
+                    let grid = frame.crowd.get_or_init(|| {
+                        Box::new(CrowdGrid::new(&frame.robot_at, reach.crowd_distance))
+                    });
+                    grid.within(&frame.robot_at, eye2, reach.crowd_distance, near);
+                }
                 // The viewer's own parts, as its turret sees them, wherever the eye is.
                 if let Some(viewer) = viewer.filter(|&v| v < frame.robot_at.len()) {
                     if let Err(at) = near.binary_search(&(viewer as u32)) {
@@ -638,7 +674,12 @@ impl ColumnScene<'_> {
                     }
                 }
                 for &robot in near.iter() {
+                    let other = Some(robot as usize) != viewer;
                     for entry in parts_of.get(robot as usize).cloned().unwrap_or(0..0) {
+                        // Other robots' parts tucked under their body are left out.
+                        if other && self.tucked.get(entry).copied().unwrap_or(false) {
+                            continue;
+                        }
                         if let Some(object) = part(entry) {
                             place(object);
                         }
@@ -657,7 +698,11 @@ impl ColumnScene<'_> {
                             .robot_at
                             .get(robot)
                             .is_some_and(|at| at.distance_squared(eye2) > distance2);
-                    if let Some(object) = part(entry).filter(|_| !far) {
+                    // Other robots' parts tucked under their body are left out too.
+                    let tucked = crowd
+                        && Some(robot) != viewer
+                        && self.tucked.get(entry).copied().unwrap_or(false);
+                    if let Some(object) = part(entry).filter(|_| !far && !tucked) {
                         place(object);
                     }
                 }
