@@ -391,7 +391,7 @@ fn an_extern_python_controller_started_by_hand_drives_its_robot() {
     let mut run = regatta()
         .arg("run")
         .arg(&world)
-        .args(["--duration", "2"])
+        .args(["--duration", "2", "--extern"])
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
         .spawn()
