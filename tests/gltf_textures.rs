@@ -168,3 +168,56 @@ fn missing_malformed_and_oversized_images_are_named() {
     );
     assert_eq!(line, 2);
 }
+
+#[test]
+fn a_texture_outside_the_project_is_a_warning_in_lenient_mode_and_is_never_read() {
+    // A project written on someone's laptop: its floor's image lies outside the project, and
+    // another is an absolute path.
+    let dir = project("outside");
+    let image = image::RgbImage::from_fn(4, 4, |x, _| image::Rgb([(x * 60) as u8, 0, 0]));
+    image.save(dir.join("line.png")).unwrap();
+    let worlds = dir.join("project").join("worlds");
+    std::fs::create_dir_all(&worlds).unwrap();
+    let world = worlds.join("w.wbt");
+    let absolute = dir.join("line.png");
+    let body = [
+        textured_box("../../line.png"),
+        textured_box(absolute.to_str().unwrap()),
+    ]
+    .concat();
+    std::fs::write(&world, format!("#VRML_SIM R2023b utf8\n{body}")).unwrap();
+    let checked = check(&world, false, Limits::default());
+    assert!(!checked.has_errors(), "{}", checked.render(false));
+    let warnings: Vec<_> = checked
+        .diagnostics
+        .iter()
+        .filter(|d| !d.diagnostic.is_error())
+        .map(|d| d.diagnostic.message.clone())
+        .collect();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("'../../line.png' leads outside the world's project")),
+        "{warnings:?}"
+    );
+    assert!(
+        warnings.iter().any(|w| w.contains("is an absolute path")),
+        "{warnings:?}"
+    );
+    // Nothing was read: the boxes are exported untextured.
+    assert!(checked.scene.assets.is_empty());
+    let (json, _) = export_json(&checked);
+    assert!(json.get("images").is_none());
+    // Strict: still errors, at their lines.
+    let checked = check(&world, true, Limits::default());
+    assert_eq!(
+        checked
+            .diagnostics
+            .iter()
+            .filter(|d| d.diagnostic.is_error())
+            .count(),
+        2,
+        "{}",
+        checked.render(false)
+    );
+}

@@ -1,7 +1,8 @@
-//! `regatta bench controllers WORLD`: a world whose robots run their project's controllers
-//! (Webots controllers, each a process of its own) beside the same world with the built-in
-//! `braitenberg`, in one sitting, runs alternated so that the machine's drift hits both
-//! alike. Each run is `regatta run` in a child process; its steps per second come from its own
+//! `regatta bench controllers WORLD [WORLD…]`: worlds whose robots run their project's
+//! controllers (Webots controllers in C or Python, each a process of its own) beside the first
+//! world with the built-in `braitenberg`, in one sitting, runs alternated so that the
+//! machine's drift hits all alike (the same world with its controller in C and in Python
+//! compares the languages). Each run is `regatta run` in a child process; its steps per second come from its own
 //! summary, the peak memory from the operating system's accounting of the largest process
 //! (the simulator or a controller).
 
@@ -14,8 +15,9 @@ use crate::outcome::Outcome;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The world, in a Webots project whose controllers/ its robots name.
-    world: PathBuf,
+    /// The worlds, each in a Webots project whose controllers/ its robots name.
+    #[arg(required = true)]
+    worlds: Vec<PathBuf>,
     /// Simulated time of each run (s).
     #[arg(long, default_value_t = 600.0)]
     duration: f64,
@@ -52,39 +54,49 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         "--controller".into(),
         args.builtin.clone(),
     ];
+    let first = &args.worlds[0];
     // One warm-up each (the first compiles the controllers into the cache).
-    one(&me, &programs, &args.world)?;
-    one(&me, &builtin, &args.world)?;
-    let (mut with_programs, mut with_builtin) = (Vec::new(), Vec::new());
-    let (mut peak_programs, mut peak_builtin) = (0, 0);
+    for world in &args.worlds {
+        one(&me, &programs, world)?;
+    }
+    one(&me, &builtin, first)?;
+    let mut speeds = vec![Vec::new(); args.worlds.len() + 1];
+    let mut peaks = vec![0; args.worlds.len() + 1];
     for _ in 0..args.runs {
-        let run = one(&me, &programs, &args.world)?;
-        with_programs.push(run.steps_per_second);
-        peak_programs = peak_programs.max(run.peak_kib);
-        let run = one(&me, &builtin, &args.world)?;
-        with_builtin.push(run.steps_per_second);
-        peak_builtin = peak_builtin.max(run.peak_kib);
+        for (i, world) in args.worlds.iter().enumerate() {
+            let run = one(&me, &programs, world)?;
+            speeds[i].push(run.steps_per_second);
+            peaks[i] = peaks[i].max(run.peak_kib);
+        }
+        let run = one(&me, &builtin, first)?;
+        speeds[args.worlds.len()].push(run.steps_per_second);
+        peaks[args.worlds.len()] = peaks[args.worlds.len()].max(run.peak_kib);
     }
     let median = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
-    let (p, b) = (median(&mut with_programs), median(&mut with_builtin));
+    let medians: Vec<f64> = speeds.iter_mut().map(median).collect();
+    let b = medians[args.worlds.len()];
     println!(
-        "world {}: {} simulated s a run, {} runs each, median",
-        args.world.display(),
-        args.duration,
-        args.runs
+        "{} simulated s a run, {} runs each, median steps/s; peak memory of a run's largest process",
+        args.duration, args.runs
     );
-    println!("  project's controllers    {p:>12.0} steps/s");
-    println!("  built-in {:<15} {b:>12.0} steps/s", args.builtin);
-    println!("  ratio                    {:>12.3}", p / b);
-    println!(
-        "  peak memory (the largest process of a run): {:.1} MB with the project's controllers, {:.1} MB with {}",
-        peak_programs as f64 / 1024.0,
-        peak_builtin as f64 / 1024.0,
-        args.builtin
-    );
+    let labels: Vec<String> = args
+        .worlds
+        .iter()
+        .map(|w| format!("{} (its controllers)", w.display()))
+        .chain([format!("{} (built-in {})", first.display(), args.builtin)])
+        .collect();
+    let width = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0);
+    for (i, label) in labels.iter().enumerate() {
+        println!(
+            "  {label:<width$} {:>10.0} steps/s  {:>6.3}× the built-in  {:>6.1} MB",
+            medians[i],
+            medians[i] / b,
+            peaks[i] as f64 / 1024.0
+        );
+    }
     Ok(Outcome::Clean)
 }
 

@@ -44,7 +44,7 @@ pub fn plan_programs(
     loaded: &mut Loaded,
     world: &std::path::Path,
     overrides: &ControllerOverride,
-    lenient: bool,
+    _lenient: bool,
 ) -> anyhow::Result<Programs> {
     if overrides.builtin_only || world == std::path::Path::new("-") {
         return Ok(Programs::default());
@@ -76,26 +76,11 @@ pub fn plan_programs(
         &project,
         &overridden,
     )?;
-    planned.retain(|item| {
-        let robot = &names[item.robot];
-        match &item.program {
-            regatta_webots::Program::C { .. } => true,
-            // Left to the controller resolution (refused, or a built-in) unless asked for.
-            regatta_webots::Program::Extern { .. } => overrides.extern_controllers,
-            other => {
-                let message = format!(
-                    "robot '{robot}': its controller \"{}\" is written in {}, which this version of regatta does not run yet (C controllers run)",
-                    loaded.compiled.rig.robots[item.robot].controller,
-                    other.language()
-                );
-                if lenient {
-                    eprintln!("warning: {message}");
-                } else {
-                    eprintln!("error: {message}");
-                }
-                false
-            }
-        }
+    // An <extern> robot is left to the controller resolution (refused, or a built-in)
+    // unless asked for.
+    planned.retain(|item| match &item.program {
+        regatta_webots::Program::Extern { .. } => overrides.extern_controllers,
+        _ => true,
     });
     regatta_webots::prepare(&mut loaded.compiled, &planned);
     // A supervisor reads the typed scene, which the run would otherwise release.
@@ -146,12 +131,17 @@ pub fn start_programs<'c>(
             continue;
         }
         let started = std::time::Instant::now();
-        let (executable, built) = regatta_webots::compile::compile(&item.program, &cache)
+        let (launch, built) = regatta_webots::runnable(&item.program, &cache)
             .map_err(|e| anyhow::anyhow!("robot '{robot}': {e}"))?;
-        let start = item.start(Some(executable));
+        let start = item.start_with(&launch);
         if built {
             eprintln!(
-                "note: compiled controller \"{}\" in {:.2} s",
+                "note: {} \"{}\" in {:.2} s",
+                match item.program {
+                    regatta_webots::Program::Python { .. } =>
+                        "built the Python controller library for",
+                    _ => "compiled controller",
+                },
                 start.controller,
                 started.elapsed().as_secs_f64()
             );

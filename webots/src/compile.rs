@@ -73,7 +73,7 @@ pub enum Program {
         folder: PathBuf,
         sources: Vec<PathBuf>,
     },
-    /// A Python controller (`NAME.py`): not run by this version.
+    /// A Python controller (`NAME.py`), run by the user's Python 3 ([`crate::python`]).
     Python { name: String, folder: PathBuf },
     /// `<extern>`: a program the user starts, which connects by itself (its folder: the
     /// project's).
@@ -87,6 +87,14 @@ impl Program {
             Program::C { folder, .. }
             | Program::Python { folder, .. }
             | Program::Extern { folder } => folder,
+        }
+    }
+
+    /// The controller's name (its folder's).
+    pub fn name(&self) -> &str {
+        match self {
+            Program::C { name, .. } | Program::Python { name, .. } => name,
+            Program::Extern { .. } => "<extern>",
         }
     }
 
@@ -210,14 +218,14 @@ pub fn cache_dir() -> PathBuf {
 }
 
 /// The C compiler: `$CC`, else `cc`.
-fn compiler() -> String {
+pub(crate) fn compiler() -> String {
     std::env::var("CC")
         .ok()
         .filter(|c| !c.trim().is_empty())
         .unwrap_or_else(|| "cc".to_owned())
 }
 
-fn hex(digest: &[u8]) -> String {
+pub(crate) fn hex(digest: &[u8]) -> String {
     digest.iter().take(12).map(|b| format!("{b:02x}")).collect()
 }
 
@@ -266,7 +274,7 @@ pub fn compile(program: &Program, cache: &Path) -> Result<(PathBuf, bool), Webot
     } = program
     else {
         return Err(WebotsError::Unsupported {
-            controller: program_name(program).to_owned(),
+            controller: program.name().to_owned(),
             language: program.language(),
         });
     };
@@ -333,13 +341,6 @@ pub fn compile(program: &Program, cache: &Path) -> Result<(PathBuf, bool), Webot
     std::fs::rename(&partial, &executable)
         .map_err(|source| WebotsError::io(&executable, source))?;
     Ok((executable, true))
-}
-
-fn program_name(program: &Program) -> &str {
-    match program {
-        Program::C { name, .. } | Program::Python { name, .. } => name,
-        Program::Extern { .. } => "<extern>",
-    }
 }
 
 #[cfg(test)]

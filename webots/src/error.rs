@@ -17,10 +17,15 @@ pub enum WebotsError {
     OutsideProject { controller: String, path: PathBuf },
     #[error("controller \"{controller}\": {folder} holds no C source (NAME.c) or Python script (NAME.py)")]
     NoSources { controller: String, folder: PathBuf },
-    #[error("controller \"{controller}\" is written in {language}, which this version of regatta does not run yet (C controllers run)")]
+    #[error("controller \"{controller}\" ({language}) is not one regatta starts this way")]
     Unsupported {
         controller: String,
         language: &'static str,
+    },
+    #[error("controller \"{controller}\" is written in Python: no Python interpreter \"{interpreter}\" is installed (install Python 3, or name one with REGATTA_PYTHON=/path/to/python3)")]
+    NoPython {
+        controller: String,
+        interpreter: String,
     },
     #[error("cannot run the C compiler \"{compiler}\" ({source}); install one (e.g. apt-get install gcc) or set CC")]
     Compiler {

@@ -28,6 +28,7 @@ mod link;
 pub mod motion;
 pub mod output;
 pub mod protocol;
+pub mod python;
 pub mod radio;
 pub mod rays;
 pub mod session;
@@ -88,6 +89,7 @@ impl Planned {
             executable,
             folder: self.program.folder().to_path_buf(),
             args: self.args.clone(),
+            env: Vec::new(),
             devices: self.devices.clone(),
             z_up: self.z_up,
             supervisor: self.supervisor,
@@ -96,6 +98,42 @@ impl Planned {
             north: self.north,
             gravity: self.gravity,
         }
+    }
+}
+
+impl Planned {
+    /// What [`Controllers::start`] needs to run it as `launch` says ([`runnable`]).
+    pub fn start_with(&self, launch: &python::Launch) -> Start {
+        let mut start = self.start(Some(launch.executable.clone()));
+        let mut args = launch.args.clone();
+        args.append(&mut start.args);
+        start.args = args;
+        start.env = launch.env.clone();
+        start
+    }
+}
+
+/// Makes a project's controller runnable: a C controller compiled (or found compiled), a
+/// Python one given its interpreter and the `controller` package (built once). Returns how
+/// to start it and whether something was built now.
+pub fn runnable(program: &Program, cache: &Path) -> Result<(python::Launch, bool), WebotsError> {
+    match program {
+        Program::C { .. } => {
+            let (executable, built) = compile::compile(program, cache)?;
+            Ok((
+                python::Launch {
+                    executable,
+                    ..python::Launch::default()
+                },
+                built,
+            ))
+        }
+        Program::Python { .. } => python::launch(program, cache),
+        // The user starts it: nothing to make (`Planned::start(None)`).
+        Program::Extern { .. } => Err(WebotsError::Unsupported {
+            controller: program.name().to_owned(),
+            language: program.language(),
+        }),
     }
 }
 

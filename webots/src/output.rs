@@ -103,6 +103,23 @@ impl Output {
         }
     }
 
+    /// What the controller printed last (a Python traceback), for the error that ends its
+    /// run: echoed, the lines are shown now and nothing is quoted; else its last 16 lines
+    /// after a colon, each on a line of its own (empty when it printed nothing).
+    pub fn last_words(&mut self, time: f64) -> String {
+        let mut lines = Vec::new();
+        self.finish(time, &mut lines);
+        if self.echo || lines.is_empty() {
+            return String::new();
+        }
+        let mut words = String::from("; its last words:");
+        for line in &lines[lines.len().saturating_sub(16)..] {
+            words.push_str("\n    ");
+            words.push_str(&line.line);
+        }
+        words
+    }
+
     fn emit(&self, time: f64, bytes: &[u8], lines: &mut Vec<ProgramLine>) {
         // Text as printed, less a carriage return before the newline and NUL bytes (which
         // no log string may hold).

@@ -58,6 +58,8 @@ pub struct Start {
     pub executable: Option<PathBuf>,
     pub folder: PathBuf,
     pub args: Vec<String>,
+    /// Environment variables added to the controller's (a Python controller's `PYTHONPATH`).
+    pub env: Vec<(std::ffi::OsString, std::ffi::OsString)>,
     /// Its devices, in tag order ([`crate::devices::devices`]).
     pub devices: Vec<Device>,
     /// Whether the world's file is z-up (positions answer in the file's axes).
@@ -136,8 +138,10 @@ struct Driven {
     /// The step at which the controller's `wb_robot_step` returns.
     wake: u64,
     senses: Arc<AtomicU8>,
-    /// Its standard output and error, when echoed or recorded.
+    /// Its standard output and error (kept even when neither echoed nor recorded).
     output: Option<Output>,
+    /// Whether its output is echoed (else an error quotes it).
+    echo: bool,
     /// Whether a command changed an LED since its state was last recorded.
     leds_changed: bool,
     /// The controller is done (it called `wb_robot_cleanup`, or exited with status 0): its
@@ -261,18 +265,16 @@ impl<'c> Controllers<'c> {
         listener
             .set_nonblocking(true)
             .map_err(|source| WebotsError::io(&path, source))?;
-        let (mut output, stdout, stderr) = if options.echo || options.record {
-            let file = self.sockets.join(format!("{}.out", start.robot));
-            let (output, stdout, stderr) =
-                Output::create(&file, start.robot, &robot_name, options.echo)?;
-            (Some(output), stdout, stderr)
-        } else {
-            (None, Stdio::null(), Stdio::null())
-        };
+        // Kept even when neither echoed nor recorded: an error quotes its last lines.
+        let file = self.sockets.join(format!("{}.out", start.robot));
+        let (output, stdout, stderr) =
+            Output::create(&file, start.robot, &robot_name, options.echo)?;
+        let mut output = Some(output);
         let mut child = match &start.executable {
             Some(executable) => Some(
                 Command::new(executable)
                     .args(&start.args)
+                    .envs(start.env.iter().map(|(k, v)| (k, v)))
                     .current_dir(&start.folder)
                     .env("REGATTA_CONTROLLER_URL", &path)
                     .env("WEBOTS_ROBOT_NAME", &robot_name)
@@ -317,17 +319,18 @@ impl<'c> Controllers<'c> {
                         continue;
                     };
                     if let Ok(Some(status)) = child.try_wait() {
-                        // What it printed says why (shown when echoing).
-                        if let Some(output) = &mut output {
-                            output.finish(0.0, &mut Vec::new());
-                        }
+                        // What it printed says why (shown when echoing, else quoted).
+                        let words = output
+                            .as_mut()
+                            .map(|o| o.last_words(0.0))
+                            .unwrap_or_default();
                         return Err(WebotsError::Controller {
                             robot: robot_name.clone(),
                             controller: start.controller.clone(),
                             time: 0.0,
                             what: format!(
-                                "it {} before connecting (did it call wb_robot_init?)",
-                                describe_exit(status)
+                                "it {} before connecting (did it call wb_robot_init, or create its Robot in Python?){words}",
+                                describe_exit(status),
                             ),
                         });
                     }
@@ -408,6 +411,7 @@ impl<'c> Controllers<'c> {
             wake: 0,
             senses,
             output,
+            echo: options.echo,
             leds_changed: false,
             finished: false,
         };
@@ -779,7 +783,8 @@ impl<'c> Controllers<'c> {
             }
         }
         let frame = w.finish().to_vec();
-        driven.link.send(&frame, simulation.time)
+        let sent = driven.link.send(&frame, simulation.time);
+        sent.map_err(|e| with_last_words(driven, e))
     }
 
     /// Reads a controller's next step request and applies it.
@@ -789,7 +794,8 @@ impl<'c> Controllers<'c> {
         let time_step_ms = self.time_step_ms;
         let driven = &mut self.driven[index];
         loop {
-            if !driven.link.receive(time, self.timeout)? {
+            let received = driven.link.receive(time, self.timeout);
+            if !received.map_err(|e| with_last_words(driven, e))? {
                 driven.finished = true;
                 if let Some(output) = &mut driven.output {
                     output.finish(time, &mut self.records.lines);
@@ -991,6 +997,32 @@ impl Drop for Controllers<'_> {
             }
             self.quit(None);
         }
+    }
+}
+
+/// A failed controller's error, with what it printed last when its output is not shown (a
+/// batch's Python traceback).
+fn with_last_words(driven: &mut Driven, error: WebotsError) -> WebotsError {
+    match error {
+        WebotsError::Controller {
+            robot,
+            controller,
+            time,
+            mut what,
+        } if !driven.echo
+            && (what.starts_with("it exited") || what.starts_with("it was killed")) =>
+        {
+            if let Some(output) = &mut driven.output {
+                what.push_str(&output.last_words(time));
+            }
+            WebotsError::Controller {
+                robot,
+                controller,
+                time,
+                what,
+            }
+        }
+        other => other,
     }
 }
 

@@ -8,12 +8,13 @@ use std::sync::Arc;
 use regatta_runtime::compile::Compiled;
 use regatta_runtime::sim::Simulation;
 use regatta_schema::Scene;
+use regatta_webots::python::Launch;
 use regatta_webots::{Controllers, Options, Planned, Program};
 
 /// The programs of a world's robots, compiled.
 #[derive(Clone, Debug, Default)]
 pub struct Programs {
-    robots: Vec<(Planned, PathBuf)>,
+    robots: Vec<(Planned, Launch)>,
     /// The typed scene, kept when a robot is a supervisor.
     scene: Option<Arc<Scene>>,
     world: PathBuf,
@@ -21,9 +22,9 @@ pub struct Programs {
 }
 
 impl Programs {
-    /// Finds the robots of `compiled` whose controller is a C program of the world's project
-    /// (not those in `skip`), readies `compiled` for them and compiles each; `Err` names what
-    /// stands in the way (a Python controller, a compiler error).
+    /// Finds the robots of `compiled` whose controller is a C or Python program of the world's project
+    /// (not those in `skip`), readies `compiled` for them and makes each runnable; `Err` names what
+    /// stands in the way (a compiler error, no Python).
     pub fn find(
         compiled: &mut Compiled,
         scene: &Scene,
@@ -46,16 +47,9 @@ impl Programs {
                     compiled.rig.robots[item.robot].name
                 ));
             }
-            if !matches!(item.program, Program::C { .. }) {
-                return Err(format!(
-                    "robot '{}': its controller is written in {}, which regatta does not run yet",
-                    compiled.rig.robots[item.robot].name,
-                    item.program.language()
-                ));
-            }
-            let (executable, _) = regatta_webots::compile::compile(&item.program, &cache)
+            let (launch, _) = regatta_webots::runnable(&item.program, &cache)
                 .map_err(|e| format!("robot '{}': {e}", compiled.rig.robots[item.robot].name))?;
-            robots.push((item, executable));
+            robots.push((item, launch));
         }
         let planned: Vec<Planned> = robots.iter().map(|(p, _)| p.clone()).collect();
         regatta_webots::prepare(compiled, &planned);
@@ -81,7 +75,7 @@ impl Programs {
         let starts = self
             .robots
             .iter()
-            .map(|(item, executable)| item.start(Some(executable.clone())))
+            .map(|(item, launch)| item.start_with(launch))
             .collect();
         let options = Options {
             echo: false,

@@ -265,8 +265,10 @@ impl<'c> Lowerer<'c> {
     }
 
     /// Reports a url that was not followed, and what happens instead. Escapes are errors in
-    /// both modes: nothing is read either way, and a world that reaches outside its folder
-    /// should not look fine.
+    /// both modes (nothing is read either way, and a world that reaches outside its folder
+    /// should not look fine), except a texture's in lenient mode: projects written on a
+    /// laptop name images there, and Webots warns and draws without them, as regatta then
+    /// does (the file is still not read).
     pub(super) fn refuse(
         &mut self,
         file: FileId,
@@ -291,6 +293,11 @@ impl<'c> Lowerer<'c> {
             // lenient mode, as Webots skips it: its nodes are then unknown, and a robot among
             // them is what `run` refuses to simulate. Nothing refused is read in either mode.
             (_, UrlUse::ExternProto) => self.strict_or_warn(file, diagnostic),
+            (Refusal::OutsideRoot | Refusal::LinkOutsideRoot | Refusal::Absolute, user)
+                if user.is_texture() =>
+            {
+                self.strict_or_warn(file, diagnostic)
+            }
             (Refusal::Missing | Refusal::Network { .. } | Refusal::Empty, UrlUse::Asset(_)) => {
                 self.strict_or_warn(file, diagnostic)
             }

@@ -99,6 +99,11 @@ pub(super) enum UrlUse<'a> {
 }
 
 impl UrlUse<'_> {
+    /// An image drawn on a shape (an ImageTexture's, or any image regatta does not read).
+    pub(super) fn is_texture(&self) -> bool {
+        matches!(self, UrlUse::Image(_) | UrlUse::Asset("ImageTexture"))
+    }
+
     pub(super) fn noun(&self) -> &str {
         match self {
             UrlUse::Inline => "Inline",

@@ -1,0 +1,90 @@
+"""A robot's device (Webots' `Device`): the base of every device class."""
+
+from . import _wb
+from ._wb import c_char_p, c_int, c_ushort, function
+
+_get_device = function('wb_robot_get_device', c_ushort, c_char_p)
+_get_name = function('wb_device_get_name', c_char_p, c_ushort)
+_get_model = function('wb_device_get_model', c_char_p, c_ushort)
+_get_node_type = function('wb_device_get_node_type', c_int, c_ushort)
+
+
+class Device:
+    """A device of the robot, by name (`Motor('left wheel motor')`) or by tag."""
+
+    def __init__(self, name=None):
+        if isinstance(name, int):
+            self._tag = name
+        elif name is None:
+            self._tag = 0
+        else:
+            self._tag = _get_device(_wb.cstr(name))
+
+    def __repr__(self):
+        return '%s(%r)' % (type(self).__name__, self.getName())
+
+    def getName(self):
+        return _wb.text(_get_name(self._tag))
+
+    def getModel(self):
+        return _wb.text(_get_model(self._tag))
+
+    def getNodeType(self):
+        return _get_node_type(self._tag)
+
+    def getTag(self):
+        return self._tag
+
+    @property
+    def name(self):
+        return self.getName()
+
+    @property
+    def model(self):
+        return self.getModel()
+
+    @property
+    def node_type(self):
+        return self.getNodeType()
+
+    @property
+    def tag(self):
+        return self._tag
+
+
+class Sensor(Device):
+    """A device read every sampling period: `enable(ms)`, `disable()`."""
+
+    # Set by each sensor class: the C functions of its kind.
+    _enable = None
+    _disable = None
+    _get_sampling_period = None
+
+    def enable(self, samplingPeriod):
+        type(self)._enable(self._tag, int(samplingPeriod))
+
+    def disable(self):
+        type(self)._disable(self._tag)
+
+    def getSamplingPeriod(self):
+        return type(self)._get_sampling_period(self._tag)
+
+    @property
+    def sampling_period(self):
+        return self.getSamplingPeriod()
+
+    @sampling_period.setter
+    def sampling_period(self, period):
+        if period:
+            self.enable(period)
+        else:
+            self.disable()
+
+
+def sampled(prefix):
+    """The enable, disable and get_sampling_period functions of the devices `wb_PREFIX_…`."""
+    return (
+        staticmethod(function('wb_%s_enable' % prefix, None, c_ushort, c_int)),
+        staticmethod(function('wb_%s_disable' % prefix, None, c_ushort)),
+        staticmethod(function('wb_%s_get_sampling_period' % prefix, c_int, c_ushort)),
+    )
