@@ -88,6 +88,8 @@ fn run_here(mut args: Args, color: bool) -> anyhow::Result<Outcome> {
         Simulation::new(compiled, args.seed).with_context(|| format!("cannot run {name}"))?;
     let mut programs =
         crate::webots::start_programs(&mut simulation, programs, &args.world, &args.controllers)?;
+    // Only a log reads the retinas' filter outputs over every pixel.
+    simulation.keep_filter_outputs(args.log.is_some());
     let backend = crate::vision::backend(args.renderer, compiled, &args.world)?;
     let vision = backend.as_ref().map(|b| b.describe());
     if let Some(backend) = backend {
