@@ -91,6 +91,7 @@ fn compile_with(scene: &Scene, robot_groups: bool) -> Compiled {
     let mut compiler = Compiler {
         scene,
         robot_groups,
+        sensors: Default::default(),
         time_step: settings.time_step,
         graph: RenderGraph {
             primitives: Vec::new(),
@@ -133,7 +134,6 @@ fn compile_with(scene: &Scene, robot_groups: bool) -> Compiled {
     compiler.graph.groups.shrink_to_fit();
     compiler.graph.materials.shrink_to_fit();
     compiler.rig.robots.shrink_to_fit();
-    compiler.rig.share_sensors();
     Compiled {
         graph: compiler.graph,
         rig: compiler.rig,
@@ -182,6 +182,8 @@ struct Compiler<'s> {
     body: Authoring,
     /// The robots' names so far (a second robot of a name gets a warning).
     robot_names: std::collections::HashSet<String>,
+    /// The distinct sets of sensors so far, which robots share as they are read.
+    sensors: rig::SharedSensors,
     /// Whether the grouping nodes inside robots are kept and equal materials kept apart
     /// ([`compile_for_run`]).
     robot_groups: bool,
@@ -691,6 +693,7 @@ impl Compiler<'_> {
         } else if let Some(turret) = scene.child(node, "turret") {
             self.turret(turret, index);
         }
+        self.sensors.share(&mut self.rig.robots[index]);
     }
 
     /// A generic robot's round body: the largest horizontal half-extent and the height of its
