@@ -203,8 +203,11 @@ pub struct RetinaOutput {
     pub analog: Vec<f64>,
     /// True when every photodiode read 0: `analog` is then all zeros.
     pub dark: bool,
-    /// Each enabled filter's output over the 150 pixels.
+    /// Each enabled filter's output over the 150 pixels (empty when `filtered_unkept`).
     pub filtered: Vec<(FilterKind, Vec<f64>)>,
+    /// Whether `filtered` is left empty, the filters' outputs going to a buffer of the
+    /// thread's: a run that logs nothing reads only `digital` (1.2 kB less per retina).
+    pub filtered_unkept: bool,
     /// Each enabled filter's converted output over the region of interest.
     pub digital: Vec<(FilterKind, Vec<u16>)>,
     pub i_bda: Vec<(FilterKind, f64)>,
@@ -400,9 +403,26 @@ impl Panoramic {
     /// The filters and the converter again, from `out.analog` (what a change of the filter
     /// settings changes).
     pub fn refilter(&self, out: &mut RetinaOutput) {
-        // Buffers are reused from update to update: no allocation once warm.
-        out.filtered
-            .resize_with(self.i_bda.len(), || (FilterKind::Raw, Vec::new()));
+        if out.filtered_unkept {
+            out.filtered.clear();
+            FILTERED.with(|cell| {
+                let mut filtered = cell.take();
+                filtered.resize_with(self.i_bda.len(), || (FilterKind::Raw, Vec::new()));
+                self.filter_into(&mut filtered, out);
+                cell.set(filtered);
+            });
+        } else {
+            let mut filtered = std::mem::take(&mut out.filtered);
+            // Buffers are reused from update to update: no allocation once warm.
+            filtered.resize_with(self.i_bda.len(), || (FilterKind::Raw, Vec::new()));
+            self.filter_into(&mut filtered, out);
+            out.filtered = filtered;
+        }
+    }
+
+    /// The filters into `filtered` (one entry per enabled filter) and the converter into
+    /// `out.digital`, from `out.analog`.
+    fn filter_into(&self, filtered: &mut [(FilterKind, Vec<f64>)], out: &mut RetinaOutput) {
         out.digital
             .resize_with(self.i_bda.len(), || (FilterKind::Raw, Vec::new()));
         if out.i_bda != self.i_bda {
@@ -410,7 +430,7 @@ impl Panoramic {
         }
         let (first, last) = self.rig.roi;
         for (slot, (&(kind, i_bda), filter)) in self.i_bda.iter().zip(&self.filters).enumerate() {
-            let (filtered_kind, filtered) = &mut out.filtered[slot];
+            let (filtered_kind, filtered) = &mut filtered[slot];
             *filtered_kind = kind;
             filtered.resize(out.analog.len(), 0.0);
             if out.analog.len() == PIXELS {
@@ -436,6 +456,9 @@ impl Panoramic {
 thread_local! {
     /// The photocurrents of [`Panoramic::update_of_unkept`], one buffer per thread.
     static PHOTOCURRENTS: std::cell::Cell<Vec<f64>> = const { std::cell::Cell::new(Vec::new()) };
+    /// The filters' outputs of a retina whose `filtered_unkept` is set, one set per thread.
+    static FILTERED: std::cell::Cell<Vec<(FilterKind, Vec<f64>)>> =
+        const { std::cell::Cell::new(Vec::new()) };
 }
 
 /// The EDI retina's strip, built once and shared by every Panoramic turret.

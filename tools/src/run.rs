@@ -93,6 +93,8 @@ fn run_here(mut args: Args, color: bool) -> anyhow::Result<Outcome> {
         &args.controllers,
         args.log.is_some(),
     )?;
+    // Only a log reads the retinas' filter outputs over every pixel.
+    simulation.keep_filter_outputs(args.log.is_some());
     let backend = crate::vision::backend(args.renderer, compiled, &args.world)?;
     let vision = backend.as_ref().map(|b| b.describe());
     if let Some(backend) = backend {

@@ -118,6 +118,9 @@ impl Parser<'_> {
                 TokenKind::RBrace => {
                     let close = self.bump().span;
                     self.depth -= 1;
+                    // A world's tree lives while its scene is built (a crowd's thousands of
+                    // node bodies): no spare room.
+                    items.shrink_to_fit();
                     return NodeBody {
                         span: open.to(close),
                         items,

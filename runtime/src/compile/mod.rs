@@ -9,6 +9,7 @@ pub mod drive;
 mod exported;
 pub mod frames;
 pub mod graph;
+mod materials;
 pub mod meshfile;
 pub mod network;
 pub mod plan;
@@ -26,15 +27,14 @@ use regatta_schema::{NodeId, Scene, Value};
 
 use crate::geometry::{axis_angle, Frame};
 use graph::{
-    index_static, Group, GroupId, Light, LightKind, Material, Owner, Primitive, RenderGraph,
-    Viewpoint,
+    index_static, Group, GroupId, Light, LightKind, Owner, Primitive, RenderGraph, Viewpoint,
 };
 pub use plan::Plan;
 use rig::{
     filter_set, CameraRenderer, CameraRig, DistanceSensorRig, LightSensorRig, LinearCameraRig,
     Optics, PanoramicRig, Pose2, RobotRig, SensorRig, TurretRig,
 };
-use shapes::{background_of, material_of, shape_of, Geometry};
+use shapes::{background_of, shape_of, Geometry};
 
 /// World-wide settings the runtime needs.
 #[derive(Clone, Debug, PartialEq)]
@@ -91,6 +91,7 @@ fn compile_with(scene: &Scene, robot_groups: bool) -> Compiled {
     let mut compiler = Compiler {
         scene,
         robot_groups,
+        sensors: Default::default(),
         time_step: settings.time_step,
         graph: RenderGraph {
             primitives: Vec::new(),
@@ -133,7 +134,6 @@ fn compile_with(scene: &Scene, robot_groups: bool) -> Compiled {
     compiler.graph.groups.shrink_to_fit();
     compiler.graph.materials.shrink_to_fit();
     compiler.rig.robots.shrink_to_fit();
-    compiler.rig.share_sensors();
     Compiled {
         graph: compiler.graph,
         rig: compiler.rig,
@@ -182,6 +182,8 @@ struct Compiler<'s> {
     body: Authoring,
     /// The robots' names so far (a second robot of a name gets a warning).
     robot_names: std::collections::HashSet<String>,
+    /// The distinct sets of sensors so far, which robots share as they are read.
+    sensors: rig::SharedSensors,
     /// Whether the grouping nodes inside robots are kept and equal materials kept apart
     /// ([`compile_for_run`]).
     robot_groups: bool,
@@ -421,46 +423,6 @@ impl Compiler<'_> {
             robot,
         });
         self.group.replace(self.graph.groups.len() - 1)
-    }
-
-    fn material(&mut self, appearance: Option<NodeId>) -> usize {
-        // A VRML Appearance shares its Material, unless it maps an image; a PBRAppearance is
-        // its own material.
-        let key = appearance.and_then(|a| match self.scene.type_name(a) {
-            "PBRAppearance" => Some(a),
-            _ if textures::has_texture(self.scene, a) => Some(a),
-            _ => self.scene.child(a, "material"),
-        });
-        if let Some(&(_, index)) = self.materials.iter().find(|(k, _)| *k == key) {
-            return index;
-        }
-        let mut material: Material = material_of(self.scene, appearance);
-        if let Some(appearance) = appearance {
-            let mut maps = textures::maps_of(
-                self.scene,
-                appearance,
-                &mut self.texture_cache,
-                &mut self.graph.textures,
-                &mut self.warnings,
-            );
-            // A texture without a Material is lit as a white one is (VRML97 6.4).
-            if maps.base_color.is_some() && material.unlit {
-                material = Material::WHITE;
-            }
-            std::mem::swap(&mut material.maps, &mut maps);
-        }
-        // A run shares equal materials: a swarm's robots have a few between them.
-        let equal = (!self.robot_groups)
-            .then(|| self.graph.materials.iter().position(|m| *m == material))
-            .flatten();
-        if let Some(index) = equal {
-            self.materials.push((key, index));
-            return index;
-        }
-        self.graph.materials.push(material);
-        let index = self.graph.materials.len() - 1;
-        self.materials.push((key, index));
-        index
     }
 
     fn shape(&mut self, node: NodeId, frame: &Frame, owner: Owner) {
@@ -703,6 +665,7 @@ impl Compiler<'_> {
         } else if let Some(turret) = scene.child(node, "turret") {
             self.turret(turret, index);
         }
+        self.sensors.share(&mut self.rig.robots[index]);
     }
 
     /// A generic robot's round body: the largest horizontal half-extent and the height of its

@@ -381,21 +381,27 @@ impl SensorRig {
     pub fn robot(&self, name: &str) -> Option<usize> {
         self.robots.iter().position(|r| r.name == name)
     }
+}
 
-    /// One copy of each distinct set of distance and light sensors, shared by the robots
-    /// that carry it: a swarm's 1000 Kheperas keep one (1.9 MB less).
-    pub(crate) fn share_sensors(&mut self) {
+/// The distinct sets of distance and light sensors read so far: a robot whose set equals
+/// one of them shares it (a swarm's 1000 Kheperas keep one copy, 1.9 MB less).
+#[derive(Default)]
+pub(crate) struct SharedSensors {
+    distance: Vec<Arc<Vec<DistanceSensorRig>>>,
+    light: Vec<Arc<Vec<LightSensorRig>>>,
+}
+
+impl SharedSensors {
+    /// Points `robot`'s sensors at an equal set read before, or keeps them as a new one.
+    pub(crate) fn share(&mut self, robot: &mut RobotRig) {
         fn share<T: PartialEq>(kept: &mut Vec<Arc<Vec<T>>>, sensors: &mut Arc<Vec<T>>) {
             match kept.iter().find(|k| **k == *sensors) {
                 Some(equal) => *sensors = equal.clone(),
                 None => kept.push(sensors.clone()),
             }
         }
-        let (mut distance, mut light) = (Vec::new(), Vec::new());
-        for robot in &mut self.robots {
-            share(&mut distance, &mut robot.distance_sensors);
-            share(&mut light, &mut robot.light_sensors);
-        }
+        share(&mut self.distance, &mut robot.distance_sensors);
+        share(&mut self.light, &mut robot.light_sensors);
     }
 }
 
