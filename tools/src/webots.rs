@@ -76,6 +76,13 @@ pub fn plan_programs(
         &project,
         &overridden,
     )?;
+    // Without --controller, --controller-args are the programs' arguments (one each), as a
+    // world's controllerArgs are.
+    if overrides.controllers.is_empty() && !overrides.args.is_empty() {
+        for item in &mut planned {
+            item.args = overrides.args.clone();
+        }
+    }
     // An <extern> robot is left to the controller resolution (refused, or a built-in)
     // unless asked for.
     planned.retain(|item| match &item.program {
@@ -222,7 +229,8 @@ pub fn resolve_controllers(
     if !overrides.args.is_empty() {
         let any = overridden.iter().any(|&o| o);
         for (index, robot) in compiled.rig.robots.iter_mut().enumerate() {
-            if overridden[index] || !any {
+            // A robot driven by its project's program got them as its arguments.
+            if (overridden[index] || !any) && robot.program.is_none() {
                 robot.controller_args = overrides.args.clone();
             }
         }

@@ -528,3 +528,43 @@ fn view_runs_a_projects_controller_as_run_does() {
     assert!(stderr.contains("runs its project's controller"), "{stderr}");
     assert!(stdout.contains("simulated 3.008 s in 94 steps"), "{stdout}");
 }
+
+#[test]
+fn controller_args_from_the_command_line_are_a_programs_arguments() {
+    let dir = project(
+        r#"#VRML_SIM R2023b utf8
+EXTERNPROTO "webots://projects/robots/gctronic/e-puck/protos/E-puck.proto"
+E-puck {
+  controller "args"
+  controllerArgs [ "from" "world" ]
+}
+"#,
+        "args",
+        r#"#include <stdio.h>
+#include <webots/robot.h>
+int main(int argc, char **argv) {
+  wb_robot_init();
+  for (int i = 1; i < argc; i++)
+    printf("arg %d: %s\n", i, argv[i]);
+  wb_robot_cleanup();
+  return 0;
+}
+"#,
+    );
+    let world = dir.join("worlds").join("w.wbt");
+    let output = run(&world, &["--duration", "0.1"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("[e-puck] arg 1: from") && stderr.contains("[e-puck] arg 2: world"),
+        "{stderr}"
+    );
+    let output = run(
+        &world,
+        &["--duration", "0.1", "--controller-args", "given=1"],
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(stderr.contains("[e-puck] arg 1: given=1"), "{stderr}");
+    assert!(!stderr.contains("arg 2"), "{stderr}");
+}
