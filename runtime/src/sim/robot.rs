@@ -87,7 +87,7 @@ impl Khepera for SimulatedKhepera<'_> {
         self.robot
             .linear_camera
             .as_mut()
-            .map(|c| c as &mut dyn LinearCameraTurret)
+            .map(|c| &mut **c as &mut dyn LinearCameraTurret)
     }
 
     fn cameras(&mut self) -> Vec<&mut dyn crate::khepera::Camera> {

@@ -172,7 +172,7 @@ pub struct RobotState {
     /// held for its period: the noise's statistics do not depend on the physics step.
     pub(super) wheel_noise: (f64, f64),
     pub panoramic: Option<PanoramicState>,
-    pub linear_camera: Option<LinearCameraState>,
+    pub linear_camera: Option<Box<LinearCameraState>>,
     pub cameras: Vec<CameraState>,
     pub(super) controller: Option<Box<dyn Controller>>,
     /// Controller calls that returned an error, and the last message.
