@@ -34,6 +34,11 @@ pub const WEBOTS_STANDINS: &[(&str, &str, crate::webots::Authoring)] = {
             WebotsRobot,
         ),
         (
+            "E-puckGroundSensors",
+            include_str!("../../worlds/protos/webots/E-puckGroundSensors.proto"),
+            WebotsRobot,
+        ),
+        (
             "E-puck_enu",
             include_str!("../../worlds/protos/webots/E-puck_enu.proto"),
             WebotsFlu,

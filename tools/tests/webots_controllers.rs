@@ -568,3 +568,67 @@ int main(int argc, char **argv) {
     assert!(stderr.contains("[e-puck] arg 1: given=1"), "{stderr}");
     assert!(!stderr.contains("arg 2"), "{stderr}");
 }
+
+#[test]
+fn the_e_pucks_ground_sensors_read_the_floor_through_webots_infra_red_model() {
+    let dir = project(
+        r#"#VRML_SIM R2023b utf8
+EXTERNPROTO "webots://projects/objects/floors/protos/RectangleArena.proto"
+EXTERNPROTO "webots://projects/robots/gctronic/e-puck/protos/E-puck.proto"
+EXTERNPROTO "webots://projects/robots/gctronic/e-puck/protos/E-puckGroundSensors.proto"
+RectangleArena {
+}
+E-puck {
+  controller "ground"
+  groundSensorsSlot [
+    E-puckGroundSensors {
+    }
+  ]
+}
+"#,
+        "ground",
+        r#"#include <stdio.h>
+#include <webots/distance_sensor.h>
+#include <webots/robot.h>
+int main() {
+  wb_robot_init();
+  WbDeviceTag gs[3];
+  char name[4];
+  for (int i = 0; i < 3; i++) {
+    sprintf(name, "gs%d", i);
+    gs[i] = wb_robot_get_device(name);
+    wb_distance_sensor_enable(gs[i], 32);
+  }
+  int n = 0;
+  while (wb_robot_step(32) != -1)
+    if (++n == 3)
+      printf("type %d gs %.1f %.1f %.1f\n", wb_distance_sensor_get_type(gs[1]), wb_distance_sensor_get_value(gs[0]),
+             wb_distance_sensor_get_value(gs[1]), wb_distance_sensor_get_value(gs[2]));
+  return 0;
+}
+"#,
+    );
+    let world = dir.join("worlds").join("w.wbt");
+    let output = run(&world, &["--duration", "0.2"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let line = stderr
+        .lines()
+        .find_map(|l| l.strip_prefix("[e-puck] type "))
+        .unwrap_or_else(|| panic!("{stderr}"));
+    let words: Vec<f64> = line
+        .split_whitespace()
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    // WB_DISTANCE_SENSOR_INFRA_RED.
+    assert_eq!(words[0], 1.0, "{line}");
+    // 5 mm above the arena's floor (red 0.72): 0.005 / (0.2 + 0.8 × 0.72) m through the
+    // module's table [0 1000, 0.016 300], with its noise of a few tenths of a percent.
+    let expected = 1000.0 - 700.0 * (0.005 / (0.2 + 0.8 * 0.72)) / 0.016;
+    for value in &words[1..] {
+        assert!(
+            (value - expected).abs() < 10.0,
+            "{value} against {expected}: {line}"
+        );
+    }
+}

@@ -289,7 +289,16 @@ impl Walk<'_> {
             }
             "RotationalMotor" if self.generic => self.motor(node, hinge),
             "PositionSensor" if self.generic => self.position_sensor(node),
-            "DistanceSensor" if self.generic => {
+            // A stand-in's own sensors are in its rig; one the compiler left out (looking
+            // down, as the e-puck's ground sensors) is cast in 3-D as a generic robot's.
+            "DistanceSensor"
+                if self.generic
+                    || !self
+                        .rig
+                        .distance_sensors
+                        .iter()
+                        .any(|s| s.name == scene.string(node, "name")) =>
+            {
                 let name = scene.string(node, "name");
                 let at = frame.then(&local_frame(scene, node));
                 let placed = self.rig.body_to_robot.then(&at);

@@ -44,6 +44,7 @@ pub struct RaySensor {
 pub struct Rays<'c> {
     caster: RayCaster<'c>,
     plan: Plan,
+    compiled: &'c Compiled,
 }
 
 impl<'c> Rays<'c> {
@@ -57,6 +58,7 @@ impl<'c> Rays<'c> {
         Rays {
             caster: RayCaster::new(&compiled.graph, &plan),
             plan,
+            compiled,
         }
     }
 
@@ -141,6 +143,9 @@ impl<'c> Rays<'c> {
                     let incidence = libm::acos((-direction.dot(hit.normal)).clamp(-1.0, 1.0));
                     (incidence < SONAR_INCIDENCE).then_some(hit.t)
                 }
+                // Webots' infra-red rays see red: the distance is divided by
+                // 0.2 + 0.8 × the red level of what they meet.
+                (Some(hit), 1) => Some(hit.t / (0.2 + 0.8 * self.red_level(&hit))),
                 (Some(hit), _) => Some(hit.t),
                 (None, _) => None,
             };
@@ -166,6 +171,22 @@ impl<'c> Rays<'c> {
             return mean;
         }
         mean * (1.0 + noise * stream.gaussian())
+    }
+}
+
+impl Rays<'_> {
+    /// The red level (0–1) of what a ray met: a mesh triangle's own colour, else its
+    /// material's diffuse colour.
+    fn red_level(&self, hit: &Hit) -> f64 {
+        let red = hit.color.map(|c| c[0]).unwrap_or_else(|| {
+            let graph = &self.compiled.graph;
+            graph
+                .primitives
+                .get(hit.primitive)
+                .and_then(|p| graph.materials.get(p.material))
+                .map_or(1.0, |m| m.diffuse[0])
+        });
+        red.clamp(0.0, 1.0)
     }
 }
 
