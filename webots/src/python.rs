@@ -44,7 +44,6 @@ pub const PACKAGE: &[(&str, &str)] = &[
         "emitter.py",
         include_str!("../python/controller/emitter.py"),
     ),
-    ("field.py", include_str!("../python/controller/field.py")),
     ("gps.py", include_str!("../python/controller/gps.py")),
     ("gyro.py", include_str!("../python/controller/gyro.py")),
     (

@@ -12,7 +12,6 @@ from .compass import Compass
 from .device import Device
 from .distance_sensor import DistanceSensor
 from .emitter import Emitter
-from .field import Field
 from .gps import GPS
 from .gyro import Gyro
 from .inertial_unit import InertialUnit
@@ -20,7 +19,7 @@ from .keyboard import Keyboard
 from .led import LED
 from .light_sensor import LightSensor
 from .motor import LinearMotor, Motor, RotationalMotor
-from .node import Node
+from .node import Field, Node
 from .position_sensor import PositionSensor
 from .receiver import Receiver
 from .robot import Robot

@@ -9,6 +9,28 @@ _get_model = function('wb_device_get_model', c_char_p, c_ushort)
 _get_node_type = function('wb_device_get_node_type', c_int, c_ushort)
 
 
+# The class of each device node type (filled by `robot`, which imports them all), and one
+# object per device, so that getDevice returns the same object every time.
+_classes = {}
+_devices = {}
+
+
+def register_classes(classes):
+    """Names the class of each device node type, for `device_of`."""
+    _classes.update(classes)
+
+
+def device_of(tag):
+    """The device object of a tag (None for 0)."""
+    if not tag:
+        return None
+    device = _devices.get(tag)
+    if device is None:
+        device = _classes.get(_get_node_type(tag), Device)(tag)
+        _devices[tag] = device
+    return device
+
+
 class Device:
     """A device of the robot, by name (`Motor('left wheel motor')`) or by tag."""
 

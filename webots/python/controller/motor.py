@@ -1,7 +1,7 @@
 """Motors (Webots' `Motor`, `RotationalMotor`, `LinearMotor`)."""
 
 from ._wb import c_double, c_int, c_ushort, function
-from .device import Device
+from .device import Device, device_of
 
 _f = {}
 for _name, _res, _args in (
@@ -139,11 +139,9 @@ class Motor(Device):
         return _f['get_multiplier'](self._tag)
 
     def getBrake(self):
-        from .robot import device_of
         return device_of(_f['get_brake'](self._tag))
 
     def getPositionSensor(self):
-        from .robot import device_of
         return device_of(_f['get_position_sensor'](self._tag))
 
     @property

@@ -1,7 +1,7 @@
 """Webots' `PositionSensor`."""
 
 from ._wb import c_double, c_int, c_ushort, function
-from .device import Sensor, sampled
+from .device import Sensor, device_of, sampled
 
 _get_value = function('wb_position_sensor_get_value', c_double, c_ushort)
 _get_type = function('wb_position_sensor_get_type', c_int, c_ushort)
@@ -23,11 +23,9 @@ class PositionSensor(Sensor):
         return _joint_type(_get_type(self._tag))
 
     def getMotor(self):
-        from .robot import device_of
         return device_of(_get_motor(self._tag))
 
     def getBrake(self):
-        from .robot import device_of
         return device_of(_get_brake(self._tag))
 
     @property

@@ -5,7 +5,7 @@ from ._wb import c_bool, c_char_p, c_double, c_int, c_ushort, function
 from .accelerometer import Accelerometer
 from .camera import Camera
 from .compass import Compass
-from .device import Device
+from .device import device_of, register_classes
 from .distance_sensor import DistanceSensor
 from .emitter import Emitter
 from .gps import GPS
@@ -41,7 +41,6 @@ _get_urdf = function('wb_robot_get_urdf', c_char_p, c_char_p)
 _get_device = function('wb_robot_get_device', c_ushort, c_char_p)
 _get_number_of_devices = function('wb_robot_get_number_of_devices', c_int)
 _get_device_by_index = function('wb_robot_get_device_by_index', c_ushort, c_int)
-_get_node_type = function('wb_device_get_node_type', c_int, c_ushort)
 _battery_enable = function('wb_robot_battery_sensor_enable', None, c_int)
 _battery_disable = function('wb_robot_battery_sensor_disable', None)
 _battery_period = function('wb_robot_battery_sensor_get_sampling_period', c_int)
@@ -67,19 +66,7 @@ _CLASSES = {
     NODE_TYPE['RECEIVER']: Receiver,
 }
 
-# One object per device, so that getDevice returns the same object every time.
-_devices = {}
-
-
-def device_of(tag):
-    """The device object of a tag (None for 0)."""
-    if not tag:
-        return None
-    device = _devices.get(tag)
-    if device is None:
-        device = _CLASSES.get(_get_node_type(tag), Device)(tag)
-        _devices[tag] = device
-    return device
+register_classes(_CLASSES)
 
 
 class Robot:

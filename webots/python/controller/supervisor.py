@@ -2,8 +2,7 @@
 
 from . import _wb
 from ._wb import c_char_p, c_int, c_void_p, function
-from .field import Field
-from .node import Node
+from .node import Field, Node
 from .robot import Robot
 
 _get_root = function('wb_supervisor_node_get_root', c_void_p)
