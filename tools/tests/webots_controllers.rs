@@ -8,7 +8,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{regatta, root, temp_dir};
+use common::{regatta, root, run_waiting_for_extern, temp_dir};
 
 /// A cache of compiled controllers shared by these tests.
 fn cache() -> PathBuf {
@@ -413,7 +413,6 @@ fn a_batch_of_a_c_controllers_world_reproduces_its_single_runs() {
 
 #[test]
 fn an_extern_controller_started_by_hand_drives_its_robot() {
-    use std::io::BufRead;
     let dir = temp_dir("webots-extern");
     std::fs::create_dir_all(dir.join("worlds")).unwrap();
     let world = dir.join("worlds").join("w.wbt");
@@ -467,26 +466,7 @@ int main() {
         .status()
         .unwrap();
     assert!(compiled.success());
-    let mut run = regatta()
-        .arg("run")
-        .arg(&world)
-        .args(["--duration", "2", "--extern"])
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut stderr = std::io::BufReader::new(run.stderr.take().unwrap());
-    let mut url = None;
-    let mut line = String::new();
-    while stderr.read_line(&mut line).unwrap() > 0 {
-        if let Some(at) = line.find("REGATTA_CONTROLLER_URL=") {
-            let rest = &line[at + "REGATTA_CONTROLLER_URL=".len()..];
-            url = rest.split_whitespace().next().map(str::to_owned);
-            break;
-        }
-        line.clear();
-    }
-    let url = url.expect("the run says where the extern controller connects");
+    let (run, url) = run_waiting_for_extern(&world, "2");
     let controller = std::process::Command::new(dir.join("drive"))
         .env("REGATTA_CONTROLLER_URL", &url)
         .output()

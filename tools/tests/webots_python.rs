@@ -12,7 +12,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{regatta, root, temp_dir};
+use common::{regatta, root, run_waiting_for_extern, temp_dir};
 
 fn cache() -> PathBuf {
     let dir = std::env::temp_dir().join(format!("regatta-python-cache-{}", std::process::id()));
@@ -366,7 +366,6 @@ fn a_batchs_python_exception_is_quoted_in_its_error() {
 fn an_extern_python_controller_started_by_hand_drives_its_robot() {
     // What people who wrap Webots by hand do: their own Python process drives the robot,
     // with the `controller` package of `regatta webots-sdk`.
-    use std::io::BufRead;
     let dir = temp_dir("python-extern");
     std::fs::create_dir_all(dir.join("worlds")).unwrap();
     let world = dir.join("worlds").join("w.wbt");
@@ -388,26 +387,7 @@ fn an_extern_python_controller_started_by_hand_drives_its_robot() {
         "from controller import Robot\nrobot = Robot()\nfor name in ('left wheel motor', 'right wheel motor'):\n    motor = robot.getDevice(name)\n    motor.setPosition(float('inf'))\n    motor.setVelocity(3.0)\nsteps = 0\nwhile robot.step(32) != -1:\n    steps += 1\nprint('stepped %d times' % steps)\n",
     )
     .unwrap();
-    let mut run = regatta()
-        .arg("run")
-        .arg(&world)
-        .args(["--duration", "2", "--extern"])
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut stderr = std::io::BufReader::new(run.stderr.take().unwrap());
-    let mut url = None;
-    let mut line = String::new();
-    while stderr.read_line(&mut line).unwrap() > 0 {
-        if let Some(at) = line.find("REGATTA_CONTROLLER_URL=") {
-            let rest = &line[at + "REGATTA_CONTROLLER_URL=".len()..];
-            url = rest.split_whitespace().next().map(str::to_owned);
-            break;
-        }
-        line.clear();
-    }
-    let url = url.expect("the run says where the extern controller connects");
+    let (run, url) = run_waiting_for_extern(&world, "2");
     let controller = std::process::Command::new("python3")
         .arg(dir.join("drive.py"))
         .env("REGATTA_CONTROLLER_URL", &url)

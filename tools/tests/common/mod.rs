@@ -36,3 +36,31 @@ pub fn temp_dir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// `regatta run WORLD --duration SECONDS --extern`, started, and the REGATTA_CONTROLLER_URL it
+/// prints for its `<extern>` robot (read from its standard error as it comes).
+pub fn run_waiting_for_extern(world: &Path, seconds: &str) -> (std::process::Child, String) {
+    use std::io::BufRead;
+    let mut run = regatta()
+        .arg("run")
+        .arg(world)
+        .args(["--duration", seconds, "--extern"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = std::io::BufReader::new(run.stderr.take().unwrap());
+    let mut line = String::new();
+    while stderr.read_line(&mut line).unwrap() > 0 {
+        if let Some(at) = line.find("REGATTA_CONTROLLER_URL=") {
+            let rest = &line[at + "REGATTA_CONTROLLER_URL=".len()..];
+            if let Some(url) = rest.split_whitespace().next() {
+                return (run, url.to_owned());
+            }
+        }
+        line.clear();
+    }
+    let _ = run.kill();
+    let _ = run.wait();
+    panic!("the run did not say where the extern controller connects");
+}

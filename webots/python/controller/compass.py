@@ -1,23 +1,7 @@
 """Webots' `Compass`."""
 
-from . import _wb
-from ._wb import c_double_p, c_int, c_ushort, function
-from .device import Sensor, sampled
-
-_get_values = function('wb_compass_get_values', c_double_p, c_ushort)
-_get_lookup_table_size = function('wb_compass_get_lookup_table_size', c_int, c_ushort)
-_get_lookup_table = function('wb_compass_get_lookup_table', c_double_p, c_ushort)
+from .device import VectorSensor
 
 
-class Compass(Sensor):
-    _enable, _disable, _get_sampling_period = sampled('compass')
-
-    def getValues(self):
-        return _wb.values(_get_values(self._tag), 3)
-
-    def getLookupTable(self):
-        return _wb.values(_get_lookup_table(self._tag), 3 * _get_lookup_table_size(self._tag)) or []
-
-    @property
-    def value(self):
-        return self.getValues()
+class Compass(VectorSensor, kind='compass'):
+    pass

@@ -1,7 +1,7 @@
 """A robot's device (Webots' `Device`): the base of every device class."""
 
 from . import _wb
-from ._wb import c_char_p, c_int, c_ushort, function
+from ._wb import c_char_p, c_double_p, c_int, c_ushort, function
 
 _get_device = function('wb_robot_get_device', c_ushort, c_char_p)
 _get_name = function('wb_device_get_name', c_char_p, c_ushort)
@@ -110,3 +110,29 @@ def sampled(prefix):
         staticmethod(function('wb_%s_disable' % prefix, None, c_ushort)),
         staticmethod(function('wb_%s_get_sampling_period' % prefix, c_int, c_ushort)),
     )
+
+
+class VectorSensor(Sensor):
+    """A sensor of three values through a lookup table (Webots' `Accelerometer`, `Compass`,
+    `Gyro`): a subclass names its kind (`class Gyro(VectorSensor, kind='gyro')`)."""
+
+    def __init_subclass__(cls, kind=None, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if kind is not None:
+            cls._enable, cls._disable, cls._get_sampling_period = sampled(kind)
+            cls._get_values = staticmethod(function('wb_%s_get_values' % kind, c_double_p, c_ushort))
+            cls._get_table_size = staticmethod(
+                function('wb_%s_get_lookup_table_size' % kind, c_int, c_ushort))
+            cls._get_table = staticmethod(
+                function('wb_%s_get_lookup_table' % kind, c_double_p, c_ushort))
+
+    def getValues(self):
+        return _wb.values(type(self)._get_values(self._tag), 3)
+
+    def getLookupTable(self):
+        rows = type(self)._get_table_size(self._tag)
+        return _wb.values(type(self)._get_table(self._tag), 3 * rows) or []
+
+    @property
+    def value(self):
+        return self.getValues()
