@@ -35,7 +35,7 @@ pub use heatmap::HeatMap;
 pub use kymograph::{average_rows, ColorScale, Kymograph, Mark};
 pub use series::{summarise, Panel, Summary, TimeSeries, Trace};
 pub use style::number;
-pub use top_view::{Buoy, ContactMark, Obstacle, Outline, TopView, Track};
+pub use top_view::{Buoy, ContactMark, FloorImage, Obstacle, Outline, TopView, Track};
 
 /// Re-exported so that callers can name colours without depending on plotters.
 pub use plotters::style::RGBColor;

@@ -1,4 +1,5 @@
-//! The arena from above: metre axes at equal scale, obstacles at their true pose and shape,
+//! The arena from above: metre axes at equal scale, the floor's image where it has one,
+//! obstacles at their true pose and shape,
 //! numbered buoys with their visit discs, each robot's trajectory in its own colour (or
 //! coloured by time) with start and end markers, contacts, and a legend beside the plot.
 //!
@@ -58,10 +59,21 @@ pub struct ContactMark {
     pub at: (f64, f64),
 }
 
+/// The floor's image seen from above (a line to follow), over the world rectangle
+/// `x.0..x.1` by `z.0..z.1`: the picture's first row at `z.0`, its first column at `x.0`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FloorImage {
+    pub x: (f64, f64),
+    pub z: (f64, f64),
+    pub picture: image::RgbImage,
+}
+
 /// The top view of a run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TopView {
     pub title: String,
+    /// Drawn under everything else.
+    pub floor: Option<FloorImage>,
     pub obstacles: Vec<Obstacle>,
     pub buoys: Vec<Buoy>,
     pub tracks: Vec<Track>,
@@ -84,6 +96,7 @@ impl TopView {
     pub fn new(title: impl Into<String>) -> TopView {
         TopView {
             title: title.into(),
+            floor: None,
             obstacles: Vec::new(),
             buoys: Vec::new(),
             tracks: Vec::new(),
@@ -96,6 +109,10 @@ impl TopView {
     /// The world rectangle shown: everything, with a small margin, in x0..x1, z0..z1.
     fn extent(&self) -> (f64, f64, f64, f64) {
         let mut points: Vec<(f64, f64)> = Vec::new();
+        if let Some(floor) = &self.floor {
+            points.push((floor.x.0, floor.z.0));
+            points.push((floor.x.1, floor.z.1));
+        }
         for obstacle in &self.obstacles {
             match &obstacle.outline {
                 Outline::Circle { center, radius } => {
@@ -188,6 +205,12 @@ impl Figure for TopView {
             .build_cartesian_2d(x0..x1, -z1..-z0)?;
         configure_axes_flipped(&mut context)?;
         let page = |(x, z): (f64, f64)| (x, -z);
+        if let Some(floor) = &self.floor {
+            let (left, top) = context.backend_coord(&page((floor.x.0, floor.z.0)));
+            let (right, bottom) = context.backend_coord(&page((floor.x.1, floor.z.1)));
+            let size = ((right - left).max(1) as u32, (bottom - top).max(1) as u32);
+            rasters.place(&main, (left, top), size, &floor.picture)?;
+        }
         // Obstacles.
         let fill = RGBColor(200, 200, 200).filled();
         let edge = RGBColor(90, 90, 90).stroke_width(2);

@@ -23,6 +23,7 @@ pub mod sim;
 pub mod tessellate;
 #[cfg(test)]
 mod test_random;
+pub mod texcoord;
 pub mod vision;
 
 pub use compile::{compile, compile_for_run, Compiled};

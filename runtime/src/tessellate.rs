@@ -19,6 +19,7 @@
 use glam::DVec3;
 
 use crate::compile::graph::{Mesh, Shape};
+use crate::texcoord::{box_face_axes, mesh_tex_coords};
 
 /// How finely shapes are cut.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -171,20 +172,6 @@ fn angle(k: usize, n: usize) -> (f64, f64) {
 /// The texture s of step `k` of `n` around the y axis (see the module's notes).
 fn around_s(k: usize, n: usize) -> f64 {
     0.75 - k as f64 / n as f64
-}
-
-/// The directions a Box face's s and t run along (VRML97 6.4): each face shows the whole
-/// image, upright seen from outside (the top's seen from the front, the bottom's from
-/// behind).
-fn box_face_axes(normal: DVec3) -> (DVec3, DVec3) {
-    match (normal.x, normal.y, normal.z) {
-        (x, _, _) if x > 0.0 => (DVec3::NEG_Z, DVec3::Y),
-        (x, _, _) if x < 0.0 => (DVec3::Z, DVec3::Y),
-        (_, y, _) if y > 0.0 => (DVec3::X, DVec3::NEG_Z),
-        (_, y, _) if y < 0.0 => (DVec3::X, DVec3::Z),
-        (_, _, z) if z > 0.0 => (DVec3::X, DVec3::Y),
-        _ => (DVec3::NEG_X, DVec3::Y),
-    }
 }
 
 /// Whether every number that shapes the geometry is finite and positive: anything else gives
@@ -387,7 +374,7 @@ fn flat_mesh(mesh: &Mesh) -> Tessellation {
         colors: colors.map(|_| Vec::new()),
         ..Tessellation::default()
     };
-    let uv_of = tex_coords(mesh);
+    let uv_of = mesh_tex_coords(mesh);
     for (t, triangle) in mesh.triangles.iter().enumerate() {
         let Some([a, b, c]) = corners(mesh, triangle) else {
             continue;
@@ -477,7 +464,7 @@ fn crease_mesh(mesh: &Mesh) -> Tessellation {
         colors: (mesh.corner_colors.is_some() || mesh.triangle_colors.is_some()).then(Vec::new),
         ..Tessellation::default()
     };
-    let uv_of = tex_coords(mesh);
+    let uv_of = mesh_tex_coords(mesh);
     // Output vertices made at each point, chained: head per point, next per vertex.
     let mut head = vec![u32::MAX; positions.len()];
     let mut next: Vec<u32> = Vec::new();
@@ -522,43 +509,6 @@ fn crease_mesh(mesh: &Mesh) -> Tessellation {
         out.triangles.push(corners);
     }
     out
-}
-
-/// A mesh's texture coordinates per triangle corner: given, or VRML97 6.23's default for a
-/// face set: s along the longest side of the bounding box, t along the second longest, both
-/// in units of the longest, from its minimum. Points out of range count for nothing.
-fn tex_coords(mesh: &Mesh) -> impl Fn(usize, usize) -> [f64; 2] + '_ {
-    let point = |i: u32| mesh.positions.get(i as usize).copied();
-    let (lo, hi) = mesh
-        .triangles
-        .iter()
-        .flatten()
-        .filter_map(|&i| point(i))
-        .fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), p| (lo.min(p), hi.max(p)),
-        );
-    let size = (hi - lo).max(DVec3::ZERO);
-    let mut axes = [0usize, 1, 2];
-    // Longest first; ties keep x before y before z, as VRML97 asks.
-    axes.sort_by(|&a, &b| size[b].total_cmp(&size[a]));
-    let (s_axis, t_axis) = (axes[0], axes[1]);
-    let scale = if size[s_axis] > 0.0 {
-        1.0 / size[s_axis]
-    } else {
-        0.0
-    };
-    move |triangle: usize, corner: usize| {
-        if let Some(given) = mesh.tex_coords.as_ref().and_then(|g| g.get(triangle)) {
-            return given[corner];
-        }
-        let p = mesh.triangles[triangle][corner];
-        let p = point(p).unwrap_or(lo);
-        [
-            (p[s_axis] - lo[s_axis]) * scale,
-            (p[t_axis] - lo[t_axis]) * scale,
-        ]
-    }
 }
 
 #[cfg(test)]

@@ -56,12 +56,23 @@ pub(crate) fn compile_embedded(
     }
     options.base_dir = recorded_folder;
     let mut checked = regatta_schema::check(source, &options);
-    regatta_runtime::check::check_scene(&mut checked);
+    // The project's own controller programs (a Webots project's `controllers/NAME`) are
+    // known names, as `run` knows them.
+    let programs = regatta_webots::programs_of(Path::new(&run.world_name));
+    regatta_runtime::check::check_scene_with(&mut checked, &programs);
     if checked.has_errors() {
         eprint!("{}", checked.render(false));
         bail!("the world embedded in the log no longer checks with this regatta");
     }
     let mut compiled = regatta_runtime::compile(&checked.scene);
+    // A robot that ran its project's program: the log holds what it did; nothing here runs
+    // the program again.
+    for rig in &mut compiled.rig.robots {
+        if programs(&rig.controller) {
+            rig.program = Some(std::mem::replace(&mut rig.controller, "none".to_owned()));
+            rig.controller_args.clear();
+        }
+    }
     // The controllers the run had: Webots names mapped as `run` maps them, then what the log
     // says the run changed.
     crate::webots::resolve_controllers(
@@ -100,6 +111,13 @@ pub fn replay(args: ReplayArgs) -> anyhow::Result<Outcome> {
         .and_then(|s| s.parse().ok())
         .unwrap_or(contents.run.steps_requested);
     let compiled = compile_embedded(&contents.run, &args.world.into())?;
+    if let Some(rig) = compiled.rig.robots.iter().find(|r| r.program.is_some()) {
+        bail!(
+            "robot '{}' ran its project's controller program \"{}\": `replay --verify` re-runs built-in controllers only (run the world again with `regatta run --log` and compare the logs)",
+            rig.name,
+            rig.program.as_deref().unwrap_or_default()
+        );
+    }
     let mut simulation = Simulation::new(&compiled, Some(contents.run.seed))?;
     let mut buffer = std::io::Cursor::new(Vec::new());
     let mut recorder = Recorder::new(&mut buffer, &mut simulation, &contents.run)?;

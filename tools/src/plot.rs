@@ -20,6 +20,8 @@ use regatta_runtime::sim::Visits;
 
 use crate::outcome::Outcome;
 
+mod floor;
+
 /// The file format of figures (`--format`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum FigureFormat {
@@ -187,6 +189,7 @@ pub fn plot(args: PlotArgs) -> anyhow::Result<Outcome> {
         contents.run.seed,
         span("simulated")
     ));
+    view.floor = floor::floor_image(&compiled);
     view.obstacles = slab
         .obstacles
         .iter()

@@ -15,6 +15,7 @@ use regatta_runtime::compile::plan::Plan;
 use regatta_runtime::compile::Compiled;
 use regatta_runtime::geometry::Ray;
 use regatta_runtime::render::raycast::{Hit, Prepared, RayCaster};
+use regatta_runtime::render::texels::Texels;
 use regatta_runtime::render::Poses;
 use regatta_runtime::sim::noise::Stream;
 use regatta_runtime::sim::sensors::lookup;
@@ -44,7 +45,8 @@ pub struct RaySensor {
 pub struct Rays<'c> {
     caster: RayCaster<'c>,
     plan: Plan,
-    compiled: &'c Compiled,
+    /// The floor's and other surfaces' images, decoded when an infra-red ray first meets one.
+    texels: Texels<'c>,
 }
 
 impl<'c> Rays<'c> {
@@ -58,7 +60,7 @@ impl<'c> Rays<'c> {
         Rays {
             caster: RayCaster::new(&compiled.graph, &plan),
             plan,
-            compiled,
+            texels: Texels::new(&compiled.graph.textures),
         }
     }
 
@@ -175,18 +177,11 @@ impl<'c> Rays<'c> {
 }
 
 impl Rays<'_> {
-    /// The red level (0–1) of what a ray met: a mesh triangle's own colour, else its
+    /// The red level (0–1) of what a ray met: a mesh triangle's own colour, else the texel
+    /// of its material's image where the ray landed (a line on the floor), else the
     /// material's diffuse colour.
     fn red_level(&self, hit: &Hit) -> f64 {
-        let red = hit.color.map(|c| c[0]).unwrap_or_else(|| {
-            let graph = &self.compiled.graph;
-            graph
-                .primitives
-                .get(hit.primitive)
-                .and_then(|p| graph.materials.get(p.material))
-                .map_or(1.0, |m| m.diffuse[0])
-        });
-        red.clamp(0.0, 1.0)
+        self.caster.diffuse_at(hit, &self.texels)[0].clamp(0.0, 1.0)
     }
 }
 

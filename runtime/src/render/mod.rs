@@ -9,6 +9,7 @@
 pub mod column;
 pub mod raster;
 pub mod raycast;
+pub mod texels;
 
 use glam::DVec3;
 

@@ -4,12 +4,14 @@
 
 use glam::DVec3;
 
+use super::texels::Texels;
 use super::{shade, world_lights, Poses, WorldLight};
 use crate::compile::graph::{LightKind, Owner, Primitive, RenderGraph, Shape};
 use crate::compile::plan::Plan;
 use crate::geometry::{
     ray_box, ray_cone, ray_cylinder, ray_sphere, ray_triangle, Aabb, Bvh, Frame, LocalHit, Ray,
 };
+use crate::texcoord;
 
 /// A surface hit in world space.
 #[derive(Clone, Copy, Debug)]
@@ -20,6 +22,33 @@ pub struct Hit {
     pub normal: DVec3,
     /// A mesh triangle's own colour, replacing the material's diffuse colour.
     pub color: Option<[f64; 3]>,
+    /// The hit point in the primitive's own frame, and the mesh triangle it lies on: where a
+    /// texture is read ([`RayCaster::diffuse_at`]).
+    pub local: DVec3,
+    pub triangle: Option<u32>,
+}
+
+/// What [`RayCaster::hit_primitive`] finds: the hit in the primitive's frame (its normal in
+/// the world's), a mesh triangle's colour and index.
+struct PrimitiveHit {
+    hit: LocalHit,
+    local: DVec3,
+    color: Option<[f64; 3]>,
+    triangle: Option<u32>,
+}
+
+impl Hit {
+    fn new(primitive: usize, ray: &Ray, found: PrimitiveHit) -> Hit {
+        Hit {
+            primitive,
+            t: found.hit.t,
+            point: ray.at(found.hit.t),
+            normal: found.hit.normal,
+            color: found.color,
+            local: found.local,
+            triangle: found.triangle,
+        }
+    }
 }
 
 /// Per-graph data: BVHs over each mesh's triangles.
@@ -106,14 +135,14 @@ impl<'g> RayCaster<'g> {
         inverse: &Frame,
         ray: &Ray,
         t_max: f64,
-    ) -> Option<(LocalHit, Option<[f64; 3]>)> {
+    ) -> Option<PrimitiveHit> {
         let local = Ray {
             origin: inverse.apply(ray.origin),
             direction: inverse.apply_vector(ray.direction),
         };
         let hit = match &primitive.shape {
-            Shape::Box { half } => ray_box(&local, *half, t_max).map(|h| (h, None)),
-            Shape::Sphere { radius } => ray_sphere(&local, *radius, t_max).map(|h| (h, None)),
+            Shape::Box { half } => ray_box(&local, *half, t_max).map(|h| (h, None, None)),
+            Shape::Sphere { radius } => ray_sphere(&local, *radius, t_max).map(|h| (h, None, None)),
             Shape::Cylinder {
                 radius,
                 height,
@@ -121,13 +150,13 @@ impl<'g> RayCaster<'g> {
                 bottom,
                 top,
             } => ray_cylinder(&local, *radius, *height, *side, *bottom, *top, t_max)
-                .map(|h| (h, None)),
+                .map(|h| (h, None, None)),
             Shape::Cone {
                 radius,
                 height,
                 side,
                 bottom,
-            } => ray_cone(&local, *radius, *height, *side, *bottom, t_max).map(|h| (h, None)),
+            } => ray_cone(&local, *radius, *height, *side, *bottom, t_max).map(|h| (h, None, None)),
             Shape::Mesh(m) => {
                 let mesh = &self.graph.meshes[*m];
                 let mut best: Option<LocalHit> = None;
@@ -155,12 +184,44 @@ impl<'g> RayCaster<'g> {
                             normal: hit.normal,
                         },
                         color,
+                        Some(tri),
                     )
                 })
             }
         }?;
         let normal = frame.apply_normal(inverse, hit.0.normal);
-        Some((LocalHit { t: hit.0.t, normal }, hit.1))
+        Some(PrimitiveHit {
+            hit: LocalHit { t: hit.0.t, normal },
+            local: local.at(hit.0.t),
+            color: hit.1,
+            triangle: hit.2,
+        })
+    }
+
+    /// The diffuse colour of the surface at `hit`: a mesh triangle's own colour, else the
+    /// texel of its material's image there ([`Texels`]), else the material's colour.
+    pub fn diffuse_at(&self, hit: &Hit, texels: &Texels) -> [f64; 3] {
+        if let Some(color) = hit.color {
+            return color;
+        }
+        let Some(primitive) = self.graph.primitives.get(hit.primitive) else {
+            return [1.0; 3];
+        };
+        let Some(material) = self.graph.materials.get(primitive.material) else {
+            return [1.0; 3];
+        };
+        if material.maps.base_color.is_some() {
+            let uv = texcoord::at_point(
+                &primitive.shape,
+                &self.graph.meshes,
+                hit.local,
+                hit.triangle,
+            );
+            if let Some(texel) = uv.and_then(|uv| texels.diffuse(material, uv)) {
+                return texel;
+            }
+        }
+        material.diffuse
     }
 
     /// The nearest visible surface along a ray within `t_max`.
@@ -174,22 +235,16 @@ impl<'g> RayCaster<'g> {
                 return None;
             }
             let primitive = &graph.primitives[index];
-            let (hit, color) = self.hit_primitive(
+            let found = self.hit_primitive(
                 primitive,
                 &primitive.frame,
                 &primitive.inverse,
                 ray,
                 t_limit.min(limit),
             )?;
-            limit = hit.t;
-            best = Some(Hit {
-                primitive: index,
-                t: hit.t,
-                point: ray.at(hit.t),
-                normal: hit.normal,
-                color,
-            });
-            Some(hit.t)
+            limit = found.hit.t;
+            best = Some(Hit::new(index, ray, found));
+            Some(limit)
         });
         for (index, world, inverse, bounds) in &frame.dynamic {
             if bounds
@@ -199,15 +254,9 @@ impl<'g> RayCaster<'g> {
                 continue;
             }
             let primitive = &graph.primitives[*index];
-            if let Some((hit, color)) = self.hit_primitive(primitive, world, inverse, ray, limit) {
-                limit = hit.t;
-                best = Some(Hit {
-                    primitive: *index,
-                    t: hit.t,
-                    point: ray.at(hit.t),
-                    normal: hit.normal,
-                    color,
-                });
+            if let Some(found) = self.hit_primitive(primitive, world, inverse, ray, limit) {
+                limit = found.hit.t;
+                best = Some(Hit::new(*index, ray, found));
             }
         }
         best
