@@ -1026,7 +1026,11 @@ fn no_gpu_adapter_is_a_clear_error() {
 #[test]
 fn every_world_and_proto_in_the_repository_is_canonical() {
     let mut files = Vec::new();
-    let mut folders = vec![root().join("worlds")];
+    let mut folders = vec![
+        root().join("worlds"),
+        root().join("examples"),
+        root().join("webots/tests/projects"),
+    ];
     while let Some(folder) = folders.pop() {
         for entry in std::fs::read_dir(folder).unwrap() {
             let path = entry.unwrap().path();

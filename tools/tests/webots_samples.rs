@@ -128,6 +128,14 @@ fn emitter_receiver_sample_runs_both_robots_python_controller() {
     s.runs_its_own("MyBot emitter", "Python");
     s.runs_its_own("MyBot receiver", "Python");
     assert!(s.distance("MyBot receiver") > 1.0, "{}", s.summary);
+    // The emitter's body is its bounding object (a 45 mm cylinder), not the 0.4 m translucent
+    // sphere it shows around its emitter: it drives too, and comes within range.
+    assert!(s.distance("MyBot emitter") > 1.0, "{}", s.summary);
+    assert!(
+        s.lines_of("MyBot receiver", "Communicating: received \"Hello!\"") >= 1,
+        "{}",
+        s.stderr
+    );
 }
 
 #[test]

@@ -5,6 +5,7 @@
 //! `DifferentialWheels` starts a robot: everything below it is attached to the robot, with
 //! frames relative to it, and its devices go to the rig.
 
+mod bounding;
 pub mod drive;
 mod exported;
 pub mod frames;
@@ -656,7 +657,7 @@ impl Compiler<'_> {
         }
         self.group = outer;
         if generic && self.rig.robots[index].drive.is_some() {
-            self.size_generic_body(index, first_part);
+            self.size_generic_body(index, first_part, &children_frame);
         } else if generic {
             // A robot that cannot move is no body either: nothing pushes it, and it pushes
             // nothing (Webots' robots without physics stand where they are written).
@@ -669,11 +670,26 @@ impl Compiler<'_> {
     }
 
     /// A generic robot's round body: the largest horizontal half-extent and the height of its
-    /// own shapes (its devices' and wheels' included), or a 5 cm stand-in when it has none.
-    fn size_generic_body(&mut self, index: usize, first_part: usize) {
+    /// `boundingObject` (what Webots collides), else of its own shapes (its devices' and
+    /// wheels' included), or a 5 cm stand-in when it has neither. A bounding object keeps
+    /// what a robot only shows (a translucent sphere marking its radio's range) out of its
+    /// body.
+    fn size_generic_body(&mut self, index: usize, first_part: usize, frame: &Frame) {
+        let node = self.rig.robots[index].node;
+        let bounding = self
+            .scene
+            .child(node, "boundingObject")
+            .map(|b| bounding::bounds(self.scene, b, frame))
+            .filter(|b| b.min.x <= b.max.x && b.min.is_finite() && b.max.is_finite());
         let (mut radius, mut height) = (0.0f64, 0.0f64);
+        if let Some(bounds) = bounding {
+            for extent in [bounds.min.x, bounds.max.x, bounds.min.z, bounds.max.z] {
+                radius = radius.max(extent.abs());
+            }
+            height = bounds.max.y;
+        }
         for primitive in &self.graph.primitives[first_part..] {
-            if primitive.owner != Owner::Robot(index) {
+            if bounding.is_some() || primitive.owner != Owner::Robot(index) {
                 continue;
             }
             // The largest horizontal half-extent: a round body's radius (a box's corners

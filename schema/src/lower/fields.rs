@@ -211,7 +211,12 @@ impl<'c> Lowerer<'c> {
             Literal::Value(value) => return Some(value),
             Literal::Nodes(atoms) => atoms,
         };
-        let accepted: Vec<String> = spec.map(|s| s.nodes.clone()).unwrap_or_default();
+        let mut accepted: Vec<String> = spec.map(|s| s.nodes.clone()).unwrap_or_default();
+        // Webots places a bounding object's primitives straight in its Pose, Transform or
+        // Group (`children [ USE BODY ]`, BODY a Cylinder): geometry stands in children there.
+        if self.in_bounding_object > 0 && field_name == "children" {
+            accepted.push("geometry".to_owned());
+        }
         let place = format!("'{field_name}'");
         let wrong = |lowerer: &mut Self, atom: &Atom| {
             let typing = Typing {
@@ -228,7 +233,11 @@ impl<'c> Lowerer<'c> {
             return match &atoms[0] {
                 Atom::Null(_) => Some(Value::Node(None)),
                 Atom::Node(node) => {
-                    Some(Value::Node(self.lower_node(node, scope, &accepted, &place)))
+                    let bounding = field_name == "boundingObject";
+                    self.in_bounding_object += usize::from(bounding);
+                    let id = self.lower_node(node, scope, &accepted, &place);
+                    self.in_bounding_object -= usize::from(bounding);
+                    Some(Value::Node(id))
                 }
                 other => {
                     wrong(self, other);

@@ -163,6 +163,8 @@ pub(super) struct Lowerer<'c> {
     pub(super) includes: Vec<FileId>,
     /// Nodes being lowered inside each other (the expanded scene's depth).
     pub(super) node_depth: usize,
+    /// Bounding objects being lowered (inside one, geometry may stand in `children`).
+    pub(super) in_bounding_object: usize,
     /// The user's line a value inside a PROTO body came from, while it is being typed.
     pub(super) blame: Option<(FileId, Span)>,
     /// Places problems in PROTO bodies were moved to (each gets one message).
@@ -238,6 +240,7 @@ impl<'c> Lowerer<'c> {
             frames: Vec::new(),
             includes: Vec::new(),
             node_depth: 0,
+            in_bounding_object: 0,
             blame: None,
             relocated: BTreeSet::new(),
             checked_protos: BTreeSet::new(),
