@@ -251,6 +251,23 @@ fn the_python_twins_of_the_c_samples_drive_as_the_c_ones_do() {
 }
 
 #[test]
+fn e_puck_line_sample_runs_its_line_follower_on_a_floor_without_its_image() {
+    let Some(s) = sample("projects/robots/gctronic/e-puck/worlds/e-puck_line.wbt") else {
+        return;
+    };
+    s.runs_its_own("e-puck", "C");
+    // Its floor image is a `webots://` url, which regatta never fetches (and ../shared does
+    // not hold it): a warning at its line, and the floor reads plain. With no line to follow
+    // the controller drives its obstacle-avoiding and line-seeking modules.
+    assert!(
+        s.stderr.contains("textures/floor.png") && s.stderr.contains("never fetches"),
+        "{}",
+        s.stderr
+    );
+    assert!(s.distance("e-puck") > 0.3, "{}", s.summary);
+}
+
+#[test]
 fn e_puck_sample_avoids_the_boxes_and_reads_gravity_and_odometry() {
     let Some(s) = sample("projects/robots/gctronic/e-puck/worlds/e-puck.wbt") else {
         return;
