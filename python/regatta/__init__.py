@@ -13,6 +13,9 @@ Python:
 - ``regatta.gym``: ``regatta/Regatta-v0`` and ``regatta/Avoidance-v0`` (registered with
   Gymnasium when this package is imported and Gymnasium is installed), and their vector
   environment for ``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``.
+- ``regatta.webots``: ``regatta/Webots-v0``, one robot of a Webots project as a Gymnasium
+  environment (actions: its motors' velocities; observations: its sensors), the project's
+  other controllers running beside it.
 - ``regatta.pettingzoo``: :func:`regatta.pettingzoo.parallel_env`, one agent per robot.
 - ``regatta.ray``: :func:`regatta.ray.evaluate`, :func:`evaluate` spread over a Ray cluster.
 """
@@ -51,5 +54,7 @@ __all__ = [
 
 if _importlib_util.find_spec("gymnasium") is not None:
     from .gym import register_environments as _register_environments
+    from .webots import register as _register_webots
 
     _register_environments()
+    _register_webots()

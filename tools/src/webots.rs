@@ -64,10 +64,25 @@ pub fn plan_programs(
         .collect();
     let mut overridden = Vec::new();
     for spec in &overrides.controllers {
-        match spec.split_once('=') {
-            Some((robot, _)) => overridden.extend(names.iter().position(|n| n == robot)),
-            None => overridden.extend(0..names.len()),
+        let (targets, controller): (Vec<usize>, &str) = match spec.split_once('=') {
+            Some((robot, controller)) => (
+                names.iter().position(|n| n == robot).into_iter().collect(),
+                controller,
+            ),
+            None => ((0..names.len()).collect(), spec.as_str()),
+        };
+        // `--controller ROBOT=<extern>`: the robot waits for a program started by hand (a
+        // Gymnasium environment's agent), as if its world said so.
+        if controller == "<extern>" {
+            if !overrides.extern_controllers {
+                bail!("--controller {spec}: an <extern> controller needs --extern (the run then waits for it)");
+            }
+            for &robot in &targets {
+                loaded.compiled.rig.robots[robot].controller = "<extern>".to_owned();
+            }
+            continue;
         }
+        overridden.extend(targets);
     }
     let project = regatta_webots::project_of(world);
     let mut planned = regatta_webots::plan(
@@ -222,6 +237,10 @@ pub fn resolve_controllers(
             None => (0..names.len()).collect(),
         };
         for index in targets {
+            // An <extern> robot planned to wait for its program is its program's.
+            if controller == "<extern>" && compiled.rig.robots[index].program.is_some() {
+                continue;
+            }
             compiled.rig.robots[index].controller = controller.to_owned();
             overridden[index] = true;
         }

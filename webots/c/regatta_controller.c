@@ -26,6 +26,7 @@
 #include <webots/touch_sensor.h>
 
 #include <errno.h>
+#include <setjmp.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
@@ -119,7 +120,17 @@ static struct {
   /* the last frame read */
   unsigned char *in;
   size_t in_capacity, in_length, in_at;
+  /* Embedded in a host program (a Gymnasium environment, `regatta_controller_embed`): a
+     failure or a vanished simulator ends the call in progress, not the process. */
+  int embedded, armed;
 } R = {-1};
+
+/* Where an embedded call in progress returns to on a failure. */
+static jmp_buf escape;
+
+void regatta_controller_embed(int on) {
+  R.embedded = on;
+}
 
 /* ---- errors and warnings, in Webots' style ---- */
 
@@ -131,7 +142,16 @@ static void fail(const char *format, ...) {
   vfprintf(stderr, format, args);
   va_end(args);
   fprintf(stderr, "\n");
+  if (R.armed)
+    longjmp(escape, 1);
   exit(1);
+}
+
+/* The simulator closed the connection: the run has ended (or failed). */
+static void gone(void) {
+  if (R.armed)
+    longjmp(escape, 1);
+  exit(0);
 }
 
 /* ---- the socket ---- */
@@ -143,7 +163,7 @@ static void write_all(const void *data, size_t size) {
     if (n < 0 && errno == EINTR)
       continue;
     if (n <= 0)
-      exit(0); /* regatta is gone: the run has ended */
+      gone();
     bytes += n;
     size -= (size_t)n;
   }
@@ -156,7 +176,7 @@ static void read_all(void *data, size_t size) {
     if (n < 0 && errno == EINTR)
       continue;
     if (n <= 0)
-      exit(0); /* regatta is gone: the run has ended */
+      gone();
     bytes += n;
     size -= (size_t)n;
   }
@@ -319,9 +339,58 @@ static double param(const Device *d, int i, double otherwise) {
 
 /* ---- the robot ---- */
 
+/* Frees what the last connection described, so that `wb_robot_init` can connect again (an
+   embedding program's next episode). */
+static void forget(void) {
+  for (int i = 0; i < R.n_devices; i++) {
+    Device *d = &R.devices[i];
+    free(d->name);
+    free(d->model);
+    free(d->params);
+    free(d->table);
+    free(d->image);
+    for (int p = 0; p < d->n_packets; p++)
+      free(d->packets[d->first_packet + p].data);
+    free(d->packets);
+  }
+  free(R.devices);
+  free(R.name);
+  free(R.model);
+  free(R.custom_data);
+  free(R.project);
+  free(R.world);
+  R.devices = NULL;
+  R.n_devices = 0;
+  R.name = R.model = R.custom_data = R.project = R.world = NULL;
+  R.quit = 0;
+  R.time = 0.0;
+  R.out_length = 0;
+  R.n_commands = 0;
+  R.in_length = R.in_at = 0;
+}
+
+static int connect_and_describe(void);
+
 int wb_robot_init(void) {
   if (R.initialized)
     return 1;
+  if (R.embedded) {
+    if (setjmp(escape)) {
+      R.armed = 0;
+      if (R.fd >= 0)
+        close(R.fd);
+      R.fd = -1;
+      return 0;
+    }
+    R.armed = 1;
+  }
+  int ok = connect_and_describe();
+  R.armed = 0;
+  return ok;
+}
+
+static int connect_and_describe(void) {
+  forget();
   const char *url = getenv("REGATTA_CONTROLLER_URL");
   if (!url || !*url)
     url = getenv("WEBOTS_CONTROLLER_URL");
@@ -505,9 +574,19 @@ int wb_robot_step_end(void) {
 }
 
 int wb_robot_step(int duration) {
-  if (wb_robot_step_begin(duration) < 0)
-    return -1;
-  return wb_robot_step_end();
+  if (R.embedded) {
+    if (setjmp(escape)) {
+      /* The simulator is gone or the step failed (said on standard error): the run is over
+         for this controller. */
+      R.armed = 0;
+      R.quit = 1;
+      return -1;
+    }
+    R.armed = 1;
+  }
+  int result = wb_robot_step_begin(duration) < 0 ? -1 : wb_robot_step_end();
+  R.armed = 0;
+  return result;
 }
 
 WbUserInputEvent wb_robot_wait_for_user_input_event(WbUserInputEvent event_type, int timeout) {
