@@ -139,6 +139,21 @@ fn emitter_receiver_sample_runs_both_robots_python_controller() {
 }
 
 #[test]
+fn light_sensor_sample_drives_to_the_light_and_stops_there() {
+    let Some(s) = sample("projects/samples/devices/worlds/light_sensor.wbt") else {
+        return;
+    };
+    s.runs_its_own("MyBot", "C");
+    // Webots' irradiance (the lamp's attenuation 0 0 5, unbounded) saturates both sensors'
+    // tables near the lamp at (0, -0.1): the wheels stop there, nearer than the start (0.61 m).
+    let pose = &s.robot("MyBot")["final_pose"];
+    let (x, y) = (pose["x"].as_f64().unwrap(), -pose["z"].as_f64().unwrap());
+    let distance = x.hypot(y + 0.1);
+    assert!(distance < 0.35, "{distance} m from the lamp: {}", s.summary);
+    assert_eq!(s.robot("MyBot")["contacts"]["events"], 0, "{}", s.summary);
+}
+
+#[test]
 fn position_sensor_sample_runs_its_pid_loop() {
     let Some(s) = sample("projects/samples/devices/worlds/position_sensor.wbt") else {
         return;

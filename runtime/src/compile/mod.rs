@@ -32,8 +32,8 @@ use graph::{
 };
 pub use plan::Plan;
 use rig::{
-    filter_set, CameraRenderer, CameraRig, DistanceSensorRig, LightSensorRig, LinearCameraRig,
-    Optics, PanoramicRig, Pose2, RobotRig, SensorRig, TurretRig,
+    filter_set, Attenuation, CameraRenderer, CameraRig, DistanceSensorRig, LightSensorRig,
+    LinearCameraRig, Optics, PanoramicRig, Pose2, RobotRig, SensorRig, TurretRig,
 };
 use shapes::{background_of, shape_of, Geometry};
 
@@ -764,6 +764,11 @@ impl Compiler<'_> {
                     lookup: self.tables.share(lookup_table(scene, node)),
                     occlusion: scene.bool(node, "occlusion"),
                     period: scene.float(node, "samplingPeriod"),
+                    attenuation: if scene.objects == regatta_schema::webots::Objects::Legacy {
+                        Attenuation::Vrml97
+                    } else {
+                        Attenuation::Unbounded
+                    },
                 };
                 Arc::make_mut(&mut self.rig.robots[robot].light_sensors).push(rig);
             }

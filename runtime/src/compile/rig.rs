@@ -128,6 +128,17 @@ impl DistanceSensorRig {
     }
 }
 
+/// How a point or spot light's attenuation 1 / (a₀ + a₁d + a₂d²) is bounded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Attenuation {
+    /// VRML97 4.14.5: never above 1 (the divisor is at least 1), for rendering and regatta's
+    /// own ambient light model.
+    Vrml97,
+    /// Webots' LightSensor irradiance: the divisor as it is, so that a sensor near a bulb
+    /// reads more than the bulb's intensity (Webots advises 0 0 4π for a real source).
+    Unbounded,
+}
+
 /// An ambient light sensor.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightSensorRig {
@@ -138,6 +149,9 @@ pub struct LightSensorRig {
     pub lookup: Arc<[[f64; 3]]>,
     pub occlusion: bool,
     pub period: f64,
+    /// How lights' attenuation is bounded: Webots' formula (unbounded) in files of Webots
+    /// R2022a and later, VRML97's elsewhere (regatta's worlds, whose ambient model uses it).
+    pub attenuation: Attenuation,
 }
 
 /// How the retina's optics are computed.

@@ -15,7 +15,7 @@ use glam::DVec3;
 
 use crate::compile::graph::{LightKind, Material, Owner, RenderGraph};
 use crate::compile::plan::Plan;
-use crate::compile::rig::Pose2;
+use crate::compile::rig::{Attenuation, Pose2};
 use crate::geometry::Frame;
 
 /// How finely exact optics integrate a strip: the world file's dial between cost and error.
@@ -173,6 +173,24 @@ pub(crate) fn shade(
 /// factor (VRML97: `1/max(a0 + a1·d + a2·d², 1)`, full inside the beam width, linear to zero
 /// at the cut-off angle). `None` beyond the light's radius.
 pub(crate) fn light_at(kind: &LightKind, point: DVec3) -> Option<(DVec3, f64)> {
+    light_at_with(kind, point, Attenuation::Vrml97)
+}
+
+/// [`light_at`] with the attenuation's bound chosen.
+pub(crate) fn light_at_with(
+    kind: &LightKind,
+    point: DVec3,
+    bound: Attenuation,
+) -> Option<(DVec3, f64)> {
+    let attenuate = |coefficients: DVec3, distance: f64| match bound {
+        Attenuation::Vrml97 => attenuate(coefficients, distance),
+        Attenuation::Unbounded => {
+            1.0 / (coefficients.x
+                + coefficients.y * distance
+                + coefficients.z * distance * distance)
+                .max(f64::MIN_POSITIVE)
+        }
+    };
     match kind {
         LightKind::Directional { direction } => Some((-*direction, 1.0)),
         LightKind::Point {

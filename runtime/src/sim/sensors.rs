@@ -24,7 +24,7 @@ use super::world2d::{Footprint, Slab};
 use crate::broad::Grid;
 use crate::compile::graph::LightKind;
 use crate::compile::rig::{DistanceSensorRig, LightSensorRig, Placement, RobotRig};
-use crate::render::{light_at, WorldLight};
+use crate::render::{light_at_with, WorldLight};
 use crate::retina::luminance;
 
 /// Value and relative noise of a lookup table at `x` (rows sorted by their first column).
@@ -297,7 +297,8 @@ pub fn ambient_value(
         .normalize_or(DVec3::X);
     let mut irradiance = 0.0;
     for light in lights {
-        let Some((to_light, reach)) = light_at(&light.kind, position) else {
+        let Some((to_light, reach)) = light_at_with(&light.kind, position, sensor.attenuation)
+        else {
             continue;
         };
         if sensor.occlusion {
