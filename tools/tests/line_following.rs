@@ -258,3 +258,64 @@ fn the_plot_draws_the_floor_image_under_the_trajectory() {
     let black = top.pixels().filter(|p| p.0 == [0, 0, 0]).count();
     assert!(black > 20_000, "{black} black pixels");
 }
+
+#[test]
+fn the_thymios_ground_sensors_read_the_line_too() {
+    // prox.ground.0 (left) and prox.ground.1 (right), 5 cm ahead of the centre and 11 mm to
+    // either side: on the line's middle both read black (0); 11 mm to the left of it, the
+    // left one reads the white floor (600 at 8 mm).
+    let dir = temp_dir("line-thymio");
+    std::fs::create_dir_all(dir.join("worlds/textures")).unwrap();
+    std::fs::create_dir_all(dir.join("controllers/probe")).unwrap();
+    std::fs::copy(
+        root().join("examples/line_following/worlds/textures/track.png"),
+        dir.join("worlds/textures/track.png"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("controllers/probe/probe.py"),
+        "from controller import Robot\n\
+         robot = Robot()\n\
+         ground = [robot.getDevice('prox.ground.%d' % i) for i in range(2)]\n\
+         for sensor in ground:\n    sensor.enable(16)\n\
+         robot.step(16)\n\
+         print('ground', ground[0].getValue(), ground[1].getValue())\n\
+         while robot.step(16) != -1:\n    pass\n",
+    )
+    .unwrap();
+    let read = |y: f64| -> (f64, f64) {
+        let world = format!(
+            "#VRML_SIM R2023b utf8\n\
+             EXTERNPROTO \"webots://projects/objects/floors/protos/RectangleArena.proto\"\n\
+             EXTERNPROTO \"webots://projects/robots/mobsya/thymio/protos/Thymio2.proto\"\n\
+             WorldInfo {{ basicTimeStep 16 }}\n\
+             RectangleArena {{\n  floorSize 1 1\n  floorTileSize 1 1\n  \
+             floorAppearance PBRAppearance {{ baseColorMap ImageTexture {{ url [ \"textures/track.png\" ] }} }}\n}}\n\
+             Thymio2 {{ translation -0.05 {y} 0 controller \"probe\" }}\n"
+        );
+        std::fs::write(dir.join("worlds/w.wbt"), world).unwrap();
+        let output = regatta()
+            .env("REGATTA_CACHE_DIR", cache())
+            .env_remove("REGATTA_PYTHON")
+            .arg("run")
+            .arg(dir.join("worlds/w.wbt"))
+            .args(["--steps", "2"])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(output.status.success(), "{stderr}");
+        let line = stderr
+            .lines()
+            .find_map(|l| l.strip_prefix("[Thymio II] ground "))
+            .unwrap_or_else(|| panic!("no reading: {stderr}"));
+        let values: Vec<f64> = line
+            .split_whitespace()
+            .map(|v| v.parse().unwrap())
+            .collect();
+        (values[0], values[1])
+    };
+    let (left, right) = read(-0.25);
+    assert!(left < 50.0 && right < 50.0, "{left} {right}");
+    let (left, right) = read(-0.239);
+    assert!(left > 550.0 && right < 50.0, "{left} {right}");
+}
