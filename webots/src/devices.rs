@@ -110,8 +110,10 @@ pub fn devices(scene: &Scene, rig: &RobotRig) -> Vec<Device> {
 
 /// The devices of a stand-in's drive (tags 1–4).
 fn drive_devices(rig: &RobotRig, devices: &mut Vec<Device>) {
+    // To the µrad/s, as a PROTO writes it: 0.12874 m/s on 20.5 mm wheels is the e-puck's
+    // 6.28 rad/s, not 6.279999…, which a controller's own `MAX_SPEED 6.28` would exceed.
     let max_velocity = if rig.wheel_radius > 0.0 {
-        rig.max_speed / rig.wheel_radius
+        libm::round(rig.max_speed / rig.wheel_radius * 1e6) / 1e6
     } else {
         0.0
     };
