@@ -31,8 +31,9 @@ pub(super) struct Impostor {
     /// Its azimuth interval, relative to the heading, in (−π, π] and not wrapping.
     pub(super) lo: f64,
     pub(super) hi: f64,
-    /// From the eye to its footprint's centre.
+    /// From the eye to its footprint's centre, and the footprint's radius.
     pub(super) distance: f64,
+    pub(super) radius: f64,
     /// Heights of its pieces together, relative to the eye.
     pub(super) y0: f64,
     pub(super) y1: f64,
@@ -287,6 +288,7 @@ mod tests {
             lo,
             hi,
             distance,
+            radius: 0.02,
             y0: -0.05,
             y1: 0.02,
             first_static: 0,

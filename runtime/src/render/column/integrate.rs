@@ -6,6 +6,7 @@
 use glam::{DVec2, DVec3};
 
 use super::super::shade;
+use super::far;
 use super::impostor::Impostor;
 use super::impostor::IMPOSTOR_PIXELS;
 use super::photodiode::{
@@ -313,10 +314,11 @@ impl ColumnScene<'_> {
                 scratch,
                 profile,
             );
-            let effect = self.impostor_effect(
+            let direction = look.turn(strip, pixel, centre);
+            let effect = self.any_impostor_effect(
                 frame,
                 look,
-                look.turn(strip, pixel, centre),
+                direction,
                 impostor,
                 (profile, pieces),
                 &column_band,
@@ -466,7 +468,7 @@ impl ColumnScene<'_> {
                 let shown = &profile[profile_starts[k]..profile_starts[k + 1]];
                 let pixel = nearest_index((strip.centers[0] - centre) * inverse_width, pixels - 1);
                 let direction = look.turn(strip, pixel, centre);
-                let effect = self.impostor_effect(
+                let effect = self.any_impostor_effect(
                     frame,
                     look,
                     direction,
@@ -656,6 +658,43 @@ impl ColumnScene<'_> {
             },
             out,
         )
+    }
+
+    /// [`ColumnScene::impostor_effect`], by `far.rs`'s short way where its faces have fast
+    /// shading.
+    #[allow(clippy::too_many_arguments)]
+    fn any_impostor_effect(
+        &self,
+        frame: &ColumnFrame,
+        look: &Look,
+        direction: DVec2,
+        impostor: &Impostor,
+        (profile, pieces): (&[Shown], &mut Vec<EyeObject>),
+        band: &Band,
+        scratch: &mut Scratch,
+    ) -> f64 {
+        let first_id = look.objects.len() as u32;
+        far::fast_effect(
+            frame,
+            impostor,
+            look.eye.y,
+            direction,
+            first_id,
+            profile,
+            band,
+            &mut scratch.free,
+        )
+        .unwrap_or_else(|| {
+            self.impostor_effect(
+                frame,
+                look,
+                direction,
+                impostor,
+                (profile, pieces),
+                band,
+                scratch,
+            )
+        })
     }
 
     /// An impostor's effect on the band's mean along `direction` (through its centre), its

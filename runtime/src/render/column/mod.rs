@@ -20,6 +20,7 @@
 //! `shading.rs` the fast shading, `crowd.rs` which other robots an eye draws, `strip.rs` the pixels to integrate.
 
 mod crowd;
+mod far;
 mod footprint;
 mod impostor;
 mod integrate;

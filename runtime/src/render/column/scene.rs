@@ -41,6 +41,11 @@ pub struct ColumnScene<'g> {
     /// Per static object, whether an eye may leave it out when it is behind the strip: no
     /// corner test names it (robot parts always may).
     pub(super) cullable: Vec<bool>,
+    /// Per static object, how many static objects (itself and those after it sharing its
+    /// round footprint: a buoy and its lamp) may become one impostor, when it is the first of
+    /// them and no corner test names it; 0 otherwise. Found once, so that a look tests a far
+    /// buoy and its lamp as one, in a few arithmetic operations.
+    pub(super) round_pieces: Vec<u32>,
     /// Per entry of `robot_parts`, whether the part is tucked under its robot's body: within
     /// [`TUCK`] of the body's round footprint and no higher than it (a Khepera's wheels). The
     /// crowd level of detail leaves such parts of other robots out.
@@ -118,7 +123,7 @@ impl<'g> ColumnScene<'g> {
             (Arc::from(lights), Arc::new(shades))
         });
         let hiders = corner_hiders(&statics);
-        let same_footprint = (0..statics.len())
+        let same_footprint: Vec<bool> = (0..statics.len())
             .map(|i| i > 0 && statics[i].footprint == statics[i - 1].footprint)
             .collect();
         let statics_fast = cached.as_ref().is_some_and(|(_, shades)| {
@@ -130,7 +135,9 @@ impl<'g> ColumnScene<'g> {
         for hider in hiders.iter().flatten() {
             cullable[hider.object as usize] = false;
         }
+        let round_pieces = round_groups(&statics, &same_footprint, &cullable);
         ColumnScene {
+            round_pieces,
             graph,
             own_visible,
             statics_fast,
@@ -238,6 +245,26 @@ impl<'g> ColumnScene<'g> {
         };
         frame.all_fast = statics_fast && frame.others.iter().chain(&frame.own).flatten().all(fast);
     }
+}
+
+/// Per static object, the size of the group of round objects it starts (see
+/// [`ColumnScene::round_pieces`]): a round, cullable object not sharing the previous one's
+/// footprint, and the objects right after it that share its footprint.
+fn round_groups(statics: &[Upright], same_footprint: &[bool], cullable: &[bool]) -> Vec<u32> {
+    let mut pieces = vec![0u32; statics.len()];
+    for (first, object) in statics.iter().enumerate() {
+        let starts = cullable[first]
+            && !same_footprint[first]
+            && matches!(object.footprint, Footprint::Circle { .. });
+        if starts {
+            let more = same_footprint[first + 1..]
+                .iter()
+                .take_while(|&&same| same)
+                .count();
+            pieces[first] = 1 + more as u32;
+        }
+    }
+    pieces
 }
 
 /// Per entry of `parts` (primitive, robot), whether it is tucked under its robot's body, the

@@ -140,7 +140,6 @@ impl Look {
 enum Fate {
     Placed,
     LeftOut,
-    Impostor,
 }
 
 /// An object as seen from `eye`, its interval `[lo, hi]` (wrapped).
@@ -189,7 +188,7 @@ pub(super) fn eye_object(object: &Upright, eye: DVec3, lo: f64, hi: f64) -> EyeO
 }
 
 /// A closure over a frame's objects, typed so that it may keep references to them.
-fn typed<'f, F: FnMut(&'f Upright)>(_frame: &'f ColumnFrame, f: F) -> F {
+fn typed<'f, F: FnMut(usize, &'f Upright) -> usize>(_frame: &'f ColumnFrame, f: F) -> F {
     f
 }
 
@@ -499,13 +498,54 @@ impl ColumnScene<'_> {
         let mut previous: Option<(&Upright, Option<Interval>, Fate)> = None;
         // Static objects, then robot parts (each viewer's own as its turret sees them), by
         // two plain loops: the per-object work is small, so the iteration shows.
-        let mut order = 0usize;
-        let mut place = typed(frame, |object| {
-            let order = {
-                order += 1;
-                order - 1
-            };
+        // Each call places the object of order `order` (static objects first, robot parts
+        // from `statics` on) and says how many static objects it took: a far buoy and its
+        // lamp become one impostor at once.
+        let mut place = typed(frame, |order: usize, object| -> usize {
             let index = objects.len();
+            // A far small round static object, with the pieces on its footprint, is an
+            // impostor, or left out when it lies beyond the strip: tested first, as most of a
+            // big arena's are.
+            let pieces = match self.round_pieces.get(order) {
+                Some(&pieces) if impostor_width > 0.0 => pieces as usize,
+                _ => 0,
+            };
+            if let (true, Footprint::Circle { center, radius }) = (pieces > 0, object.footprint) {
+                if let Some((lo, hi, distance)) = impostor::far(
+                    center,
+                    radius,
+                    eye,
+                    heading,
+                    reach.crowd_distance,
+                    impostor_width,
+                ) {
+                    if sector.is_some() {
+                        static_slots.extend(std::iter::repeat_n(index as u32, pieces));
+                    }
+                    let (first, last) = reach.extent;
+                    if hi >= first && lo <= last {
+                        let group = &frame.statics[order..order + pieces];
+                        let (mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY);
+                        for piece in group {
+                            y0 = y0.min(piece.y0);
+                            y1 = y1.max(piece.y1);
+                        }
+                        impostors.push(Impostor {
+                            lo,
+                            hi,
+                            distance,
+                            radius,
+                            y0: y0 - eye.y,
+                            y1: y1 - eye.y,
+                            first_static: order as u32,
+                            pieces: pieces as u32,
+                            visible: 1.0,
+                        });
+                    }
+                    previous = None;
+                    return pieces;
+                }
+            }
             // Static objects keep their order unless some may be left out.
             if order < statics && sector.is_some() {
                 static_slots.push(index as u32);
@@ -517,68 +557,26 @@ impl ColumnScene<'_> {
             };
             let (interval, shared) = match previous {
                 Some((before, interval, fate)) if shares_previous(before) => match fate {
-                    Fate::LeftOut => return,
-                    Fate::Impostor => {
-                        // Another piece of the same impostor (a lamp on its far buoy).
-                        if let Some(last) = impostors.last_mut() {
-                            last.y0 = last.y0.min(object.y0 - eye.y);
-                            last.y1 = last.y1.max(object.y1 - eye.y);
-                            last.pieces += 1;
-                        }
-                        return;
-                    }
+                    Fate::LeftOut => return 1,
                     Fate::Placed => (interval, true),
                 },
                 _ => {
                     // Robot parts, and static objects no corner test names.
                     let may_leave = order >= statics || self.cullable[order];
-                    // A far small round static object is an impostor, or left out when it
-                    // lies beyond the strip: tested first, as most of a big arena's are.
-                    if impostor_width > 0.0 && order < statics && may_leave {
-                        if let Footprint::Circle { center, radius } = object.footprint {
-                            if let Some((lo, hi, distance)) = impostor::far(
-                                center,
-                                radius,
-                                eye,
-                                heading,
-                                reach.crowd_distance,
-                                impostor_width,
-                            ) {
-                                let (first, last) = reach.extent;
-                                let fate = if hi < first || lo > last {
-                                    Fate::LeftOut
-                                } else {
-                                    impostors.push(Impostor {
-                                        lo,
-                                        hi,
-                                        distance,
-                                        y0: object.y0 - eye.y,
-                                        y1: object.y1 - eye.y,
-                                        first_static: order as u32,
-                                        pieces: 1,
-                                        visible: 1.0,
-                                    });
-                                    Fate::Impostor
-                                };
-                                previous = Some((object, None, fate));
-                                return;
-                            }
-                        }
-                    }
                     if may_leave
                         && reach.out_of_band.is_finite()
                         && out_of_band(object, eye, reach.out_of_band)
                     {
                         // Stacked pieces of its footprint are tested each on its own.
                         previous = None;
-                        return;
+                        return 1;
                     }
                     if let Some(sector) = sector.filter(|_| may_leave) {
                         let (center, radius) = object.footprint.bounding_circle();
                         let offset = center - eye2;
                         if sector.excludes(DVec2::new(offset.x, -offset.y), radius) {
                             previous = Some((object, None, Fate::LeftOut));
-                            return;
+                            return 1;
                         }
                     }
                     (azimuth_interval(object, eye2, heading), false)
@@ -639,9 +637,11 @@ impl ColumnScene<'_> {
                 }
             }
             objects.push(placed);
+            1
         });
-        for object in frame.statics.iter() {
-            place(object);
+        let mut order = 0;
+        while order < statics {
+            order += place(order, &frame.statics[order]);
         }
         let part = |entry: usize| {
             if Some(frame.part_robot[entry]) == viewer {
@@ -681,7 +681,7 @@ impl ColumnScene<'_> {
                             continue;
                         }
                         if let Some(object) = part(entry) {
-                            place(object);
+                            place(statics, object);
                         }
                     }
                 }
@@ -703,7 +703,7 @@ impl ColumnScene<'_> {
                         && Some(robot) != viewer
                         && self.tucked.get(entry).copied().unwrap_or(false);
                     if let Some(object) = part(entry).filter(|_| !far && !tucked) {
-                        place(object);
+                        place(statics, object);
                     }
                 }
             }
