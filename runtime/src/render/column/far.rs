@@ -11,9 +11,9 @@ use super::impostor::Impostor;
 use super::photodiode::{Band, Free, Lit, Shown};
 use super::scene::ColumnFrame;
 
-/// Most faces an impostor keeps here (a side and two caps per piece); one with more takes the
-/// general path.
-const MOST_FACES: usize = 12;
+/// Most faces an impostor keeps here (a side and two caps per piece: a buoy and its lamp); one
+/// with more takes the general path.
+const MOST_FACES: usize = 6;
 
 /// The change in the band's mean along `direction` (through the impostor's centre) when its
 /// faces join what `profile` shows, its pieces numbered from `first_id` (ties in depth go by

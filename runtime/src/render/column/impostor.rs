@@ -63,27 +63,20 @@ pub(super) struct Standing {
 }
 
 /// Per azimuth bin, the highest top (tan-elevation) of the objects standing on the floor
-/// that cover the whole bin, among those placed so far (nearest first). Stamped, so that a
-/// new look clears nothing.
+/// that cover the whole bin, among those placed so far (nearest first). Cleared for each look
+/// that has impostors (32 kB, a few hundred vector stores): the loops over bins are then plain
+/// maxima and counts, which run in vector lanes.
 #[derive(Default)]
 pub(super) struct Occlusion {
-    stamp: Vec<u32>,
     top: Vec<f64>,
-    epoch: u32,
 }
 
 impl Occlusion {
     fn begin(&mut self) {
-        if self.stamp.len() != BINS {
-            self.stamp = vec![0; BINS];
+        if self.top.len() != BINS {
             self.top = vec![f64::NEG_INFINITY; BINS];
-            self.epoch = 0;
-        }
-        self.epoch = self.epoch.wrapping_add(1);
-        if self.epoch == 0 {
-            // Every stamp might now look current: clear them once per 2³² looks.
-            self.stamp.fill(0);
-            self.epoch = 1;
+        } else {
+            self.top.fill(f64::NEG_INFINITY);
         }
     }
 
@@ -98,13 +91,23 @@ impl Occlusion {
         let (u0, u1) = (Self::position(lo), Self::position(hi));
         let first = (u0.max(0.0) as usize).min(BINS - 1);
         let last = (u1.max(0.0) as usize).min(BINS - 1);
-        let mut open = 0.0;
-        for k in first..=last {
-            let covered = self.stamp[k] == self.epoch && self.top[k] >= top;
-            if !covered {
-                let (b0, b1) = (k as f64, k as f64 + 1.0);
-                open += (u1.min(b1) - u0.max(b0)).max(0.0);
+        let open_in = |k: usize| {
+            let (b0, b1) = (k as f64, k as f64 + 1.0);
+            if self.top[k] >= top {
+                0.0
+            } else {
+                (u1.min(b1) - u0.max(b0)).max(0.0)
             }
+        };
+        let mut open = open_in(first);
+        if last > first {
+            open += open_in(last);
+            // The bins between, each whole: a count.
+            let between = self.top[first + 1..last]
+                .iter()
+                .filter(|&&t| !(t >= top))
+                .count();
+            open += between as f64;
         }
         open * (std::f64::consts::TAU / BINS as f64)
     }
@@ -112,14 +115,11 @@ impl Occlusion {
     /// Records an object covering `[lo, hi]` up to `top`, in the bins it covers whole.
     fn cover(&mut self, lo: f64, hi: f64, top: f64) {
         let (u0, u1) = (Self::position(lo), Self::position(hi));
-        let first = u0.max(0.0).ceil() as usize;
+        let first = (u0.max(0.0).ceil() as usize).min(BINS);
         let end = (u1.max(0.0).floor() as usize).min(BINS);
-        for k in first..end {
-            if self.stamp[k] != self.epoch {
-                self.stamp[k] = self.epoch;
-                self.top[k] = top;
-            } else if top > self.top[k] {
-                self.top[k] = top;
+        if first < end {
+            for bin in &mut self.top[first..end] {
+                *bin = if top > *bin { top } else { *bin };
             }
         }
     }

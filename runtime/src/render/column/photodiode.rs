@@ -392,7 +392,7 @@ impl Band {
     /// The angle of tan-elevation `x` within the band (the band's edges and the horizon
     /// exactly, as [`Band::composite`] takes them).
     #[inline]
-    fn angle(&self, x: f64) -> f64 {
+    pub(super) fn angle(&self, x: f64) -> f64 {
         if x == self.tan_half {
             0.5 * self.band
         } else if x == -self.tan_half {
