@@ -6,7 +6,6 @@
 use glam::{DVec2, DVec3};
 
 use super::super::shade;
-use super::far;
 use super::impostor::Impostor;
 use super::impostor::IMPOSTOR_PIXELS;
 use super::photodiode::{
@@ -255,79 +254,6 @@ impl ColumnScene<'_> {
             scratch,
             &mut out[..pixels],
         );
-    }
-
-    /// Adds each visible impostor as a box over its interval: its effect on the column through
-    /// its centre (its faces composited into what that column shows), times its visible share.
-    /// The strip's windows are contiguous (impostors are made only then).
-    #[allow(clippy::too_many_arguments)]
-    fn draw_impostors(
-        &self,
-        look: &Look,
-        frame: &ColumnFrame,
-        strip: &Strip,
-        band: f64,
-        sky: f64,
-        ground: f64,
-        (facing, pieces, profile): (&mut Vec<u32>, &mut Vec<EyeObject>, &mut Vec<Shown>),
-        scratch: &mut Scratch,
-        out: &mut [f64],
-    ) {
-        let pixels = out.len();
-        if look.impostor_order.is_empty() || pixels == 0 {
-            return;
-        }
-        let width = strip.width;
-        let extent_hi = strip.centers[0] + width / 2.0;
-        let extent_lo = strip.centers[pixels - 1] - width / 2.0;
-        let inverse_width = 1.0 / width;
-        let column_band = Band {
-            tan_half: strip.tan_half_band,
-            band,
-            sky,
-            ground,
-        };
-        let mut raster = Raster {
-            origin: extent_hi,
-            inverse_width,
-            width,
-            out,
-        };
-        for &index in &look.impostor_order {
-            let impostor = &look.impostors[index as usize];
-            if impostor.hi <= extent_lo || impostor.lo >= extent_hi {
-                continue;
-            }
-            // What the column through its centre shows (within the strip), then its faces
-            // there (its true centre).
-            let centre = 0.5 * (impostor.lo + impostor.hi);
-            let alpha = centre.clamp(extent_lo, extent_hi);
-            let pixel = nearest_index((strip.centers[0] - alpha) * inverse_width, pixels - 1);
-            look.facing_over(impostor.lo, impostor.hi, facing);
-            profile.clear();
-            self.profile(
-                frame,
-                look,
-                look.turn(strip, pixel, alpha),
-                facing,
-                &column_band,
-                scratch,
-                profile,
-            );
-            let direction = look.turn(strip, pixel, centre);
-            let effect = self.any_impostor_effect(
-                frame,
-                look,
-                direction,
-                impostor,
-                (profile, pieces),
-                &column_band,
-                scratch,
-            );
-            if effect != 0.0 {
-                raster.add(impostor.lo, impostor.hi, effect * impostor.visible, 0.0);
-            }
-        }
     }
 
     /// The strip cut into smooth regions at silhouette edges; each region sampled at about one
@@ -624,7 +550,7 @@ impl ColumnScene<'_> {
     /// What the column along `direction` shows, piece by piece (see [`Band::profile`]),
     /// appended to `out`; returns [`ColumnScene::column`]'s value.
     #[allow(clippy::too_many_arguments)]
-    fn profile(
+    pub(super) fn profile(
         &self,
         frame: &ColumnFrame,
         look: &Look,
@@ -660,47 +586,10 @@ impl ColumnScene<'_> {
         )
     }
 
-    /// [`ColumnScene::impostor_effect`], by `far.rs`'s short way where its faces have fast
-    /// shading.
-    #[allow(clippy::too_many_arguments)]
-    fn any_impostor_effect(
-        &self,
-        frame: &ColumnFrame,
-        look: &Look,
-        direction: DVec2,
-        impostor: &Impostor,
-        (profile, pieces): (&[Shown], &mut Vec<EyeObject>),
-        band: &Band,
-        scratch: &mut Scratch,
-    ) -> f64 {
-        let first_id = look.objects.len() as u32;
-        far::fast_effect(
-            frame,
-            impostor,
-            look.eye.y,
-            direction,
-            first_id,
-            profile,
-            band,
-            &mut scratch.free,
-        )
-        .unwrap_or_else(|| {
-            self.impostor_effect(
-                frame,
-                look,
-                direction,
-                impostor,
-                (profile, pieces),
-                band,
-                scratch,
-            )
-        })
-    }
-
     /// An impostor's effect on the band's mean along `direction` (through its centre), its
     /// faces composited into `profile` (what the column shows without it).
     #[allow(clippy::too_many_arguments)]
-    fn impostor_effect(
+    pub(super) fn impostor_effect(
         &self,
         frame: &ColumnFrame,
         look: &Look,
