@@ -9,14 +9,10 @@
 use glam::{DVec2, DVec3};
 
 use super::impostor::Impostor;
-use super::photodiode::{nearest_index, Band, Free, Lit, Raster, Scratch, Shown};
+use super::photodiode::{nearest_index, Band, Raster, Scratch, Shown};
 use super::scene::{ColumnFrame, ColumnScene};
 use super::strip::Strip;
 use super::sweep::{EyeObject, Look};
-
-/// Most faces an impostor keeps here (a side and two caps per piece: a buoy and its lamp); one
-/// with more takes the general path.
-const MOST_FACES: usize = 6;
 
 impl ColumnScene<'_> {
     /// Adds each visible impostor as a box over its interval: its effect on the column through
@@ -105,18 +101,7 @@ impl ColumnScene<'_> {
         band: &Band,
         scratch: &mut Scratch,
     ) -> f64 {
-        let first_id = look.objects.len() as u32;
-        fast_effect(
-            frame,
-            impostor,
-            look.eye.y,
-            direction,
-            first_id,
-            profile,
-            band,
-            &mut scratch.free,
-        )
-        .unwrap_or_else(|| {
+        fast_effect(frame, impostor, look.eye.y, direction, profile, band).unwrap_or_else(|| {
             self.impostor_effect(
                 frame,
                 look,
@@ -130,19 +115,24 @@ impl ColumnScene<'_> {
     }
 }
 
+/// Most pieces a stack drawn here has (a buoy and its lamp: two); more take the general path.
+const MOST_PIECES: usize = 4;
+
 /// The change in the band's mean along `direction` (through the impostor's centre) when its
-/// faces join what `profile` shows, its pieces numbered from `first_id` (ties in depth go by
-/// them, as in a column); `None` when a piece has no fast shading or the faces are too many.
-#[allow(clippy::too_many_arguments)]
+/// faces join what `profile` shows, for the usual impostor: pieces stacked on one round
+/// footprint (a buoy and its lamp), each showing its side (every cap hidden by the piece
+/// beside it, or facing away), in front of every piece of `profile` they span. Then the
+/// stack's sides are contiguous bands of tan-elevation, each with one luminance (its normal
+/// faces the eye), and they replace the profile's integral over their span, read off its
+/// running integrals: an arctangent per side's end and no compositing. `None` for anything
+/// else, which the general path draws.
 pub(super) fn fast_effect(
     frame: &ColumnFrame,
     impostor: &Impostor,
     eye_y: f64,
     direction: DVec2,
-    first_id: u32,
     profile: &[Shown],
     band: &Band,
-    free: &mut Free,
 ) -> Option<f64> {
     #[cfg(test)]
     if tests::GENERAL_ONLY.with(std::cell::Cell::get) {
@@ -150,6 +140,9 @@ pub(super) fn fast_effect(
     }
     let first = impostor.first_static as usize;
     let pieces = frame.statics.get(first..first + impostor.pieces as usize)?;
+    if pieces.len() > MOST_PIECES || profile.is_empty() {
+        return None;
+    }
     // An impostor lies beyond the crowd distance: the eye is outside its footprint.
     let (t_in, t_out) = (
         impostor.distance - impostor.radius,
@@ -160,63 +153,91 @@ pub(super) fn fast_effect(
     }
     let inv_in = 1.0 / t_in;
     let normal = DVec3::new(-direction.x, 0.0, -direction.y);
-    let mut faces = [Lit::default(); MOST_FACES];
-    let mut count = 0;
-    let mut push = |face: Lit| {
-        if count == MOST_FACES {
-            return false;
-        }
-        // Front to back, equal depths by object, each object's faces in the order they come
-        // (a column's order).
-        let mut i = count;
-        while i > 0
-            && (faces[i - 1].depth > face.depth
-                || (faces[i - 1].depth == face.depth && faces[i - 1].object > face.object))
-        {
-            faces[i] = faces[i - 1];
-            i -= 1;
-        }
-        faces[i] = face;
-        count += 1;
-        true
-    };
+    // The sides' tan-elevations from the bottom up, and their luminances.
+    let mut ends = [0.0; MOST_PIECES + 1];
+    let mut luminances = [0.0; MOST_PIECES];
+    let mut below: Option<(f64, f64, bool)> = None;
     for (k, piece) in pieces.iter().enumerate() {
         let fast = frame.fast_shade(piece.primitive as u32)?;
-        let object = first_id + k as u32;
         let (y0, y1) = (piece.y0 - eye_y, piece.y1 - eye_y);
-        let mut kept = true;
-        if piece.side {
-            kept &= push(Lit {
-                depth: t_in,
-                t0: y0 * inv_in,
-                t1: y1 * inv_in,
-                luminance: fast.luminance(normal),
-                object,
-            });
-        }
-        if piece.top && y1 < 0.0 {
-            kept &= push(Lit {
-                depth: t_out,
-                t0: y1 * inv_in,
-                t1: y1 / t_out,
-                luminance: fast.up_luminance,
-                object,
-            });
-        }
-        if piece.bottom && y0 > 0.0 {
-            kept &= push(Lit {
-                depth: t_out,
-                t0: y0 / t_out,
-                t1: y0 * inv_in,
-                luminance: fast.down_luminance,
-                object,
-            });
-        }
-        if !kept {
+        if !piece.side || !(y0 < y1) {
             return None;
         }
+        match below {
+            None => {
+                // A bottom seen from below would show under the stack.
+                if piece.bottom && y0 > 0.0 {
+                    return None;
+                }
+            }
+            Some((y0_below, y1_below, top_below)) => {
+                // Stacked on the piece below (to rounding), each hiding the other's cap: a
+                // top below the eye spans [y/t_in, y/t_out], under this side's top; a bottom
+                // above it, [y/t_out, y/t_in], over the lower side's foot.
+                if (y0 - y1_below).abs() > 1e-12 * (1.0 + y0.abs()) {
+                    return None;
+                }
+                if top_below && y1_below < 0.0 && y1 * t_out < y1_below * t_in {
+                    return None;
+                }
+                if piece.bottom && y0 > 0.0 && y0_below * t_out > y0 * t_in {
+                    return None;
+                }
+            }
+        }
+        ends[k] = y0 * inv_in;
+        luminances[k] = fast.luminance(normal);
+        below = Some((y0, y1, piece.top));
     }
-    Some(band.effect(profile, &faces[..count], free, |face, _, _| face.luminance))
+    let (_, y_top, top_cap) = below?;
+    // A top below the eye would show over the stack.
+    if top_cap && y_top < 0.0 {
+        return None;
+    }
+    let n = pieces.len();
+    ends[n] = y_top * inv_in;
+    let tan_half = band.tan_half;
+    let clip = |x: f64| x.max(-tan_half).min(tan_half);
+    let (lo, hi) = (clip(ends[0]), clip(ends[n]));
+    if !(lo < hi) {
+        return Some(0.0);
+    }
+    // Every piece of the profile the stack spans lies behind it.
+    let start = profile
+        .partition_point(|p| p.t1 <= lo)
+        .min(profile.len() - 1);
+    let mut end = start;
+    for (k, piece) in profile.iter().enumerate().skip(start) {
+        if piece.t0 >= hi {
+            break;
+        }
+        if !(piece.depth > t_in) {
+            return None;
+        }
+        end = k;
+    }
+    // Consecutive sides share ends: the last angle is kept.
+    let mut last = (f64::NAN, 0.0);
+    let mut angle = |x: f64| {
+        if x != last.0 {
+            last = (x, band.angle(x));
+        }
+        last.1
+    };
+    let a_lo = angle(lo);
+    let (mut a0, mut sum) = (a_lo, 0.0);
+    for k in 0..n {
+        let a1 = angle(clip(ends[k + 1]));
+        if a1 > a0 {
+            sum += luminances[k] * (a1 - a0);
+            a0 = a1;
+        }
+    }
+    let a_hi = angle(hi);
+    let (first, last_piece) = (&profile[start], &profile[end]);
+    let behind = (last_piece.sum0 + last_piece.luminance * (a_hi - last_piece.a0))
+        - (first.sum0 + first.luminance * (a_lo - first.a0));
+    Some((sum - behind) / band.band)
 }
 
 #[cfg(test)]
