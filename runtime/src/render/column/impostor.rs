@@ -14,7 +14,6 @@
 
 use glam::{DVec2, DVec3};
 
-use super::footprint::wrap;
 use super::photodiode::total_key;
 
 /// Impostors are at most this many photodiode windows wide: wider objects would show their
@@ -34,12 +33,13 @@ pub(super) struct Impostor {
     /// From the eye to its footprint's centre, and the footprint's radius.
     pub(super) distance: f64,
     pub(super) radius: f64,
-    /// Heights of its pieces together, relative to the eye.
+    /// The foot of its pieces together, relative to the eye.
     pub(super) y0: f64,
-    pub(super) y1: f64,
     /// Its pieces: this many of the frame's static objects from `first_static` on.
     pub(super) first_static: u32,
     pub(super) pieces: u32,
+    /// The tan-elevation of its pieces' top together at its centre's distance.
+    pub(super) top: f64,
     /// The share of its interval no nearer standing object hides (set by [`settle`]).
     pub(super) visible: f64,
 }
@@ -47,7 +47,7 @@ pub(super) struct Impostor {
 impl Impostor {
     /// The tan-elevation of its top seen from the eye, at its centre's distance.
     fn top(&self) -> f64 {
-        self.y1 / self.distance
+        self.top
     }
 }
 
@@ -183,39 +183,89 @@ pub(super) fn settle(
     }
 }
 
-/// A round footprint's azimuth interval (relative to `heading`, wrapped) and distance from
-/// `eye`, if it is an impostor's: farther than `crowd_distance` beyond its radius, at most
-/// `width` wide, and not behind the eye (its interval does not pass ±π). The distance is
-/// tested first, so that near objects cost no transcendental; the interval comes from
-/// polynomials (within 2e-8 rad), as an impostor's place needs no more.
-pub(super) fn far(
-    center: DVec2,
-    radius: f64,
-    eye: DVec3,
-    heading: f64,
+/// What telling impostors needs of one look, worked out once: the eye, its heading's cosine
+/// and sine, the crowd distance, the widest impostor (radians), and the cosine of the largest
+/// angle from the heading at which an impostor may still meet the strip.
+pub(super) struct Viewpoint {
+    eye: DVec2,
+    cos_h: f64,
+    sin_h: f64,
     crowd_distance: f64,
     width: f64,
-) -> Option<(f64, f64, f64)> {
-    let offset = center - DVec2::new(eye.x, eye.z);
-    let distance = offset.length();
-    // (A NaN distance is near: drawn exactly.)
-    if distance - radius <= crowd_distance || distance.is_nan() {
-        return None;
+    reach_cos: f64,
+}
+
+impl Viewpoint {
+    /// For an eye at `eye` facing `heading`, with a strip over relative azimuths `extent`.
+    pub(super) fn new(
+        eye: DVec3,
+        heading: f64,
+        crowd_distance: f64,
+        width: f64,
+        (first, last): (f64, f64),
+    ) -> Viewpoint {
+        // Beyond this angle from the heading (a margin over the polynomial arctangent's error)
+        // an impostor's interval misses the strip.
+        let reach = first.abs().max(last.abs()) + 0.5 * width + 1e-6;
+        Viewpoint {
+            eye: DVec2::new(eye.x, eye.z),
+            cos_h: libm::cos(heading),
+            sin_h: libm::sin(heading),
+            crowd_distance,
+            width,
+            reach_cos: if reach < std::f64::consts::PI {
+                libm::cos(reach)
+            } else {
+                f64::NEG_INFINITY
+            },
+        }
     }
-    let ratio = radius / distance;
-    // asin by its series: an impostor is narrower than a few photodiodes (ratio ≲ 0.06,
-    // where the terms left out are below 1e-12); past 0.1 the series is not used.
-    if ratio > 0.1 {
-        return None;
+
+    /// A round footprint's azimuth interval (relative to the heading, in (−π, π] and not
+    /// passing ±π) and distance from the eye, if it is an impostor's: farther than the crowd
+    /// distance beyond its radius, at most the widest impostor wide. `Some` with an empty
+    /// interval (`lo > hi`) when it is one but lies behind the strip, or passes ±π. The
+    /// distance is tested first, so that near objects cost no square root; the interval
+    /// comes from polynomials (within 2e-8 rad), as an impostor's place needs no more.
+    #[inline]
+    pub(super) fn far(&self, center: DVec2, radius: f64) -> Option<(f64, f64, f64)> {
+        let offset = center - self.eye;
+        // A margin keeps the squared test on the near side of the exact one below.
+        let reach = (self.crowd_distance + radius) * (1.0 + 1e-9);
+        let distance2 = offset.length_squared();
+        if distance2 <= reach * reach {
+            return None;
+        }
+        let distance = distance2.sqrt();
+        // (A NaN distance is near: drawn exactly.)
+        if distance - radius <= self.crowd_distance || distance.is_nan() {
+            return None;
+        }
+        let ratio = radius / distance;
+        // asin by its series: an impostor is narrower than a few photodiodes (ratio ≲ 0.06,
+        // where the terms left out are below 1e-12); past 0.1 the series is not used.
+        if ratio > 0.1 {
+            return None;
+        }
+        let r2 = ratio * ratio;
+        let half = ratio * (1.0 + r2 * (1.0 / 6.0 + r2 * (3.0 / 40.0 + r2 * (5.0 / 112.0))));
+        if 2.0 * half > self.width {
+            return None;
+        }
+        // Azimuth is anticlockwise from +x towards −z: the offset turned by −heading.
+        let (u, v) = (offset.x, -offset.y);
+        let along = u * self.cos_h + v * self.sin_h;
+        const BEHIND: Option<(f64, f64, f64)> = Some((1.0, 0.0, 0.0));
+        if along < distance * self.reach_cos {
+            return BEHIND;
+        }
+        let middle = atan2(v * self.cos_h - u * self.sin_h, along);
+        let (lo, hi) = (middle - half, middle + half);
+        if lo <= -std::f64::consts::PI || hi > std::f64::consts::PI {
+            return BEHIND;
+        }
+        Some((lo, hi, distance))
     }
-    let r2 = ratio * ratio;
-    let half = ratio * (1.0 + r2 * (1.0 / 6.0 + r2 * (3.0 / 40.0 + r2 * (5.0 / 112.0))));
-    if 2.0 * half > width {
-        return None;
-    }
-    let middle = wrap(atan2(-offset.y, offset.x) - heading);
-    let (lo, hi) = (wrap(middle - half), wrap(middle + half));
-    (lo <= hi).then_some((lo, hi, distance))
 }
 
 /// `atan2(y, x)` by an odd polynomial after reducing the argument to |w| ≤ tan(π/8)
@@ -231,11 +281,11 @@ fn atan2(y: f64, x: f64) -> f64 {
     if den == 0.0 {
         return 0.0;
     }
-    let z = num / den;
-    let (base, w) = if z > std::f64::consts::SQRT_2 - 1.0 {
-        (FRAC_PI_4, (z - 1.0) / (z + 1.0))
+    // z = num/den, reduced past tan(π/8) by (z − 1)/(z + 1): one division either way.
+    let (base, w) = if num > (std::f64::consts::SQRT_2 - 1.0) * den {
+        (FRAC_PI_4, (num - den) / (num + den))
     } else {
-        (0.0, z)
+        (0.0, num / den)
     };
     let w2 = w * w;
     let series = w
@@ -290,7 +340,7 @@ mod tests {
             distance,
             radius: 0.02,
             y0: -0.05,
-            y1: 0.02,
+            top: 0.02 / distance,
             first_static: 0,
             pieces: 1,
             visible: 1.0,
@@ -340,7 +390,7 @@ mod tests {
         // Behind it and lower in view: hidden. A tall one far behind: its top shows.
         let mut impostors = [impostor(-0.01, 0.01, 2.0), {
             let mut tall = impostor(0.05, 0.06, 2.0);
-            tall.y1 = 0.5;
+            tall.top = 0.5 / 2.0;
             tall
         }];
         let (mut occlusion, mut order) = (Occlusion::default(), Vec::new());

@@ -41,11 +41,12 @@ pub struct ColumnScene<'g> {
     /// Per static object, whether an eye may leave it out when it is behind the strip: no
     /// corner test names it (robot parts always may).
     pub(super) cullable: Vec<bool>,
-    /// Per static object, how many static objects (itself and those after it sharing its
-    /// round footprint: a buoy and its lamp) may become one impostor, when it is the first of
-    /// them and no corner test names it; 0 otherwise. Found once, so that a look tests a far
-    /// buoy and its lamp as one, in a few arithmetic operations.
-    pub(super) round_pieces: Vec<u32>,
+    /// The groups of static objects that may become one impostor: a round object no corner
+    /// test names and those after it sharing its footprint (a buoy and its lamp). Found once,
+    /// so that a look tests each far buoy with its lamp in a tight loop over this list.
+    pub(super) rounds: Vec<Round>,
+    /// Per static object, 1 + the index in `rounds` of the group it starts; 0 for the others.
+    pub(super) round_at: Vec<u32>,
     /// Per entry of `robot_parts`, whether the part is tucked under its robot's body: within
     /// [`TUCK`] of the body's round footprint and no higher than it (a Khepera's wheels). The
     /// crowd level of detail leaves such parts of other robots out.
@@ -135,9 +136,10 @@ impl<'g> ColumnScene<'g> {
         for hider in hiders.iter().flatten() {
             cullable[hider.object as usize] = false;
         }
-        let round_pieces = round_groups(&statics, &same_footprint, &cullable);
+        let (rounds, round_at) = round_groups(&statics, &same_footprint, &cullable);
         ColumnScene {
-            round_pieces,
+            rounds,
+            round_at,
             graph,
             own_visible,
             statics_fast,
@@ -247,24 +249,50 @@ impl<'g> ColumnScene<'g> {
     }
 }
 
-/// Per static object, the size of the group of round objects it starts (see
-/// [`ColumnScene::round_pieces`]): a round, cullable object not sharing the previous one's
-/// footprint, and the objects right after it that share its footprint.
-fn round_groups(statics: &[Upright], same_footprint: &[bool], cullable: &[bool]) -> Vec<u32> {
-    let mut pieces = vec![0u32; statics.len()];
+/// Static objects that may become one impostor: the first (round, and named by no corner test,
+/// not sharing the previous one's footprint) and the objects right after it sharing its
+/// footprint; with their heights together.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Round {
+    pub(super) center: DVec2,
+    pub(super) radius: f64,
+    pub(super) y0: f64,
+    pub(super) y1: f64,
+    pub(super) first: u32,
+    pub(super) pieces: u32,
+}
+
+/// The round groups of `statics` (see [`ColumnScene::rounds`]), and per static object 1 + the
+/// index of the group it starts (0: none).
+fn round_groups(
+    statics: &[Upright],
+    same_footprint: &[bool],
+    cullable: &[bool],
+) -> (Vec<Round>, Vec<u32>) {
+    let (mut rounds, mut round_at) = (Vec::new(), vec![0u32; statics.len()]);
     for (first, object) in statics.iter().enumerate() {
-        let starts = cullable[first]
-            && !same_footprint[first]
-            && matches!(object.footprint, Footprint::Circle { .. });
-        if starts {
-            let more = same_footprint[first + 1..]
-                .iter()
-                .take_while(|&&same| same)
-                .count();
-            pieces[first] = 1 + more as u32;
+        let Footprint::Circle { center, radius } = object.footprint else {
+            continue;
+        };
+        if !cullable[first] || same_footprint[first] {
+            continue;
         }
+        let more = same_footprint[first + 1..]
+            .iter()
+            .take_while(|&&same| same)
+            .count();
+        let group = &statics[first..first + 1 + more];
+        rounds.push(Round {
+            center,
+            radius,
+            y0: group.iter().map(|u| u.y0).fold(f64::INFINITY, f64::min),
+            y1: group.iter().map(|u| u.y1).fold(f64::NEG_INFINITY, f64::max),
+            first: first as u32,
+            pieces: group.len() as u32,
+        });
+        round_at[first] = rounds.len() as u32;
     }
-    pieces
+    (rounds, round_at)
 }
 
 /// Per entry of `parts` (primitive, robot), whether it is tucked under its robot's body, the

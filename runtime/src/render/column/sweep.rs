@@ -78,6 +78,8 @@ pub struct Look {
     /// The objects drawn exactly that may hide impostors, and the bins that say where.
     standing: Vec<Standing>,
     occlusion: Occlusion,
+    /// Per round group of the scene, whether this look made it an impostor or left it out.
+    round_far: Vec<bool>,
     /// Scratch for ordering impostors.
     impostor_keys: Vec<u64>,
     centre_keys: Vec<u128>,
@@ -484,6 +486,7 @@ impl ColumnScene<'_> {
             near,
             impostors,
             standing,
+            round_far,
             ..
         } = look;
         objects.clear();
@@ -494,6 +497,41 @@ impl ColumnScene<'_> {
         standing.clear();
         let statics = frame.statics.len();
         let impostor_width = reach.impostor_width;
+        // Where objects may be left out, each static object's place among `objects`.
+        let keep_slots = sector.is_some() || impostor_width > 0.0;
+        // Far small round static objects first, with their pieces: each an impostor, or left
+        // out beyond the strip. A tight loop over the scene's round groups.
+        round_far.clear();
+        if impostor_width > 0.0 {
+            let (first, last) = reach.extent;
+            let viewpoint = impostor::Viewpoint::new(
+                eye,
+                heading,
+                reach.crowd_distance,
+                impostor_width,
+                reach.extent,
+            );
+            round_far.extend(self.rounds.iter().map(|round| {
+                let Some((lo, hi, distance)) = viewpoint.far(round.center, round.radius) else {
+                    return false;
+                };
+                if lo <= hi && hi >= first && lo <= last {
+                    impostors.push(Impostor {
+                        lo,
+                        hi,
+                        distance,
+                        radius: round.radius,
+                        y0: round.y0 - eye.y,
+                        first_static: round.first,
+                        pieces: round.pieces,
+                        top: (round.y1 - eye.y) / distance,
+                        visible: 1.0,
+                    });
+                }
+                true
+            }));
+        }
+        let round_far = &*round_far;
         // The previous object placed, its interval, and what became of it.
         let mut previous: Option<(&Upright, Option<Interval>, Fate)> = None;
         // Static objects, then robot parts (each viewer's own as its turret sees them), by
@@ -503,51 +541,19 @@ impl ColumnScene<'_> {
         // lamp become one impostor at once.
         let mut place = typed(frame, |order: usize, object| -> usize {
             let index = objects.len();
-            // A far small round static object, with the pieces on its footprint, is an
-            // impostor, or left out when it lies beyond the strip: tested first, as most of a
-            // big arena's are.
-            let pieces = match self.round_pieces.get(order) {
-                Some(&pieces) if impostor_width > 0.0 => pieces as usize,
-                _ => 0,
-            };
-            if let (true, Footprint::Circle { center, radius }) = (pieces > 0, object.footprint) {
-                if let Some((lo, hi, distance)) = impostor::far(
-                    center,
-                    radius,
-                    eye,
-                    heading,
-                    reach.crowd_distance,
-                    impostor_width,
-                ) {
-                    if sector.is_some() {
-                        static_slots.extend(std::iter::repeat_n(index as u32, pieces));
-                    }
-                    let (first, last) = reach.extent;
-                    if hi >= first && lo <= last {
-                        let group = &frame.statics[order..order + pieces];
-                        let (mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY);
-                        for piece in group {
-                            y0 = y0.min(piece.y0);
-                            y1 = y1.max(piece.y1);
-                        }
-                        impostors.push(Impostor {
-                            lo,
-                            hi,
-                            distance,
-                            radius,
-                            y0: y0 - eye.y,
-                            y1: y1 - eye.y,
-                            first_static: order as u32,
-                            pieces: pieces as u32,
-                            visible: 1.0,
-                        });
-                    }
-                    previous = None;
-                    return pieces;
+            // A far small round static object, with the pieces on its footprint, was made an
+            // impostor (or left out beyond the strip) before: its pieces are passed over.
+            let group = self.round_at.get(order).map_or(0, |&g| g as usize);
+            if group > 0 && round_far.get(group - 1) == Some(&true) {
+                let pieces = self.rounds[group - 1].pieces as usize;
+                if keep_slots {
+                    static_slots.extend(std::iter::repeat_n(index as u32, pieces));
                 }
+                previous = None;
+                return pieces;
             }
             // Static objects keep their order unless some may be left out.
-            if order < statics && sector.is_some() {
+            if order < statics && keep_slots {
                 static_slots.push(index as u32);
             }
             // A lamp on its buoy has the buoy's footprint: its interval is the buoy's.
