@@ -347,6 +347,69 @@ mod tests {
         }
     }
 
+    /// A look's impostor test against libm's: the same near and far decisions (off by the
+    /// squared test's margin at most), the same interval within 1e-7 rad, and nothing that
+    /// meets the strip judged behind it.
+    #[test]
+    fn the_viewpoints_test_is_libms_and_never_drops_what_meets_the_strip() {
+        let mut unit = crate::test_random::unit_stream(17);
+        let pixel = 1.6f64.to_radians();
+        let width = IMPOSTOR_PIXELS * pixel;
+        let (mut far_ones, mut behind) = (0, 0);
+        for case in 0..20_000 {
+            let eye = DVec3::new(unit() * 8.0 - 4.0, 0.05, unit() * 8.0 - 4.0);
+            let heading = unit() * 12.0 - 6.0;
+            let extent = if case % 3 == 0 {
+                (-0.5, 1.0)
+            } else {
+                (-120f64.to_radians(), 120f64.to_radians())
+            };
+            let crowd = [0.25, 0.5, 1.0][case % 3];
+            let viewpoint = Viewpoint::new(eye, heading, crowd, width, extent);
+            let center = DVec2::new(unit() * 10.0 - 5.0, unit() * 10.0 - 5.0);
+            let radius = 0.005 + 0.03 * unit();
+            let offset = center - DVec2::new(eye.x, eye.z);
+            let distance = offset.length();
+            let half = libm::asin(radius / distance);
+            let reference_far = distance - radius > crowd && 2.0 * half <= width;
+            let got = viewpoint.far(center, radius);
+            let margin = (crowd + radius) * 1e-8;
+            if (distance - radius - crowd).abs() > margin && (2.0 * half - width).abs() > 1e-9 {
+                assert_eq!(got.is_some(), reference_far, "case {case}");
+            }
+            let Some((lo, hi, d)) = got else {
+                continue;
+            };
+            far_ones += 1;
+            assert!(lo > hi || (d - distance).abs() <= 1e-12 * distance);
+            let mut middle = libm::atan2(-offset.y, offset.x) - heading;
+            while middle > std::f64::consts::PI {
+                middle -= std::f64::consts::TAU;
+            }
+            while middle <= -std::f64::consts::PI {
+                middle += std::f64::consts::TAU;
+            }
+            let (rlo, rhi) = (middle - half, middle + half);
+            let meets = rlo > -std::f64::consts::PI
+                && rhi <= std::f64::consts::PI
+                && rhi >= extent.0
+                && rlo <= extent.1;
+            if lo > hi {
+                behind += 1;
+                assert!(!meets || (rhi - extent.0).abs() < 1e-6 || (rlo - extent.1).abs() < 1e-6);
+            } else {
+                assert!(
+                    (lo - rlo).abs() < 1e-7 && (hi - rhi).abs() < 1e-7,
+                    "case {case}"
+                );
+            }
+        }
+        assert!(
+            far_ones > 1000 && behind > 100,
+            "{far_ones} far, {behind} behind"
+        );
+    }
+
     #[test]
     fn the_polynomial_atan2_is_libms_within_2e_8() {
         for i in 0..20_000 {
