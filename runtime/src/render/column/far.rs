@@ -6,6 +6,8 @@
 //! impostor's cost at 1000 robots, for the same faces (to rounding). Here too: the impostors of a
 //! strip sampled pixel by pixel, each against the column through its own centre.
 
+use std::cmp::Ordering;
+
 use glam::{DVec2, DVec3};
 
 use super::impostor::Impostor;
@@ -148,7 +150,7 @@ pub(super) fn fast_effect(
         impostor.distance - impostor.radius,
         impostor.distance + impostor.radius,
     );
-    if !(t_in > 0.0) {
+    if t_in.partial_cmp(&0.0) != Some(Ordering::Greater) {
         return None;
     }
     let inv_in = 1.0 / t_in;
@@ -160,7 +162,7 @@ pub(super) fn fast_effect(
     for (k, piece) in pieces.iter().enumerate() {
         let fast = frame.fast_shade(piece.primitive as u32)?;
         let (y0, y1) = (piece.y0 - eye_y, piece.y1 - eye_y);
-        if !piece.side || !(y0 < y1) {
+        if !piece.side || y0.partial_cmp(&y1) != Some(Ordering::Less) {
             return None;
         }
         match below {
@@ -199,7 +201,7 @@ pub(super) fn fast_effect(
     let tan_half = band.tan_half;
     let clip = |x: f64| x.max(-tan_half).min(tan_half);
     let (lo, hi) = (clip(ends[0]), clip(ends[n]));
-    if !(lo < hi) {
+    if lo.partial_cmp(&hi) != Some(Ordering::Less) {
         return Some(0.0);
     }
     // Every piece of the profile the stack spans lies behind it.
@@ -211,7 +213,7 @@ pub(super) fn fast_effect(
         if piece.t0 >= hi {
             break;
         }
-        if !(piece.depth > t_in) {
+        if piece.depth.partial_cmp(&t_in) != Some(Ordering::Greater) {
             return None;
         }
         end = k;

@@ -12,6 +12,8 @@
 //! cylinder shows varies little across it (its distance within r²/2d, its lamp's radiance not
 //! at all). `regatta bench crowd` measures the error against exact.
 
+use std::cmp::Ordering;
+
 use glam::{DVec2, DVec3};
 
 use super::photodiode::total_key;
@@ -63,12 +65,15 @@ pub(super) struct Standing {
 }
 
 /// Per azimuth bin, the highest top (tan-elevation) of the objects standing on the floor
-/// that cover the whole bin, among those placed so far (nearest first). Cleared for each look
-/// that has impostors (32 kB, a few hundred vector stores): the loops over bins are then plain
-/// maxima and counts, which run in vector lanes.
+/// that cover the whole bin, among those placed so far (nearest first). A look that has
+/// impostors clears the bins the previous one wrote (`written`): the loops over bins are then
+/// plain maxima and counts, which run in vector lanes, and a look with few impostors clears
+/// few bins.
 #[derive(Default)]
 pub(super) struct Occlusion {
     top: Vec<f64>,
+    /// The bins written since the last clearing.
+    written: std::ops::Range<usize>,
 }
 
 impl Occlusion {
@@ -76,8 +81,9 @@ impl Occlusion {
         if self.top.len() != BINS {
             self.top = vec![f64::NEG_INFINITY; BINS];
         } else {
-            self.top.fill(f64::NEG_INFINITY);
+            self.top[self.written.clone()].fill(f64::NEG_INFINITY);
         }
+        self.written = 0..0;
     }
 
     /// Azimuth `angle` (in (−π, π]) as a position in bins.
@@ -105,7 +111,7 @@ impl Occlusion {
             // The bins between, each whole: a count.
             let between = self.top[first + 1..last]
                 .iter()
-                .filter(|&&t| !(t >= top))
+                .filter(|&&t| matches!(t.partial_cmp(&top), None | Some(Ordering::Less)))
                 .count();
             open += between as f64;
         }
@@ -118,6 +124,11 @@ impl Occlusion {
         let first = (u0.max(0.0).ceil() as usize).min(BINS);
         let end = (u1.max(0.0).floor() as usize).min(BINS);
         if first < end {
+            self.written = if self.written.is_empty() {
+                first..end
+            } else {
+                self.written.start.min(first)..self.written.end.max(end)
+            };
             for bin in &mut self.top[first..end] {
                 *bin = if top > *bin { top } else { *bin };
             }
@@ -197,27 +208,34 @@ pub(super) struct Viewpoint {
 
 impl Viewpoint {
     /// For an eye at `eye` facing `heading`, with a strip over relative azimuths `extent`.
+    /// For an eye at `eye` facing the heading whose cosine and sine are `(cos_h, sin_h)`;
+    /// `reach_cos` from [`Viewpoint::reach_cos`].
     pub(super) fn new(
         eye: DVec3,
-        heading: f64,
+        (cos_h, sin_h): (f64, f64),
         crowd_distance: f64,
         width: f64,
-        (first, last): (f64, f64),
+        reach_cos: f64,
     ) -> Viewpoint {
-        // Beyond this angle from the heading (a margin over the polynomial arctangent's error)
-        // an impostor's interval misses the strip.
-        let reach = first.abs().max(last.abs()) + 0.5 * width + 1e-6;
         Viewpoint {
             eye: DVec2::new(eye.x, eye.z),
-            cos_h: libm::cos(heading),
-            sin_h: libm::sin(heading),
+            cos_h,
+            sin_h,
             crowd_distance,
             width,
-            reach_cos: if reach < std::f64::consts::PI {
-                libm::cos(reach)
-            } else {
-                f64::NEG_INFINITY
-            },
+            reach_cos,
+        }
+    }
+
+    /// The cosine of the largest angle from the heading at which an impostor at most `width`
+    /// wide may meet a strip over relative azimuths `(first, last)` (a margin over the
+    /// polynomial arctangent's error); −∞ when any angle may.
+    pub(super) fn reach_cos(width: f64, (first, last): (f64, f64)) -> f64 {
+        let reach = first.abs().max(last.abs()) + 0.5 * width + 1e-6;
+        if reach < std::f64::consts::PI {
+            libm::cos(reach)
+        } else {
+            f64::NEG_INFINITY
         }
     }
 
@@ -365,7 +383,9 @@ mod tests {
                 (-120f64.to_radians(), 120f64.to_radians())
             };
             let crowd = [0.25, 0.5, 1.0][case % 3];
-            let viewpoint = Viewpoint::new(eye, heading, crowd, width, extent);
+            let heading_turn = (libm::cos(heading), libm::sin(heading));
+            let reach_cos = Viewpoint::reach_cos(width, extent);
+            let viewpoint = Viewpoint::new(eye, heading_turn, crowd, width, reach_cos);
             let center = DVec2::new(unit() * 10.0 - 5.0, unit() * 10.0 - 5.0);
             let radius = 0.005 + 0.03 * unit();
             let offset = center - DVec2::new(eye.x, eye.z);

@@ -80,6 +80,9 @@ pub struct Look {
     occlusion: Occlusion,
     /// Per round group of the scene, whether this look made it an impostor or left it out.
     round_far: Vec<bool>,
+    /// The last strip's reach for impostors ([`impostor::Viewpoint::reach_cos`]), by the bits
+    /// of its width and extent.
+    reach_cos: ((u64, u64, u64), f64),
     /// Scratch for ordering impostors.
     impostor_keys: Vec<u64>,
     centre_keys: Vec<u128>,
@@ -478,6 +481,7 @@ impl ColumnScene<'_> {
     ) {
         let sector = reach.sector;
         let eye2 = DVec2::new(eye.x, eye.z);
+        let (cos_h, sin_h) = (libm::cos(heading), libm::sin(heading));
         let Look {
             objects,
             breaks,
@@ -487,6 +491,7 @@ impl ColumnScene<'_> {
             impostors,
             standing,
             round_far,
+            reach_cos,
             ..
         } = look;
         objects.clear();
@@ -504,12 +509,24 @@ impl ColumnScene<'_> {
         round_far.clear();
         if impostor_width > 0.0 {
             let (first, last) = reach.extent;
+            // The strip's reach, worked out once per strip and width.
+            let key = (
+                impostor_width.to_bits(),
+                reach.extent.0.to_bits(),
+                reach.extent.1.to_bits(),
+            );
+            if reach_cos.0 != key {
+                *reach_cos = (
+                    key,
+                    impostor::Viewpoint::reach_cos(impostor_width, reach.extent),
+                );
+            }
             let viewpoint = impostor::Viewpoint::new(
                 eye,
-                heading,
+                (cos_h, sin_h),
                 reach.crowd_distance,
                 impostor_width,
-                reach.extent,
+                reach_cos.1,
             );
             round_far.extend(self.rounds.iter().map(|round| {
                 let Some((lo, hi, distance)) = viewpoint.far(round.center, round.radius) else {
@@ -741,8 +758,8 @@ impl ColumnScene<'_> {
         // Objects may share an edge: one is enough.
         breaks.dedup();
         look.eye = eye;
-        look.cos_h = libm::cos(heading);
-        look.sin_h = libm::sin(heading);
+        look.cos_h = cos_h;
+        look.sin_h = sin_h;
     }
 
     /// Whether a rectangle's silhouette edge is hidden where it stands: the sight line to
