@@ -12,8 +12,6 @@
 //! cylinder shows varies little across it (its distance within r²/2d, its lamp's radiance not
 //! at all). `regatta bench crowd` measures the error against exact.
 
-use std::cmp::Ordering;
-
 use glam::{DVec2, DVec3};
 
 use super::photodiode::total_key;
@@ -111,7 +109,8 @@ impl Occlusion {
             // The bins between, each whole: a count.
             let between = self.top[first + 1..last]
                 .iter()
-                .filter(|&&t| matches!(t.partial_cmp(&top), None | Some(Ordering::Less)))
+                // Uncovered: lower, or unordered (as `!(t >= top)`, in vector lanes).
+                .filter(|&&t| t < top || t.is_nan() || top.is_nan())
                 .count();
             open += between as f64;
         }
