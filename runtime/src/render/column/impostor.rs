@@ -4,10 +4,12 @@
 //! box over its azimuth interval whose height is its effect on the column through its centre
 //! (that column composited with it and without it), times the share of its interval that no
 //! nearer object standing on the floor hides. This module owns which objects become
-//! impostors, and how much of each shows (the occlusion bins); `integrate.rs` draws them.
+//! impostors (each look tests the scene's round groups, [`Viewpoint::far`]), and how much of
+//! each shows (the occlusion bins); `far.rs` draws them.
 //!
 //! Why it is cheap: a far buoy used to cut the strip twice, each cut a region with its own
-//! sampled columns; as an impostor it costs one column's segments composited twice. Why the
+//! sampled columns; as an impostor it costs a few arithmetic operations to tell and a few
+//! lookups in its column's running integrals to draw. Why the
 //! error is small: beyond the crowd distance and narrower than a few photodiodes, what a
 //! cylinder shows varies little across it (its distance within r²/2d, its lamp's radiance not
 //! at all). `regatta bench crowd` measures the error against exact.
