@@ -336,6 +336,27 @@ fn a_crowd_with_its_level_of_detail_runs_the_same_on_any_number_of_threads() {
     assert_ne!(one, run_on_threads(&exact, 1, 40), "nothing was left out");
 }
 
+/// Impostors in numbers (a buoy field, most buoys beyond the crowd distance: told by each
+/// look's loop over the scene's round groups, hidden by the occlusion bins, drawn by the
+/// short path against the sampled columns' running integrals) run the same on any number of
+/// threads, each thread keeping its own look and bins from update to update.
+#[test]
+fn impostors_run_the_same_on_any_number_of_threads() {
+    let mut text = swarm_text(30, 3.0).replace(
+        "PanoramicTurret { lambda 5 }",
+        "PanoramicTurret { lambda 5 crowdDistance 0.4 }",
+    );
+    let mut unit = uniform(41);
+    for _ in 0..40 {
+        let (x, z) = ((unit() - 0.5) * 2.8, (unit() - 0.5) * 2.8);
+        text += &format!("Buoy {{ translation {x} 0 {z} irReflectance 1 }}\n");
+    }
+    let compiled = compile_text(&text);
+    let one = run_on_threads(&compiled, 1, 30);
+    assert_eq!(one, run_on_threads(&compiled, 2, 30));
+    assert_eq!(one, run_on_threads(&compiled, 3, 30));
+}
+
 /// A generated swarm with retinas (the bench's kind of world, small).
 fn swarm_text(robots: usize, side: f64) -> String {
     let per_row = (robots as f64).sqrt().ceil() as usize;

@@ -4,17 +4,18 @@
 //! box over its azimuth interval whose height is its effect on the column through its centre
 //! (that column composited with it and without it), times the share of its interval that no
 //! nearer object standing on the floor hides. This module owns which objects become
-//! impostors, and how much of each shows (the occlusion bins); `integrate.rs` draws them.
+//! impostors (each look tests the scene's round groups, [`Viewpoint::far`]), and how much of
+//! each shows (the occlusion bins); `far.rs` draws them.
 //!
 //! Why it is cheap: a far buoy used to cut the strip twice, each cut a region with its own
-//! sampled columns; as an impostor it costs one column's segments composited twice. Why the
+//! sampled columns; as an impostor it costs a few arithmetic operations to tell and a few
+//! lookups in its column's running integrals to draw. Why the
 //! error is small: beyond the crowd distance and narrower than a few photodiodes, what a
 //! cylinder shows varies little across it (its distance within r²/2d, its lamp's radiance not
 //! at all). `regatta bench crowd` measures the error against exact.
 
 use glam::{DVec2, DVec3};
 
-use super::footprint::wrap;
 use super::photodiode::total_key;
 
 /// Impostors are at most this many photodiode windows wide: wider objects would show their
@@ -31,14 +32,16 @@ pub(super) struct Impostor {
     /// Its azimuth interval, relative to the heading, in (−π, π] and not wrapping.
     pub(super) lo: f64,
     pub(super) hi: f64,
-    /// From the eye to its footprint's centre.
+    /// From the eye to its footprint's centre, and the footprint's radius.
     pub(super) distance: f64,
-    /// Heights of its pieces together, relative to the eye.
+    pub(super) radius: f64,
+    /// The foot of its pieces together, relative to the eye.
     pub(super) y0: f64,
-    pub(super) y1: f64,
     /// Its pieces: this many of the frame's static objects from `first_static` on.
     pub(super) first_static: u32,
     pub(super) pieces: u32,
+    /// The tan-elevation of its pieces' top together at its centre's distance.
+    pub(super) top: f64,
     /// The share of its interval no nearer standing object hides (set by [`settle`]).
     pub(super) visible: f64,
 }
@@ -46,7 +49,7 @@ pub(super) struct Impostor {
 impl Impostor {
     /// The tan-elevation of its top seen from the eye, at its centre's distance.
     fn top(&self) -> f64 {
-        self.y1 / self.distance
+        self.top
     }
 }
 
@@ -62,28 +65,25 @@ pub(super) struct Standing {
 }
 
 /// Per azimuth bin, the highest top (tan-elevation) of the objects standing on the floor
-/// that cover the whole bin, among those placed so far (nearest first). Stamped, so that a
-/// new look clears nothing.
+/// that cover the whole bin, among those placed so far (nearest first). A look that has
+/// impostors clears the bins the previous one wrote (`written`): the loops over bins are then
+/// plain maxima and counts, which run in vector lanes, and a look with few impostors clears
+/// few bins.
 #[derive(Default)]
 pub(super) struct Occlusion {
-    stamp: Vec<u32>,
     top: Vec<f64>,
-    epoch: u32,
+    /// The bins written since the last clearing.
+    written: std::ops::Range<usize>,
 }
 
 impl Occlusion {
     fn begin(&mut self) {
-        if self.stamp.len() != BINS {
-            self.stamp = vec![0; BINS];
+        if self.top.len() != BINS {
             self.top = vec![f64::NEG_INFINITY; BINS];
-            self.epoch = 0;
+        } else {
+            self.top[self.written.clone()].fill(f64::NEG_INFINITY);
         }
-        self.epoch = self.epoch.wrapping_add(1);
-        if self.epoch == 0 {
-            // Every stamp might now look current: clear them once per 2³² looks.
-            self.stamp.fill(0);
-            self.epoch = 1;
-        }
+        self.written = 0..0;
     }
 
     /// Azimuth `angle` (in (−π, π]) as a position in bins.
@@ -97,13 +97,24 @@ impl Occlusion {
         let (u0, u1) = (Self::position(lo), Self::position(hi));
         let first = (u0.max(0.0) as usize).min(BINS - 1);
         let last = (u1.max(0.0) as usize).min(BINS - 1);
-        let mut open = 0.0;
-        for k in first..=last {
-            let covered = self.stamp[k] == self.epoch && self.top[k] >= top;
-            if !covered {
-                let (b0, b1) = (k as f64, k as f64 + 1.0);
-                open += (u1.min(b1) - u0.max(b0)).max(0.0);
+        let open_in = |k: usize| {
+            let (b0, b1) = (k as f64, k as f64 + 1.0);
+            if self.top[k] >= top {
+                0.0
+            } else {
+                (u1.min(b1) - u0.max(b0)).max(0.0)
             }
+        };
+        let mut open = open_in(first);
+        if last > first {
+            open += open_in(last);
+            // The bins between, each whole: a count.
+            let between = self.top[first + 1..last]
+                .iter()
+                // Uncovered: lower, or unordered (as `!(t >= top)`, in vector lanes).
+                .filter(|&&t| t < top || t.is_nan() || top.is_nan())
+                .count();
+            open += between as f64;
         }
         open * (std::f64::consts::TAU / BINS as f64)
     }
@@ -111,14 +122,16 @@ impl Occlusion {
     /// Records an object covering `[lo, hi]` up to `top`, in the bins it covers whole.
     fn cover(&mut self, lo: f64, hi: f64, top: f64) {
         let (u0, u1) = (Self::position(lo), Self::position(hi));
-        let first = u0.max(0.0).ceil() as usize;
+        let first = (u0.max(0.0).ceil() as usize).min(BINS);
         let end = (u1.max(0.0).floor() as usize).min(BINS);
-        for k in first..end {
-            if self.stamp[k] != self.epoch {
-                self.stamp[k] = self.epoch;
-                self.top[k] = top;
-            } else if top > self.top[k] {
-                self.top[k] = top;
+        if first < end {
+            self.written = if self.written.is_empty() {
+                first..end
+            } else {
+                self.written.start.min(first)..self.written.end.max(end)
+            };
+            for bin in &mut self.top[first..end] {
+                *bin = if top > *bin { top } else { *bin };
             }
         }
     }
@@ -182,39 +195,96 @@ pub(super) fn settle(
     }
 }
 
-/// A round footprint's azimuth interval (relative to `heading`, wrapped) and distance from
-/// `eye`, if it is an impostor's: farther than `crowd_distance` beyond its radius, at most
-/// `width` wide, and not behind the eye (its interval does not pass ±π). The distance is
-/// tested first, so that near objects cost no transcendental; the interval comes from
-/// polynomials (within 2e-8 rad), as an impostor's place needs no more.
-pub(super) fn far(
-    center: DVec2,
-    radius: f64,
-    eye: DVec3,
-    heading: f64,
+/// What telling impostors needs of one look, worked out once: the eye, its heading's cosine
+/// and sine, the crowd distance, the widest impostor (radians), and the cosine of the largest
+/// angle from the heading at which an impostor may still meet the strip.
+pub(super) struct Viewpoint {
+    eye: DVec2,
+    cos_h: f64,
+    sin_h: f64,
     crowd_distance: f64,
     width: f64,
-) -> Option<(f64, f64, f64)> {
-    let offset = center - DVec2::new(eye.x, eye.z);
-    let distance = offset.length();
-    // (A NaN distance is near: drawn exactly.)
-    if distance - radius <= crowd_distance || distance.is_nan() {
-        return None;
+    reach_cos: f64,
+}
+
+impl Viewpoint {
+    /// For an eye at `eye` facing `heading`, with a strip over relative azimuths `extent`.
+    /// For an eye at `eye` facing the heading whose cosine and sine are `(cos_h, sin_h)`;
+    /// `reach_cos` from [`Viewpoint::reach_cos`].
+    pub(super) fn new(
+        eye: DVec3,
+        (cos_h, sin_h): (f64, f64),
+        crowd_distance: f64,
+        width: f64,
+        reach_cos: f64,
+    ) -> Viewpoint {
+        Viewpoint {
+            eye: DVec2::new(eye.x, eye.z),
+            cos_h,
+            sin_h,
+            crowd_distance,
+            width,
+            reach_cos,
+        }
     }
-    let ratio = radius / distance;
-    // asin by its series: an impostor is narrower than a few photodiodes (ratio ≲ 0.06,
-    // where the terms left out are below 1e-12); past 0.1 the series is not used.
-    if ratio > 0.1 {
-        return None;
+
+    /// The cosine of the largest angle from the heading at which an impostor at most `width`
+    /// wide may meet a strip over relative azimuths `(first, last)` (a margin over the
+    /// polynomial arctangent's error); −∞ when any angle may.
+    pub(super) fn reach_cos(width: f64, (first, last): (f64, f64)) -> f64 {
+        let reach = first.abs().max(last.abs()) + 0.5 * width + 1e-6;
+        if reach < std::f64::consts::PI {
+            libm::cos(reach)
+        } else {
+            f64::NEG_INFINITY
+        }
     }
-    let r2 = ratio * ratio;
-    let half = ratio * (1.0 + r2 * (1.0 / 6.0 + r2 * (3.0 / 40.0 + r2 * (5.0 / 112.0))));
-    if 2.0 * half > width {
-        return None;
+
+    /// A round footprint's azimuth interval (relative to the heading, in (−π, π] and not
+    /// passing ±π) and distance from the eye, if it is an impostor's: farther than the crowd
+    /// distance beyond its radius, at most the widest impostor wide. `Some` with an empty
+    /// interval (`lo > hi`) when it is one but lies behind the strip, or passes ±π. The
+    /// distance is tested first, so that near objects cost no square root; the interval
+    /// comes from polynomials (within 2e-8 rad), as an impostor's place needs no more.
+    #[inline]
+    pub(super) fn far(&self, center: DVec2, radius: f64) -> Option<(f64, f64, f64)> {
+        let offset = center - self.eye;
+        // A margin keeps the squared test on the near side of the exact one below.
+        let reach = (self.crowd_distance + radius) * (1.0 + 1e-9);
+        let distance2 = offset.length_squared();
+        if distance2 <= reach * reach {
+            return None;
+        }
+        let distance = distance2.sqrt();
+        // (A NaN distance is near: drawn exactly.)
+        if distance - radius <= self.crowd_distance || distance.is_nan() {
+            return None;
+        }
+        let ratio = radius / distance;
+        // asin by its series: an impostor is narrower than a few photodiodes (ratio ≲ 0.06,
+        // where the terms left out are below 1e-12); past 0.1 the series is not used.
+        if ratio > 0.1 {
+            return None;
+        }
+        let r2 = ratio * ratio;
+        let half = ratio * (1.0 + r2 * (1.0 / 6.0 + r2 * (3.0 / 40.0 + r2 * (5.0 / 112.0))));
+        if 2.0 * half > self.width {
+            return None;
+        }
+        // Azimuth is anticlockwise from +x towards −z: the offset turned by −heading.
+        let (u, v) = (offset.x, -offset.y);
+        let along = u * self.cos_h + v * self.sin_h;
+        const BEHIND: Option<(f64, f64, f64)> = Some((1.0, 0.0, 0.0));
+        if along < distance * self.reach_cos {
+            return BEHIND;
+        }
+        let middle = atan2(v * self.cos_h - u * self.sin_h, along);
+        let (lo, hi) = (middle - half, middle + half);
+        if lo <= -std::f64::consts::PI || hi > std::f64::consts::PI {
+            return BEHIND;
+        }
+        Some((lo, hi, distance))
     }
-    let middle = wrap(atan2(-offset.y, offset.x) - heading);
-    let (lo, hi) = (wrap(middle - half), wrap(middle + half));
-    (lo <= hi).then_some((lo, hi, distance))
 }
 
 /// `atan2(y, x)` by an odd polynomial after reducing the argument to |w| ≤ tan(π/8)
@@ -230,11 +300,11 @@ fn atan2(y: f64, x: f64) -> f64 {
     if den == 0.0 {
         return 0.0;
     }
-    let z = num / den;
-    let (base, w) = if z > std::f64::consts::SQRT_2 - 1.0 {
-        (FRAC_PI_4, (z - 1.0) / (z + 1.0))
+    // z = num/den, reduced past tan(π/8) by (z − 1)/(z + 1): one division either way.
+    let (base, w) = if num > (std::f64::consts::SQRT_2 - 1.0) * den {
+        (FRAC_PI_4, (num - den) / (num + den))
     } else {
-        (0.0, z)
+        (0.0, num / den)
     };
     let w2 = w * w;
     let series = w
@@ -287,12 +357,78 @@ mod tests {
             lo,
             hi,
             distance,
+            radius: 0.02,
             y0: -0.05,
-            y1: 0.02,
+            top: 0.02 / distance,
             first_static: 0,
             pieces: 1,
             visible: 1.0,
         }
+    }
+
+    /// A look's impostor test against libm's: the same near and far decisions (off by the
+    /// squared test's margin at most), the same interval within 1e-7 rad, and nothing that
+    /// meets the strip judged behind it.
+    #[test]
+    fn the_viewpoints_test_is_libms_and_never_drops_what_meets_the_strip() {
+        let mut unit = crate::test_random::unit_stream(17);
+        let pixel = 1.6f64.to_radians();
+        let width = IMPOSTOR_PIXELS * pixel;
+        let (mut far_ones, mut behind) = (0, 0);
+        for case in 0..20_000 {
+            let eye = DVec3::new(unit() * 8.0 - 4.0, 0.05, unit() * 8.0 - 4.0);
+            let heading = unit() * 12.0 - 6.0;
+            let extent = if case % 3 == 0 {
+                (-0.5, 1.0)
+            } else {
+                (-120f64.to_radians(), 120f64.to_radians())
+            };
+            let crowd = [0.25, 0.5, 1.0][case % 3];
+            let heading_turn = (libm::cos(heading), libm::sin(heading));
+            let reach_cos = Viewpoint::reach_cos(width, extent);
+            let viewpoint = Viewpoint::new(eye, heading_turn, crowd, width, reach_cos);
+            let center = DVec2::new(unit() * 10.0 - 5.0, unit() * 10.0 - 5.0);
+            let radius = 0.005 + 0.03 * unit();
+            let offset = center - DVec2::new(eye.x, eye.z);
+            let distance = offset.length();
+            let half = libm::asin(radius / distance);
+            let reference_far = distance - radius > crowd && 2.0 * half <= width;
+            let got = viewpoint.far(center, radius);
+            let margin = (crowd + radius) * 1e-8;
+            if (distance - radius - crowd).abs() > margin && (2.0 * half - width).abs() > 1e-9 {
+                assert_eq!(got.is_some(), reference_far, "case {case}");
+            }
+            let Some((lo, hi, d)) = got else {
+                continue;
+            };
+            far_ones += 1;
+            assert!(lo > hi || (d - distance).abs() <= 1e-12 * distance);
+            let mut middle = libm::atan2(-offset.y, offset.x) - heading;
+            while middle > std::f64::consts::PI {
+                middle -= std::f64::consts::TAU;
+            }
+            while middle <= -std::f64::consts::PI {
+                middle += std::f64::consts::TAU;
+            }
+            let (rlo, rhi) = (middle - half, middle + half);
+            let meets = rlo > -std::f64::consts::PI
+                && rhi <= std::f64::consts::PI
+                && rhi >= extent.0
+                && rlo <= extent.1;
+            if lo > hi {
+                behind += 1;
+                assert!(!meets || (rhi - extent.0).abs() < 1e-6 || (rlo - extent.1).abs() < 1e-6);
+            } else {
+                assert!(
+                    (lo - rlo).abs() < 1e-7 && (hi - rhi).abs() < 1e-7,
+                    "case {case}"
+                );
+            }
+        }
+        assert!(
+            far_ones > 1000 && behind > 100,
+            "{far_ones} far, {behind} behind"
+        );
     }
 
     #[test]
@@ -338,7 +474,7 @@ mod tests {
         // Behind it and lower in view: hidden. A tall one far behind: its top shows.
         let mut impostors = [impostor(-0.01, 0.01, 2.0), {
             let mut tall = impostor(0.05, 0.06, 2.0);
-            tall.y1 = 0.5;
+            tall.top = 0.5 / 2.0;
             tall
         }];
         let (mut occlusion, mut order) = (Occlusion::default(), Vec::new());

@@ -256,78 +256,6 @@ impl ColumnScene<'_> {
         );
     }
 
-    /// Adds each visible impostor as a box over its interval: its effect on the column through
-    /// its centre (its faces composited into what that column shows), times its visible share.
-    /// The strip's windows are contiguous (impostors are made only then).
-    #[allow(clippy::too_many_arguments)]
-    fn draw_impostors(
-        &self,
-        look: &Look,
-        frame: &ColumnFrame,
-        strip: &Strip,
-        band: f64,
-        sky: f64,
-        ground: f64,
-        (facing, pieces, profile): (&mut Vec<u32>, &mut Vec<EyeObject>, &mut Vec<Shown>),
-        scratch: &mut Scratch,
-        out: &mut [f64],
-    ) {
-        let pixels = out.len();
-        if look.impostor_order.is_empty() || pixels == 0 {
-            return;
-        }
-        let width = strip.width;
-        let extent_hi = strip.centers[0] + width / 2.0;
-        let extent_lo = strip.centers[pixels - 1] - width / 2.0;
-        let inverse_width = 1.0 / width;
-        let column_band = Band {
-            tan_half: strip.tan_half_band,
-            band,
-            sky,
-            ground,
-        };
-        let mut raster = Raster {
-            origin: extent_hi,
-            inverse_width,
-            width,
-            out,
-        };
-        for &index in &look.impostor_order {
-            let impostor = &look.impostors[index as usize];
-            if impostor.hi <= extent_lo || impostor.lo >= extent_hi {
-                continue;
-            }
-            // What the column through its centre shows (within the strip), then its faces
-            // there (its true centre).
-            let centre = 0.5 * (impostor.lo + impostor.hi);
-            let alpha = centre.clamp(extent_lo, extent_hi);
-            let pixel = nearest_index((strip.centers[0] - alpha) * inverse_width, pixels - 1);
-            look.facing_over(impostor.lo, impostor.hi, facing);
-            profile.clear();
-            self.profile(
-                frame,
-                look,
-                look.turn(strip, pixel, alpha),
-                facing,
-                &column_band,
-                scratch,
-                profile,
-            );
-            let effect = self.impostor_effect(
-                frame,
-                look,
-                look.turn(strip, pixel, centre),
-                impostor,
-                (profile, pieces),
-                &column_band,
-                scratch,
-            );
-            if effect != 0.0 {
-                raster.add(impostor.lo, impostor.hi, effect * impostor.visible, 0.0);
-            }
-        }
-    }
-
     /// The strip cut into smooth regions at silhouette edges; each region sampled at about one
     /// column per `stride` pixels (at least once), the integrand modelled as piecewise linear
     /// through the samples (extended linearly to the region's ends), and that model integrated
@@ -466,7 +394,7 @@ impl ColumnScene<'_> {
                 let shown = &profile[profile_starts[k]..profile_starts[k + 1]];
                 let pixel = nearest_index((strip.centers[0] - centre) * inverse_width, pixels - 1);
                 let direction = look.turn(strip, pixel, centre);
-                let effect = self.impostor_effect(
+                let effect = self.any_impostor_effect(
                     frame,
                     look,
                     direction,
@@ -622,7 +550,7 @@ impl ColumnScene<'_> {
     /// What the column along `direction` shows, piece by piece (see [`Band::profile`]),
     /// appended to `out`; returns [`ColumnScene::column`]'s value.
     #[allow(clippy::too_many_arguments)]
-    fn profile(
+    pub(super) fn profile(
         &self,
         frame: &ColumnFrame,
         look: &Look,
@@ -661,7 +589,7 @@ impl ColumnScene<'_> {
     /// An impostor's effect on the band's mean along `direction` (through its centre), its
     /// faces composited into `profile` (what the column shows without it).
     #[allow(clippy::too_many_arguments)]
-    fn impostor_effect(
+    pub(super) fn impostor_effect(
         &self,
         frame: &ColumnFrame,
         look: &Look,

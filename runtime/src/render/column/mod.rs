@@ -17,9 +17,12 @@
 //! `scene.rs` holds the scene and a step's frame, `sweep.rs` what one eye sees of it,
 //! `integrate.rs` the strip integrated region by region, `photodiode.rs` a column's segments
 //! and the band over each photodiode window, `footprint.rs` the placed upright objects,
-//! `shading.rs` the fast shading, `crowd.rs` which other robots an eye draws, `strip.rs` the pixels to integrate.
+//! `shading.rs` the fast shading, `crowd.rs` which other robots an eye draws, `impostor.rs`
+//! which far small static objects stand in as impostors and `far.rs` how they are drawn,
+//! `strip.rs` the pixels to integrate.
 
 mod crowd;
+mod far;
 mod footprint;
 mod impostor;
 mod integrate;

@@ -372,6 +372,11 @@ pub(super) trait Extent {
 pub(super) struct Shown {
     pub(super) t0: f64,
     pub(super) t1: f64,
+    /// The angle of `t0` ([`Band::angle`]), and the luminance integrated in angle from the
+    /// band's lower edge up to it: a face in front of a run of pieces replaces their
+    /// integral, read at its two ends (`far.rs`).
+    pub(super) a0: f64,
+    pub(super) sum0: f64,
     pub(super) depth: f64,
     pub(super) luminance: f64,
 }
@@ -392,7 +397,7 @@ impl Band {
     /// The angle of tan-elevation `x` within the band (the band's edges and the horizon
     /// exactly, as [`Band::composite`] takes them).
     #[inline]
-    fn angle(&self, x: f64) -> f64 {
+    pub(super) fn angle(&self, x: f64) -> f64 {
         if x == self.tan_half {
             0.5 * self.band
         } else if x == -self.tan_half {
@@ -430,12 +435,15 @@ impl Band {
             let first = out.len();
             let (mut covered, mut middle) = (0.0, 0.0);
             free.take(a, b, |x0, x1| {
-                let weight = self.angle(x1) - self.angle(x0);
+                let a0 = self.angle(x0);
+                let weight = self.angle(x1) - a0;
                 middle += 0.5 * (x0 + x1) * weight;
                 covered += weight;
                 out.push(Shown {
                     t0: x0,
                     t1: x1,
+                    a0,
+                    sum0: 0.0,
                     depth: segment.depth(),
                     luminance: 0.0,
                 });
@@ -452,24 +460,26 @@ impl Band {
         }
         for &(x0, x1) in free.as_slice() {
             let (a0, a1) = (self.angle(x0), self.angle(x1));
-            let mut background = |t0: f64, t1: f64, luminance: f64| {
+            let mut background = |(t0, a0): (f64, f64), t1: f64, luminance: f64| {
                 out.push(Shown {
                     t0,
                     t1,
+                    a0,
+                    sum0: 0.0,
                     depth: f64::INFINITY,
                     luminance,
                 })
             };
             if x0 >= 0.0 {
                 sum += self.sky * (a1 - a0);
-                background(x0, x1, self.sky);
+                background((x0, a0), x1, self.sky);
             } else if x1 <= 0.0 {
                 sum += self.ground * (a1 - a0);
-                background(x0, x1, self.ground);
+                background((x0, a0), x1, self.ground);
             } else {
                 sum += self.ground * -a0 + self.sky * a1;
-                background(x0, 0.0, self.ground);
-                background(0.0, x1, self.sky);
+                background((x0, a0), 0.0, self.ground);
+                background((0.0, 0.0), x1, self.sky);
             }
         }
         // A few dozen pieces at most, mostly in order: insertion.
@@ -482,6 +492,13 @@ impl Band {
                 j -= 1;
             }
             pieces[j] = piece;
+        }
+        // The pieces tile the band: each one's integral runs up to the next one's start.
+        let mut integral = 0.0;
+        for k in 0..pieces.len() {
+            pieces[k].sum0 = integral;
+            let a1 = pieces.get(k + 1).map_or(0.5 * self.band, |next| next.a0);
+            integral += pieces[k].luminance * (a1 - pieces[k].a0);
         }
         sum / self.band
     }

@@ -41,6 +41,12 @@ pub struct ColumnScene<'g> {
     /// Per static object, whether an eye may leave it out when it is behind the strip: no
     /// corner test names it (robot parts always may).
     pub(super) cullable: Vec<bool>,
+    /// The groups of static objects that may become one impostor: a round object no corner
+    /// test names and those after it sharing its footprint (a buoy and its lamp). Found once,
+    /// so that a look tests each far buoy with its lamp in a tight loop over this list.
+    pub(super) rounds: Vec<Round>,
+    /// Per static object, 1 + the index in `rounds` of the group it starts; 0 for the others.
+    pub(super) round_at: Vec<u32>,
     /// Per entry of `robot_parts`, whether the part is tucked under its robot's body: within
     /// [`TUCK`] of the body's round footprint and no higher than it (a Khepera's wheels). The
     /// crowd level of detail leaves such parts of other robots out.
@@ -118,7 +124,7 @@ impl<'g> ColumnScene<'g> {
             (Arc::from(lights), Arc::new(shades))
         });
         let hiders = corner_hiders(&statics);
-        let same_footprint = (0..statics.len())
+        let same_footprint: Vec<bool> = (0..statics.len())
             .map(|i| i > 0 && statics[i].footprint == statics[i - 1].footprint)
             .collect();
         let statics_fast = cached.as_ref().is_some_and(|(_, shades)| {
@@ -130,7 +136,10 @@ impl<'g> ColumnScene<'g> {
         for hider in hiders.iter().flatten() {
             cullable[hider.object as usize] = false;
         }
+        let (rounds, round_at) = round_groups(&statics, &same_footprint, &cullable);
         ColumnScene {
+            rounds,
+            round_at,
             graph,
             own_visible,
             statics_fast,
@@ -238,6 +247,52 @@ impl<'g> ColumnScene<'g> {
         };
         frame.all_fast = statics_fast && frame.others.iter().chain(&frame.own).flatten().all(fast);
     }
+}
+
+/// Static objects that may become one impostor: the first (round, and named by no corner test,
+/// not sharing the previous one's footprint) and the objects right after it sharing its
+/// footprint; with their heights together.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Round {
+    pub(super) center: DVec2,
+    pub(super) radius: f64,
+    pub(super) y0: f64,
+    pub(super) y1: f64,
+    pub(super) first: u32,
+    pub(super) pieces: u32,
+}
+
+/// The round groups of `statics` (see [`ColumnScene::rounds`]), and per static object 1 + the
+/// index of the group it starts (0: none).
+fn round_groups(
+    statics: &[Upright],
+    same_footprint: &[bool],
+    cullable: &[bool],
+) -> (Vec<Round>, Vec<u32>) {
+    let (mut rounds, mut round_at) = (Vec::new(), vec![0u32; statics.len()]);
+    for (first, object) in statics.iter().enumerate() {
+        let Footprint::Circle { center, radius } = object.footprint else {
+            continue;
+        };
+        if !cullable[first] || same_footprint[first] {
+            continue;
+        }
+        let more = same_footprint[first + 1..]
+            .iter()
+            .take_while(|&&same| same)
+            .count();
+        let group = &statics[first..first + 1 + more];
+        rounds.push(Round {
+            center,
+            radius,
+            y0: group.iter().map(|u| u.y0).fold(f64::INFINITY, f64::min),
+            y1: group.iter().map(|u| u.y1).fold(f64::NEG_INFINITY, f64::max),
+            first: first as u32,
+            pieces: group.len() as u32,
+        });
+        round_at[first] = rounds.len() as u32;
+    }
+    (rounds, round_at)
 }
 
 /// Per entry of `parts` (primitive, robot), whether it is tucked under its robot's body, the

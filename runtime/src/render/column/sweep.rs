@@ -78,6 +78,11 @@ pub struct Look {
     /// The objects drawn exactly that may hide impostors, and the bins that say where.
     standing: Vec<Standing>,
     occlusion: Occlusion,
+    /// Per round group of the scene, whether this look made it an impostor or left it out.
+    round_far: Vec<bool>,
+    /// The last strip's reach for impostors ([`impostor::Viewpoint::reach_cos`]), by the bits
+    /// of its width and extent.
+    reach_cos: ((u64, u64, u64), f64),
     /// Scratch for ordering impostors.
     impostor_keys: Vec<u64>,
     centre_keys: Vec<u128>,
@@ -140,7 +145,6 @@ impl Look {
 enum Fate {
     Placed,
     LeftOut,
-    Impostor,
 }
 
 /// An object as seen from `eye`, its interval `[lo, hi]` (wrapped).
@@ -189,7 +193,7 @@ pub(super) fn eye_object(object: &Upright, eye: DVec3, lo: f64, hi: f64) -> EyeO
 }
 
 /// A closure over a frame's objects, typed so that it may keep references to them.
-fn typed<'f, F: FnMut(&'f Upright)>(_frame: &'f ColumnFrame, f: F) -> F {
+fn typed<'f, F: FnMut(usize, &'f Upright) -> usize>(_frame: &'f ColumnFrame, f: F) -> F {
     f
 }
 
@@ -477,6 +481,7 @@ impl ColumnScene<'_> {
     ) {
         let sector = reach.sector;
         let eye2 = DVec2::new(eye.x, eye.z);
+        let (cos_h, sin_h) = (libm::cos(heading), libm::sin(heading));
         let Look {
             objects,
             breaks,
@@ -485,6 +490,8 @@ impl ColumnScene<'_> {
             near,
             impostors,
             standing,
+            round_far,
+            reach_cos,
             ..
         } = look;
         objects.clear();
@@ -495,19 +502,75 @@ impl ColumnScene<'_> {
         standing.clear();
         let statics = frame.statics.len();
         let impostor_width = reach.impostor_width;
+        // Where objects may be left out, each static object's place among `objects`.
+        let keep_slots = sector.is_some() || impostor_width > 0.0;
+        // Far small round static objects first, with their pieces: each an impostor, or left
+        // out beyond the strip. A tight loop over the scene's round groups.
+        round_far.clear();
+        if impostor_width > 0.0 {
+            let (first, last) = reach.extent;
+            // The strip's reach, worked out once per strip and width.
+            let key = (
+                impostor_width.to_bits(),
+                reach.extent.0.to_bits(),
+                reach.extent.1.to_bits(),
+            );
+            if reach_cos.0 != key {
+                *reach_cos = (
+                    key,
+                    impostor::Viewpoint::reach_cos(impostor_width, reach.extent),
+                );
+            }
+            let viewpoint = impostor::Viewpoint::new(
+                eye,
+                (cos_h, sin_h),
+                reach.crowd_distance,
+                impostor_width,
+                reach_cos.1,
+            );
+            round_far.extend(self.rounds.iter().map(|round| {
+                let Some((lo, hi, distance)) = viewpoint.far(round.center, round.radius) else {
+                    return false;
+                };
+                if lo <= hi && hi >= first && lo <= last {
+                    impostors.push(Impostor {
+                        lo,
+                        hi,
+                        distance,
+                        radius: round.radius,
+                        y0: round.y0 - eye.y,
+                        first_static: round.first,
+                        pieces: round.pieces,
+                        top: (round.y1 - eye.y) / distance,
+                        visible: 1.0,
+                    });
+                }
+                true
+            }));
+        }
+        let round_far = &*round_far;
         // The previous object placed, its interval, and what became of it.
         let mut previous: Option<(&Upright, Option<Interval>, Fate)> = None;
         // Static objects, then robot parts (each viewer's own as its turret sees them), by
         // two plain loops: the per-object work is small, so the iteration shows.
-        let mut order = 0usize;
-        let mut place = typed(frame, |object| {
-            let order = {
-                order += 1;
-                order - 1
-            };
+        // Each call places the object of order `order` (static objects first, robot parts
+        // from `statics` on) and says how many static objects it took: a far buoy and its
+        // lamp become one impostor at once.
+        let mut place = typed(frame, |order: usize, object| -> usize {
             let index = objects.len();
+            // A far small round static object, with the pieces on its footprint, was made an
+            // impostor (or left out beyond the strip) before: its pieces are passed over.
+            let group = self.round_at.get(order).map_or(0, |&g| g as usize);
+            if group > 0 && round_far.get(group - 1) == Some(&true) {
+                let pieces = self.rounds[group - 1].pieces as usize;
+                if keep_slots {
+                    static_slots.extend(std::iter::repeat_n(index as u32, pieces));
+                }
+                previous = None;
+                return pieces;
+            }
             // Static objects keep their order unless some may be left out.
-            if order < statics && sector.is_some() {
+            if order < statics && keep_slots {
                 static_slots.push(index as u32);
             }
             // A lamp on its buoy has the buoy's footprint: its interval is the buoy's.
@@ -517,68 +580,26 @@ impl ColumnScene<'_> {
             };
             let (interval, shared) = match previous {
                 Some((before, interval, fate)) if shares_previous(before) => match fate {
-                    Fate::LeftOut => return,
-                    Fate::Impostor => {
-                        // Another piece of the same impostor (a lamp on its far buoy).
-                        if let Some(last) = impostors.last_mut() {
-                            last.y0 = last.y0.min(object.y0 - eye.y);
-                            last.y1 = last.y1.max(object.y1 - eye.y);
-                            last.pieces += 1;
-                        }
-                        return;
-                    }
+                    Fate::LeftOut => return 1,
                     Fate::Placed => (interval, true),
                 },
                 _ => {
                     // Robot parts, and static objects no corner test names.
                     let may_leave = order >= statics || self.cullable[order];
-                    // A far small round static object is an impostor, or left out when it
-                    // lies beyond the strip: tested first, as most of a big arena's are.
-                    if impostor_width > 0.0 && order < statics && may_leave {
-                        if let Footprint::Circle { center, radius } = object.footprint {
-                            if let Some((lo, hi, distance)) = impostor::far(
-                                center,
-                                radius,
-                                eye,
-                                heading,
-                                reach.crowd_distance,
-                                impostor_width,
-                            ) {
-                                let (first, last) = reach.extent;
-                                let fate = if hi < first || lo > last {
-                                    Fate::LeftOut
-                                } else {
-                                    impostors.push(Impostor {
-                                        lo,
-                                        hi,
-                                        distance,
-                                        y0: object.y0 - eye.y,
-                                        y1: object.y1 - eye.y,
-                                        first_static: order as u32,
-                                        pieces: 1,
-                                        visible: 1.0,
-                                    });
-                                    Fate::Impostor
-                                };
-                                previous = Some((object, None, fate));
-                                return;
-                            }
-                        }
-                    }
                     if may_leave
                         && reach.out_of_band.is_finite()
                         && out_of_band(object, eye, reach.out_of_band)
                     {
                         // Stacked pieces of its footprint are tested each on its own.
                         previous = None;
-                        return;
+                        return 1;
                     }
                     if let Some(sector) = sector.filter(|_| may_leave) {
                         let (center, radius) = object.footprint.bounding_circle();
                         let offset = center - eye2;
                         if sector.excludes(DVec2::new(offset.x, -offset.y), radius) {
                             previous = Some((object, None, Fate::LeftOut));
-                            return;
+                            return 1;
                         }
                     }
                     (azimuth_interval(object, eye2, heading), false)
@@ -639,9 +660,11 @@ impl ColumnScene<'_> {
                 }
             }
             objects.push(placed);
+            1
         });
-        for object in frame.statics.iter() {
-            place(object);
+        let mut order = 0;
+        while order < statics {
+            order += place(order, &frame.statics[order]);
         }
         let part = |entry: usize| {
             if Some(frame.part_robot[entry]) == viewer {
@@ -681,7 +704,7 @@ impl ColumnScene<'_> {
                             continue;
                         }
                         if let Some(object) = part(entry) {
-                            place(object);
+                            place(statics, object);
                         }
                     }
                 }
@@ -703,7 +726,7 @@ impl ColumnScene<'_> {
                         && Some(robot) != viewer
                         && self.tucked.get(entry).copied().unwrap_or(false);
                     if let Some(object) = part(entry).filter(|_| !far && !tucked) {
-                        place(object);
+                        place(statics, object);
                     }
                 }
             }
@@ -735,8 +758,8 @@ impl ColumnScene<'_> {
         // Objects may share an edge: one is enough.
         breaks.dedup();
         look.eye = eye;
-        look.cos_h = libm::cos(heading);
-        look.sin_h = libm::sin(heading);
+        look.cos_h = cos_h;
+        look.sin_h = sin_h;
     }
 
     /// Whether a rectangle's silhouette edge is hidden where it stands: the sight line to
