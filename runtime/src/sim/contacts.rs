@@ -223,7 +223,8 @@ impl Motion<'_> {
                         next = candidates.partition_point(|&c| (c as usize) < b);
                         continue;
                     }
-                    let rb = rigs[b].body_radius;
+                    // The compact copy: a candidate that touches nothing costs no rig line.
+                    let rb = self.broad.radii[b];
                     let ca = DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z);
                     let cb = DVec2::new(self.robots[b].pose.x, self.robots[b].pose.z);
                     if let Some((depth, normal)) = (Footprint::Circle {
@@ -304,7 +305,7 @@ impl Motion<'_> {
                 for &b in candidates.iter().filter(|&&b| b as usize > a) {
                     let b = b as usize;
                     let cb = DVec2::new(robots[b].pose.x, robots[b].pose.z);
-                    if ca.distance(cb) < ra + rigs[b].body_radius - PENETRATION_TOLERANCE {
+                    if ca.distance(cb) < ra + self.broad.radii[b] - PENETRATION_TOLERANCE {
                         marked[a] = true;
                         marked[b] = true;
                         any = true;

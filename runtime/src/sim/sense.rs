@@ -91,14 +91,14 @@ impl SenseShared<'_, '_> {
                     // The grid's square holds its corners too: only robots whose bodies come
                     // within reach are worth a sensor's test (in a crowd, most sensors then
                     // have none and trace nothing).
+                    // The centres just filed are the placements' (x, z).
                     let center = DVec2::new(placement.x, placement.z);
                     let sensor_reach = robot.ir_reach;
-                    let rigs = &compiled.rig.robots;
+                    let (centres, radii) = (&self.broad.centres, &self.broad.radii);
                     robot.nearby_robots.retain(|&other| {
-                        let place = &self.placements[other as usize];
-                        other as usize != index
-                            && DVec2::new(place.x, place.z).distance(center)
-                                <= sensor_reach + rigs[other as usize].body_radius
+                        let other = other as usize;
+                        other != index
+                            && centres[other].distance(center) <= sensor_reach + radii[other]
                     });
                 }
                 nearby_found = true;

@@ -159,8 +159,8 @@ pub struct RobotState {
     pub(super) ambient_due: Vec<f64>,
     pub(super) ir_streams: Vec<Stream>,
     /// Each IR sensor's (mean, spread) with nothing in range
-    /// ([`super::sensors::nothing_in_range`]).
-    pub(super) ir_nothing: Vec<(f64, f64)>,
+    /// ([`super::sensors::nothing_in_range`]), shared by robots with the same sensors.
+    pub(super) ir_nothing: std::sync::Arc<[(f64, f64)]>,
     /// How far from the centre any IR sensor reaches ([`super::sensors::ir_reach`]).
     pub(super) ir_reach: f64,
     /// The IR sensors' period when they all share one (read here, not from the rig, in the

@@ -89,6 +89,11 @@ impl<'c> Simulation<'c> {
         let mut robots: Vec<RobotState> = Vec::with_capacity(compiled.rig.robots.len());
         // The last turret built: the next with the same settings shares its filters.
         let mut last_panoramic: Option<usize> = None;
+        // The last robot's sensors and their readings of nothing: the next robot with the same
+        // sensors (a swarm's, shared by the rig) reads the same values from one place, which
+        // stays in cache across a crowd instead of costing each robot a miss.
+        let mut last_nothing: Option<(&std::sync::Arc<Vec<_>>, std::sync::Arc<[(f64, f64)]>)> =
+            None;
         for (index, rig) in compiled.rig.robots.iter().enumerate() {
             let controller =
                 controllers::build_for(rig).map_err(|source| SimError::Controller {
@@ -110,11 +115,22 @@ impl<'c> Simulation<'c> {
                 ambient: [0; 8],
                 ir_due: vec![0.0; rig.distance_sensors.len()],
                 ambient_due: vec![0.0; rig.light_sensors.len()],
-                ir_nothing: rig
-                    .distance_sensors
-                    .iter()
-                    .map(sensors::nothing_in_range)
-                    .collect(),
+                ir_nothing: match &last_nothing {
+                    Some((sensors, nothing))
+                        if std::sync::Arc::ptr_eq(sensors, &rig.distance_sensors) =>
+                    {
+                        nothing.clone()
+                    }
+                    _ => {
+                        let nothing: std::sync::Arc<[(f64, f64)]> = rig
+                            .distance_sensors
+                            .iter()
+                            .map(sensors::nothing_in_range)
+                            .collect();
+                        last_nothing = Some((&rig.distance_sensors, nothing.clone()));
+                        nothing
+                    }
+                },
                 ir_reach: sensors::ir_reach(&rig.distance_sensors),
                 ir_period: rig.distance_sensors.first().map(|s| s.period).filter(|&p| {
                     rig.distance_sensors
