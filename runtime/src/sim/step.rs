@@ -7,6 +7,8 @@
 //! A step is two halves: [`Simulation::sense`] (sensors, side by side where robots are many)
 //! and [`Simulation::act`] (controllers, then motion and collisions, falls and visits).
 
+use std::sync::Arc;
+
 use glam::DVec2;
 
 use super::broad_phase::BroadPhase;
@@ -21,7 +23,7 @@ use super::state::{
 };
 use super::visits::{track_falls, track_visits};
 use super::world2d::Slab;
-use crate::compile::rig::TurretRig;
+use crate::compile::rig::{DistanceSensorRig, TurretRig};
 use crate::compile::Compiled;
 use crate::controllers;
 use crate::khepera::{Controller, Senses};
@@ -92,9 +94,28 @@ impl<'c> Simulation<'c> {
         // The last robot's sensors and their readings of nothing: the next robot with the same
         // sensors (a swarm's, shared by the rig) reads the same values from one place, which
         // stays in cache across a crowd instead of costing each robot a miss.
-        let mut last_nothing: Option<(&std::sync::Arc<Vec<_>>, std::sync::Arc<[(f64, f64)]>)> =
-            None;
+        let mut last_nothing: Option<(&Arc<Vec<DistanceSensorRig>>, Arc<[(f64, f64)]>)> = None;
+        // Every robot's IR due times and noise streams, allocated one robot after the other
+        // before anything else of theirs: the sensing sweep then reads ascending addresses that
+        // the hardware's prefetcher follows (interleaved with each robot's other allocations,
+        // a crowd's streams cost a cache miss a robot).
+        let mut ir_state = compiled
+            .rig
+            .robots
+            .iter()
+            .enumerate()
+            .map(|(index, rig)| {
+                let count = rig.distance_sensors.len();
+                let due = vec![0.0; count];
+                let streams: Vec<Stream> = (0..count)
+                    .map(|s| Stream::new(seed, index, kind::PROXIMITY, s))
+                    .collect();
+                (due, streams)
+            })
+            .collect::<Vec<_>>()
+            .into_iter();
         for (index, rig) in compiled.rig.robots.iter().enumerate() {
+            let (ir_due, ir_streams) = ir_state.next().unwrap_or_default();
             let controller =
                 controllers::build_for(rig).map_err(|source| SimError::Controller {
                     robot: rig.name.clone(),
@@ -113,16 +134,14 @@ impl<'c> Simulation<'c> {
                 senses: Senses::ALL,
                 proximity: [0; 8],
                 ambient: [0; 8],
-                ir_due: vec![0.0; rig.distance_sensors.len()],
+                ir_due,
                 ambient_due: vec![0.0; rig.light_sensors.len()],
                 ir_nothing: match &last_nothing {
-                    Some((sensors, nothing))
-                        if std::sync::Arc::ptr_eq(sensors, &rig.distance_sensors) =>
-                    {
+                    Some((sensors, nothing)) if Arc::ptr_eq(sensors, &rig.distance_sensors) => {
                         nothing.clone()
                     }
                     _ => {
-                        let nothing: std::sync::Arc<[(f64, f64)]> = rig
+                        let nothing: Arc<[(f64, f64)]> = rig
                             .distance_sensors
                             .iter()
                             .map(sensors::nothing_in_range)
@@ -137,9 +156,7 @@ impl<'c> Simulation<'c> {
                         .iter()
                         .all(|s| s.period.to_bits() == p.to_bits())
                 }),
-                ir_streams: (0..rig.distance_sensors.len())
-                    .map(|s| Stream::new(seed, index, kind::PROXIMITY, s))
-                    .collect(),
+                ir_streams,
                 ambient_streams: (0..rig.light_sensors.len())
                     .map(|s| Stream::new(seed, index, kind::AMBIENT, s))
                     .collect(),
