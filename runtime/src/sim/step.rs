@@ -31,6 +31,10 @@ use crate::optics::{LinearCamera, LinearCameraOutput, Panoramic, Renderer, Retin
 use crate::render::Poses;
 use crate::vision::{VisionBackend, VisionError, VisionRequest, WorldInstance};
 
+/// Each IR sensor's (mean, spread) with nothing in range, shared by robots with the same
+/// sensors.
+type Nothing = Arc<[(f64, f64)]>;
+
 /// Why a simulation could not start.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SimError {
@@ -94,7 +98,7 @@ impl<'c> Simulation<'c> {
         // The last robot's sensors and their readings of nothing: the next robot with the same
         // sensors (a swarm's, shared by the rig) reads the same values from one place, which
         // stays in cache across a crowd instead of costing each robot a miss.
-        let mut last_nothing: Option<(&Arc<Vec<DistanceSensorRig>>, Arc<[(f64, f64)]>)> = None;
+        let mut last_nothing: Option<(&Arc<Vec<DistanceSensorRig>>, Nothing)> = None;
         // Every robot's IR due times and noise streams, allocated one robot after the other
         // before anything else of theirs: the sensing sweep then reads ascending addresses that
         // the hardware's prefetcher follows (interleaved with each robot's other allocations,
@@ -141,7 +145,7 @@ impl<'c> Simulation<'c> {
                         nothing.clone()
                     }
                     _ => {
-                        let nothing: Arc<[(f64, f64)]> = rig
+                        let nothing: Nothing = rig
                             .distance_sensors
                             .iter()
                             .map(sensors::nothing_in_range)
