@@ -160,15 +160,47 @@ pub fn socket_folder() -> Result<PathBuf, WebotsError> {
         .map(PathBuf::from)
         .filter(|p| p.is_dir())
         .unwrap_or_else(std::env::temp_dir);
-    let name = format!(
-        "regatta-{}-{}",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    );
-    let dir = base.join(name);
-    std::fs::DirBuilder::new()
-        .mode(0o700)
-        .create(&dir)
-        .map_err(|source| WebotsError::io(&dir, source))?;
-    Ok(dir)
+    // A folder of an earlier process with the same id (a killed run leaves its folder) is
+    // not ours: the next name is tried, never the stale one reused.
+    let mut attempts = 0;
+    loop {
+        let name = format!(
+            "regatta-{}-{}",
+            std::process::id(),
+            COUNTER.fetch_add(1, Ordering::Relaxed)
+        );
+        let dir = base.join(name);
+        match std::fs::DirBuilder::new().mode(0o700).create(&dir) {
+            Ok(()) => return Ok(dir),
+            Err(source)
+                if source.kind() == std::io::ErrorKind::AlreadyExists && attempts < 1000 =>
+            {
+                attempts += 1;
+            }
+            Err(source) => return Err(WebotsError::io(&dir, source)),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_stale_folder_of_the_same_process_id_is_stepped_over() {
+        // Folders an earlier process with this id left behind (its next names included).
+        let base = std::env::var_os("XDG_RUNTIME_DIR")
+            .map(std::path::PathBuf::from)
+            .filter(|p| p.is_dir())
+            .unwrap_or_else(std::env::temp_dir);
+        let stale: Vec<_> = (0..64)
+            .map(|n| base.join(format!("regatta-{}-{n}", std::process::id())))
+            .filter(|dir| std::fs::create_dir(dir).is_ok())
+            .collect();
+        let made = super::socket_folder();
+        for dir in &stale {
+            let _ = std::fs::remove_dir(dir);
+        }
+        let made = made.expect("a fresh folder");
+        assert!(!stale.contains(&made), "{}", made.display());
+        std::fs::remove_dir(&made).unwrap();
+    }
 }
