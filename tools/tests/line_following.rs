@@ -177,25 +177,35 @@ fn probes(image: &image::GrayImage, tile: f64, at: &[(f64, f64)]) -> Vec<f64> {
         ));
     }
     std::fs::write(dir.join("worlds/w.wbt"), world).unwrap();
+    let stderr = two_steps(&dir.join("worlds/w.wbt"));
+    (0..at.len())
+        .map(|k| numbers_after(&stderr, &format!("[probe{k}] gs1 "))[0])
+        .collect()
+}
+
+/// What the probe controllers of `world` print in its first two steps.
+fn two_steps(world: &Path) -> String {
     let output = regatta()
         .env("REGATTA_CACHE_DIR", cache())
         .env_remove("REGATTA_PYTHON")
         .arg("run")
-        .arg(dir.join("worlds/w.wbt"))
+        .arg(world)
         .args(["--steps", "2"])
         .output()
         .unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
     assert!(output.status.success(), "{stderr}");
-    (0..at.len())
-        .map(|k| {
-            let prefix = format!("[probe{k}] gs1 ");
-            let line = stderr
-                .lines()
-                .find_map(|l| l.strip_prefix(&prefix))
-                .unwrap_or_else(|| panic!("no reading of probe{k}: {stderr}"));
-            line.trim().parse().unwrap()
-        })
+    stderr
+}
+
+/// The numbers of the line of `stderr` that starts with `prefix`.
+fn numbers_after(stderr: &str, prefix: &str) -> Vec<f64> {
+    stderr
+        .lines()
+        .find_map(|l| l.strip_prefix(prefix))
+        .unwrap_or_else(|| panic!("no line {prefix:?} in {stderr}"))
+        .split_whitespace()
+        .map(|v| v.parse().unwrap())
         .collect()
 }
 
@@ -294,24 +304,7 @@ fn the_thymios_ground_sensors_read_the_line_too() {
              Thymio2 {{ translation -0.05 {y} 0 controller \"probe\" }}\n"
         );
         std::fs::write(dir.join("worlds/w.wbt"), world).unwrap();
-        let output = regatta()
-            .env("REGATTA_CACHE_DIR", cache())
-            .env_remove("REGATTA_PYTHON")
-            .arg("run")
-            .arg(dir.join("worlds/w.wbt"))
-            .args(["--steps", "2"])
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        assert!(output.status.success(), "{stderr}");
-        let line = stderr
-            .lines()
-            .find_map(|l| l.strip_prefix("[Thymio II] ground "))
-            .unwrap_or_else(|| panic!("no reading: {stderr}"));
-        let values: Vec<f64> = line
-            .split_whitespace()
-            .map(|v| v.parse().unwrap())
-            .collect();
+        let values = numbers_after(&two_steps(&dir.join("worlds/w.wbt")), "[Thymio II] ground ");
         (values[0], values[1])
     };
     let (left, right) = read(-0.25);

@@ -713,10 +713,10 @@ impl Compiler<'_> {
         match scene.type_name(node) {
             "DistanceSensor" => {
                 let (position, direction) = device_pose(scene, node, frame);
-                // A sensor looking down (the Thymio's and e-puck's ground sensors) would read
-                // the floor, which regatta's 2.5-D world makes uniform: it is not simulated,
-                // and kept out of the proximity slots, where it would look ahead at wheel
-                // height.
+                // A sensor looking down (the Thymio's and e-puck's ground sensors) reads the
+                // floor: the 2.5-D proximity model cannot, so it is kept out of the proximity
+                // slots (where it would look ahead at wheel height); regatta-webots casts it
+                // in 3-D for a Webots controller.
                 if direction.y < -std::f64::consts::FRAC_1_SQRT_2 {
                     return;
                 }

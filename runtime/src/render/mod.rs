@@ -182,15 +182,6 @@ pub(crate) fn light_at_with(
     point: DVec3,
     bound: Attenuation,
 ) -> Option<(DVec3, f64)> {
-    let attenuate = |coefficients: DVec3, distance: f64| match bound {
-        Attenuation::Vrml97 => attenuate(coefficients, distance),
-        Attenuation::Unbounded => {
-            1.0 / (coefficients.x
-                + coefficients.y * distance
-                + coefficients.z * distance * distance)
-                .max(f64::MIN_POSITIVE)
-        }
-    };
     match kind {
         LightKind::Directional { direction } => Some((-*direction, 1.0)),
         LightKind::Point {
@@ -203,7 +194,7 @@ pub(crate) fn light_at_with(
             (distance <= *radius).then(|| {
                 (
                     offset / distance.max(1e-300),
-                    attenuate(*attenuation, distance),
+                    attenuate(*attenuation, distance, bound),
                 )
             })
         }
@@ -229,12 +220,15 @@ pub(crate) fn light_at_with(
             } else {
                 (angle - cut_off) / (beam_width - cut_off)
             };
-            Some((to_light, attenuate(*attenuation, distance) * spot))
+            Some((to_light, attenuate(*attenuation, distance, bound) * spot))
         }
     }
 }
 
-fn attenuate(coefficients: DVec3, distance: f64) -> f64 {
-    1.0 / (coefficients.x + coefficients.y * distance + coefficients.z * distance * distance)
-        .max(1.0)
+fn attenuate(coefficients: DVec3, distance: f64, bound: Attenuation) -> f64 {
+    let divisor = coefficients.x + coefficients.y * distance + coefficients.z * distance * distance;
+    1.0 / match bound {
+        Attenuation::Vrml97 => divisor.max(1.0),
+        Attenuation::Unbounded => divisor.max(f64::MIN_POSITIVE),
+    }
 }

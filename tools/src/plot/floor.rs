@@ -3,7 +3,6 @@
 //! textured floor get none and pay nothing.
 
 use regatta_figures::FloorImage;
-use regatta_runtime::compile::graph::Owner;
 use regatta_runtime::compile::Compiled;
 use regatta_runtime::geometry::{Aabb, Ray};
 use regatta_runtime::render::raycast::RayCaster;
@@ -30,8 +29,7 @@ pub fn floor_image(compiled: &Compiled) -> Option<FloorImage> {
         .copied()
         .filter(|&p| {
             let primitive = &graph.primitives[p];
-            primitive.owner == Owner::Static
-                && primitive.bounds.max.y <= floor + 1e-6
+            primitive.bounds.max.y <= floor + 1e-6
                 && graph
                     .materials
                     .get(primitive.material)
