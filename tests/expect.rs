@@ -62,14 +62,13 @@ fn typed_diagnostics_match_their_expectations() {
         for id in scene.walk().into_iter().take(40) {
             let node = scene.node(id);
             let def = node
-                .def_name
-                .as_ref()
+                .def_name()
                 .map(|d| format!(" DEF {d}"))
                 .unwrap_or_default();
-            let protos = if node.proto_names.is_empty() {
+            let protos = if node.proto_names().is_empty() {
                 String::new()
             } else {
-                format!(" from {}", node.proto_names.join(" < "))
+                format!(" from {}", node.proto_names().join(" < "))
             };
             let written: Vec<String> = scene
                 .spec(id)

@@ -582,7 +582,7 @@ impl Dumper<'_> {
                                     d.nested(|d| d.field_value(&f.value));
                                 }
                                 BodyItem::Proto(p) => d.proto(p),
-                                BodyItem::Route(r) => d.item(&Item::Route(r.clone())),
+                                BodyItem::Route(r) => d.item(&Item::Route((**r).clone())),
                                 BodyItem::Declaration(decl) => d.declaration(decl),
                                 BodyItem::Template(t) => d.item(&Item::Template(t.clone())),
                             }

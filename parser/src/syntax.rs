@@ -84,10 +84,12 @@ pub struct NodeBody {
 pub enum BodyItem {
     Field(Field),
     Proto(Proto),
-    Route(Route),
+    /// Boxed, as the declaration below: both are rare and twice a field's size, and a swarm's
+    /// file holds thousands of fields.
+    Route(Box<Route>),
     /// A field declaration in a node body, as in Webots' header-less node models
     /// (`vrmlField SFFloat ambientIntensity 0`) and VRML97 Script nodes.
-    Declaration(Declaration),
+    Declaration(Box<Declaration>),
     Template(Template),
 }
 

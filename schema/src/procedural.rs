@@ -169,7 +169,7 @@ impl<'a> FieldsJson<'a> {
         self.given += 1;
         let node = self.nodes.get(index)?;
         let spec = self.catalogue.spec(node.spec);
-        let name = node.proto_names.last().unwrap_or(&spec.name).clone();
+        let name = node.proto_names().last().unwrap_or(&spec.name).clone();
         let mut fields = Map::new();
         for (field, value) in spec.fields.iter().zip(&node.fields) {
             let ty = field.ty();

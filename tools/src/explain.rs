@@ -267,7 +267,7 @@ fn robot_kind(
 ) -> String {
     let node = scene.node(robot.node);
     let name = node
-        .proto_names
+        .proto_names()
         .last()
         .cloned()
         .unwrap_or_else(|| scene.spec(robot.node).name.to_string());

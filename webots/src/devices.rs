@@ -92,7 +92,11 @@ pub fn devices(scene: &Scene, rig: &RobotRig) -> Vec<Device> {
     if scene.type_name(rig.node) != "Robot" {
         drive_devices(rig, &mut devices);
         sensor_devices(rig, &mut devices);
-        let model = scene.node(rig.node).proto_names.first().map(String::as_str);
+        let model = scene
+            .node(rig.node)
+            .proto_names()
+            .first()
+            .map(String::as_str);
         stand_in_leds(model.unwrap_or(""), &mut devices);
         stand_in_accelerometer(model.unwrap_or(""), &mut devices);
     }

@@ -110,8 +110,8 @@ impl Supervisor {
         }
         for id in supervisor.scene.walk() {
             let node = supervisor.scene.node(id);
-            if let (Some(def), false) = (&node.def_name, supervisor.internal[id.index()]) {
-                supervisor.defs.entry(def.clone()).or_insert(id);
+            if let (Some(def), false) = (node.def_name(), supervisor.internal[id.index()]) {
+                supervisor.defs.entry(def.to_owned()).or_insert(id);
             }
         }
         supervisor
@@ -145,7 +145,7 @@ impl Supervisor {
         };
         self.frames[id.index()] = Some((robot, frame));
         // Inside a PROTO instance, nodes written in the PROTO's file are its body's.
-        let body_file = if node.proto_names.is_empty() {
+        let body_file = if node.proto_names().is_empty() {
             body_file
         } else {
             Some(node.origin.file)
@@ -246,7 +246,7 @@ impl Supervisor {
                 let node = self.node(r.u32()?);
                 let name = r.str()?;
                 let found = node
-                    .filter(|&n| !self.scene.node(n).proto_names.is_empty())
+                    .filter(|&n| !self.scene.node(n).proto_names().is_empty())
                     .and_then(|n| self.find_inside(n, &name));
                 answer.u32(found.map_or(0, |n| n.index() as u32 + 1));
             }
@@ -254,10 +254,10 @@ impl Supervisor {
                 Some(n) => {
                     let node = self.scene.node(n);
                     let base = self.scene.type_name(n).to_owned();
-                    answer.str(node.proto_names.first().unwrap_or(&base));
+                    answer.str(node.proto_names().first().unwrap_or(&base));
                     answer.str(&base);
-                    answer.str(node.def_name.as_deref().unwrap_or(""));
-                    answer.u8(u8::from(!node.proto_names.is_empty()));
+                    answer.str(node.def_name().unwrap_or(""));
+                    answer.u8(u8::from(!node.proto_names().is_empty()));
                 }
                 None => {
                     answer.str("");
@@ -354,7 +354,7 @@ impl Supervisor {
                 break;
             }
             let node = self.scene.node(id);
-            if id != root && node.def_name.as_deref() == Some(name) {
+            if id != root && node.def_name() == Some(name) {
                 return Some(id);
             }
             for value in node.fields.own() {

@@ -206,7 +206,7 @@ impl Parser<'_> {
                 let text = self.current_text();
                 match text {
                     "PROTO" => Some(BodyItem::Proto(self.proto())),
-                    "ROUTE" => self.route().map(BodyItem::Route),
+                    "ROUTE" => self.route().map(|route| BodyItem::Route(Box::new(route))),
                     "hidden" => {
                         // `hidden` is a field name in its own right unless a name follows.
                         let next = self.peek_second();
@@ -226,7 +226,8 @@ impl Parser<'_> {
                             && self.text(next.span).starts_with(['S', 'M'])
                             && self.text(next.span)[1..].starts_with('F')
                         {
-                            self.declaration(true).map(BodyItem::Declaration)
+                            self.declaration(true)
+                                .map(|d| BodyItem::Declaration(Box::new(d)))
                         } else {
                             Some(BodyItem::Field(self.field()))
                         }

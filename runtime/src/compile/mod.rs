@@ -247,7 +247,7 @@ impl Compiler<'_> {
     /// its children.
     fn walk_axes(&mut self, node: NodeId, frame: &Frame, owner: Owner, depth: usize) {
         let scene = self.scene;
-        if owner == Owner::Static && scene.node(node).proto_names.iter().any(|n| n == "Buoy") {
+        if owner == Owner::Static && scene.node(node).proto_names().iter().any(|n| n == "Buoy") {
             let first = self.graph.primitives.len();
             self.walk_inner(node, frame, owner, depth);
             let bounds = self.graph.primitives[first..]
@@ -967,8 +967,8 @@ fn find_floors(graph: &mut RenderGraph, rig: &mut SensorRig) {
 /// name, else its `name` field, else its type.
 fn group_name(scene: &Scene, node: NodeId) -> String {
     let data = scene.node(node);
-    if let Some(def) = &data.def_name {
-        return def.clone();
+    if let Some(def) = data.def_name() {
+        return def.to_owned();
     }
     let name_field = match scene.spec(node).field_index("name") {
         Some(index) => match &data.fields[index] {
@@ -977,7 +977,7 @@ fn group_name(scene: &Scene, node: NodeId) -> String {
         },
         None => None,
     };
-    if let Some(proto) = data.proto_names.last() {
+    if let Some(proto) = data.proto_names().last() {
         return name_field.unwrap_or_else(|| proto.clone());
     }
     name_field.unwrap_or_else(|| scene.type_name(node).to_owned())

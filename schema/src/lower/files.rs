@@ -11,7 +11,7 @@ use regatta_parser::{Diagnostic, SourceText, Span};
 
 use crate::access::Refusal;
 use crate::protos::WEBOTS_STANDINS;
-use crate::scene::{FieldsBuilder, FileId, NodeId, Origin, SceneNode, Written};
+use crate::scene::{FieldsBuilder, FileId, NodeId, NodeNames, Origin, SceneNode, Written};
 use crate::value::Value;
 
 use super::checked::{FileDiagnostic, Source};
@@ -474,8 +474,10 @@ impl<'c> Lowerer<'c> {
                 spec: group,
                 written,
                 fields,
-                def_name: None,
-                proto_names: vec!["Inline".to_owned()],
+                names: Some(Box::new(NodeNames {
+                    def_name: None,
+                    proto_names: vec!["Inline".to_owned()],
+                })),
                 origin,
                 axes: Default::default(),
             },

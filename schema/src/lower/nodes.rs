@@ -221,7 +221,7 @@ impl<'c> Lowerer<'c> {
                 };
                 if let Some(def) = &node.def {
                     if !def.text.is_empty() {
-                        self.nodes[id.index()].def_name = Some(def.text.clone());
+                        self.nodes[id.index()].names_mut().def_name = Some(def.text.clone());
                         scope.defs.insert(def.text.clone(), id);
                     }
                 }
@@ -478,8 +478,7 @@ impl<'c> Lowerer<'c> {
                 spec: spec_id,
                 fields,
                 written,
-                def_name: None,
-                proto_names: Vec::new(),
+                names: None,
                 origin,
                 axes: Default::default(),
             },

@@ -442,7 +442,7 @@ impl<'c> Lowerer<'c> {
         }
         let root = root?;
         let root_node = &mut self.nodes[root.index()];
-        root_node.proto_names.push(name.clone());
+        root_node.names_mut().proto_names.push(name.clone());
         // The instance is where the user wrote the node; its body's authoring (which axes it
         // was written in) is the innermost PROTO's, remembered before the origin moves.
         let body_file = root_node.origin.file;
