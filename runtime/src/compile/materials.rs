@@ -17,7 +17,7 @@ impl Compiler<'_> {
             _ if textures::has_texture(self.scene, a) => Some(a),
             _ => self.scene.child(a, "material"),
         });
-        if let Some(&(_, index)) = self.materials.iter().find(|(k, _)| *k == key) {
+        if let Some(&index) = self.materials.get(&key) {
             return index;
         }
         let mut material: Material = material_of(self.scene, appearance);
@@ -40,12 +40,12 @@ impl Compiler<'_> {
             .then(|| self.graph.materials.iter().position(|m| *m == material))
             .flatten();
         if let Some(index) = equal {
-            self.materials.push((key, index));
+            self.materials.insert(key, index);
             return index;
         }
         self.graph.materials.push(material);
         let index = self.graph.materials.len() - 1;
-        self.materials.push((key, index));
+        self.materials.insert(key, index);
         index
     }
 }

@@ -97,7 +97,7 @@ fn compile_with(scene: &Scene, robot_groups: bool) -> Compiled {
         graph: RenderGraph {
             primitives: Vec::new(),
             meshes: Vec::new(),
-            materials: Vec::new(),
+            materials: Default::default(),
             lights: Vec::new(),
             lines: Vec::new(),
             textures: Vec::new(),
@@ -110,7 +110,7 @@ fn compile_with(scene: &Scene, robot_groups: bool) -> Compiled {
         },
         rig: SensorRig::default(),
         warnings: Vec::new(),
-        materials: Vec::new(),
+        materials: Default::default(),
         texture_cache: Default::default(),
         landmarks: Vec::new(),
         group: None,
@@ -169,7 +169,7 @@ struct Compiler<'s> {
     rig: SensorRig,
     warnings: Vec<String>,
     /// Material nodes already converted, to share entries.
-    materials: Vec<(Option<NodeId>, usize)>,
+    materials: std::collections::HashMap<Option<NodeId>, usize>,
     /// Texture nodes already read.
     texture_cache: textures::TextureCache,
     landmarks: Vec<Landmark>,
