@@ -176,6 +176,9 @@ pub struct Chain {
     period: f64,
     /// Shared by the chain's copies (a filter's two chains, the turrets of a swarm).
     powers: std::sync::Arc<[f64]>,
+    /// `a^(n−i)` for i = 0…n − 1: the powers a left-going pass takes, in the order it writes
+    /// them, so that its loops run forward (in vector lanes, no reversal).
+    falling: std::sync::Arc<[f64]>,
 }
 
 /// Independent blocks a recursion is cut into, so that their dependency chains overlap.
@@ -185,16 +188,22 @@ impl Chain {
     pub fn new(lambda: f64, len: usize) -> Chain {
         let lambda = lambda.max(1e-12);
         let n = len as f64;
+        let powers: std::sync::Arc<[f64]> = (0..len + 2)
+            .map(|k| libm::exp(-(k as f64) / lambda))
+            .collect::<Vec<f64>>()
+            .into();
         Chain {
             len,
             a: libm::exp(-1.0 / lambda),
             one_minus_a: -libm::expm1(-1.0 / lambda),
             a_n: libm::exp(-n / lambda),
             period: -libm::expm1(-2.0 * n / lambda),
-            powers: (0..len + 2)
-                .map(|k| libm::exp(-(k as f64) / lambda))
+            falling: (1..=len)
+                .rev()
+                .map(|k| powers[k])
                 .collect::<Vec<f64>>()
                 .into(),
+            powers,
         }
     }
 
@@ -349,7 +358,9 @@ impl Chain {
                 }
                 let carry = left[n - k * block];
                 let end = n - k * block;
-                for (l, power) in left[end - lengths[k]..end].iter_mut().rev().zip(carried) {
+                // left[end − 1 − i] takes a^(i+1): a^(len_k − j) at end − len_k + j.
+                let carried = &self.falling[self.len - lengths[k]..];
+                for (l, power) in left[end - lengths[k]..end].iter_mut().zip(carried) {
                     *l += power * carry;
                 }
             }
@@ -387,8 +398,8 @@ impl Chain {
     pub fn odd(&self, x: &[f64], out: &mut [f64]) {
         self.with_passes(x, out, |out, left, (right_start, left_start)| {
             // a^(i+1) rising for the right-going pass, a^(n−i) falling for the left-going one.
-            let ramp = &self.powers[1..=out.len()];
-            let weights = ramp.iter().zip(ramp.iter().rev());
+            let n = out.len();
+            let weights = self.powers[1..=n].iter().zip(&self.falling[self.len - n..]);
             for ((o, l), (up, down)) in out.iter_mut().zip(left).zip(weights) {
                 let right_going = *o + up * right_start;
                 let left_going = *l + down * left_start;
