@@ -423,9 +423,16 @@ impl Chain {
         }
         debug_assert_eq!(n, self.len, "a chain filters images of its own length");
         let (x, out) = (&x[..n], &mut out[..n]);
-        with_scratch(n, |left| {
-            let starts = self.zero_state_passes(x, out, left);
-            finish(out, left, starts);
+        LEFT_GOING.with(|cell| {
+            // Every element of the left-going pass is written before it is read: the buffer
+            // is kept from image to image, not zeroed.
+            let mut left = cell.take();
+            if left.len() < n {
+                left.resize(n, 0.0);
+            }
+            let starts = self.zero_state_passes(x, out, &mut left[..n]);
+            finish(out, &left[..n], starts);
+            cell.set(left);
         });
         Some(out)
     }
@@ -444,6 +451,11 @@ pub fn highpass(x: &[f64], lambda: f64, out: &mut [f64]) {
         chains: (chain.clone(), chain),
     }
     .apply(x, out);
+}
+
+thread_local! {
+    /// The left-going pass of [`Chain::with_passes`], one buffer per thread.
+    static LEFT_GOING: std::cell::Cell<Vec<f64>> = const { std::cell::Cell::new(Vec::new()) };
 }
 
 /// Runs `f` with a scratch slice of `n` zeros: on the stack up to 256, else on the heap.
