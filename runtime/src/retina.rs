@@ -270,8 +270,8 @@ impl Chain {
             right.copy_from_slice(x);
             self.recursion::<false>(right);
         } else {
-            // Both directions in one sweep, each in blocks as in `recursion` and with the same
-            // arithmetic per element: eight dependency chains in flight instead of four.
+            // Both directions, each in blocks as in `recursion` and with the same arithmetic
+            // per element.
             let (a, c) = (self.a, self.one_minus_a);
             let block = n.div_ceil(BLOCKS);
             let lengths: [usize; BLOCKS] =
@@ -301,10 +301,16 @@ impl Chain {
                         let (skip_y, skip_l) = ($y.len() - $len, $l.len() - $len);
                         let ($y, $l) = (&$y[skip_y..], &mut $l[skip_l..]);
                     )+
+                    // One direction at a time: four chains in flight each, with few enough
+                    // pointers to stay in registers (both at once spill on every element).
                     for i in $range {
                         $(
                             forward[$k] = a * forward[$k] + c * $x[i];
                             $r[i] = forward[$k];
+                        )+
+                    }
+                    for i in $range {
+                        $(
                             let j = $len - 1 - i;
                             backward[$k] = a * backward[$k] + c * $y[j];
                             $l[j] = backward[$k];
