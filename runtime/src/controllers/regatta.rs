@@ -131,34 +131,31 @@ impl LobeThresholds {
 impl LobeThresholds {
     /// Where the first value in a lobe (negative or positive) is, if any.
     fn first_in_lobe(&self, odd: &[u16]) -> Option<usize> {
-        // Out of every lobe is one unsigned compare (`negative_below ≤ d < positive_from`:
-        // a value in a positive lobe is in no negative one, so the bounds are in order), on
-        // 16-bit lanes where both bounds fit (`positive_from ≤ 65536` keeps the wrapped
-        // difference of a value below the band out of it).
+        // Out of every lobe is one unsigned compare of the value's wrapped distance above
+        // `negative_below` (a value in a positive lobe is in no negative one, so the bounds
+        // are in order; `positive_from ≤ 65536` keeps a value below the band out of it).
         let width = self.positive_from.saturating_sub(self.negative_below);
-        match (u16::try_from(self.negative_below), u16::try_from(width)) {
-            (Ok(below), Ok(width)) => first_loud(odd, |d| d.wrapping_sub(below) < width),
-            _ => first_loud(odd, |d| {
-                (d as u32).wrapping_sub(self.negative_below) < width
-            }),
+        let (Ok(below), Ok(width)) = (u16::try_from(self.negative_below), u16::try_from(width))
+        else {
+            let quiet = |d: u16| (d as u32).wrapping_sub(self.negative_below) < width;
+            return odd.iter().position(|&d| !quiet(d));
+        };
+        // Whole blocks of 16 by the largest distance in each, a reduction with no early exit
+        // that runs in vector lanes: most of a retina is in no lobe.
+        let distance = |d: u16| d.wrapping_sub(below);
+        let mut blocks = odd.chunks_exact(16);
+        let mut start = 0;
+        for block in &mut blocks {
+            if block.iter().fold(0, |far, &d| far.max(distance(d))) >= width {
+                break;
+            }
+            start += 16;
         }
+        odd[start..]
+            .iter()
+            .position(|&d| distance(d) >= width)
+            .map(|p| start + p)
     }
-}
-
-/// Where the first value that is not `quiet` is, if any. Whole blocks of 16 are tested with
-/// no early exit, which runs in vector lanes: most of a retina is in no lobe.
-#[inline(always)]
-fn first_loud(values: &[u16], quiet: impl Fn(u16) -> bool) -> Option<usize> {
-    let mut blocks = values.chunks_exact(16);
-    let mut start = 0;
-    for block in &mut blocks {
-        if !block.iter().fold(true, |all, &d| all & quiet(d)) {
-            return block.iter().position(|&d| !quiet(d)).map(|p| start + p);
-        }
-        start += 16;
-    }
-    let rest = blocks.remainder();
-    rest.iter().position(|&d| !quiet(d)).map(|p| start + p)
 }
 
 /// The number of values in 0…65535 that satisfy `holds`, which holds on a prefix of them.
