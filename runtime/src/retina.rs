@@ -674,9 +674,18 @@ pub fn convert(filtered: f64, i_bda: f64, bits: u32) -> u16 {
 #[inline]
 pub fn convert_scaled(filtered: f64, half: f64, gain: f64, top: f64) -> u16 {
     let value = half + filtered * gain + 0.5;
-    // Clamped to [0, top], then `as` truncates (floor on (0, top)). `max` returns 0 for NaN,
-    // which therefore reads 0. No branch, so a row of pixels converts in vector lanes.
-    value.max(0.0).min(top) as u16
+    // Clamped to [0, top] (and to the u16 range) by plain compares: NaN fails the first and
+    // reads 0.
+    let ceiling = if top < 65535.0 { top } else { 65535.0 };
+    let clamped = if value > 0.0 { value } else { 0.0 };
+    let clamped = if clamped < ceiling { clamped } else { ceiling };
+    // Then floored without the saturating conversion's fix-ups, so that a row of pixels
+    // converts in vector lanes: adding 2⁵² rounds to the nearest integer, which lands in the
+    // low bits, one less where that rounded up. Exact for 0 ≤ x < 2⁵².
+    const SHIFT: f64 = 4503599627370496.0;
+    let shifted = clamped + SHIFT;
+    let rounded_up = shifted - SHIFT > clamped;
+    (shifted.to_bits() - rounded_up as u64) as u16
 }
 
 #[cfg(test)]
@@ -701,6 +710,50 @@ mod tests {
         ));
         assert_eq!(analog, [0.0; 4]);
         assert!(!normalize(&[0.0; 4], &mut analog));
+    }
+
+    /// The converter floors exactly as clamping and truncating does, at every kind of value:
+    /// integers, halves, a hair either side, the ends of the range, beyond, and not finite.
+    #[test]
+    fn conversion_floors_as_truncation_does() {
+        let truncated = |value: f64, top: f64| value.max(0.0).min(top) as u16;
+        let mut values = vec![
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            -0.0,
+            0.0,
+            f64::MIN_POSITIVE,
+            1e300,
+            -1e300,
+        ];
+        for k in -3..70_000 {
+            let k = k as f64;
+            for x in [k, k + 0.5, k + 0.25, k + 0.75] {
+                values.extend([x, x.next_up(), x.next_down()]);
+            }
+        }
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..100_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            values.push((state >> 11) as f64 / (1u64 << 53) as f64 * 140_000.0 - 70_000.0);
+        }
+        for bits in [1u32, 6, 8, 12, 16] {
+            let top = ((1u32 << bits) - 1) as f64;
+            for &value in &values {
+                // half + 0·gain + 0.5 is value itself when half = value − 0.5 is exact; test
+                // the clamp and floor through gain 1 instead: half = 0.
+                let converted = convert_scaled(value - 0.5, 0.0, 1.0, top);
+                let expected = truncated(0.0 + (value - 0.5) * 1.0 + 0.5, top);
+                assert_eq!(converted, expected, "value {value} top {top}");
+            }
+        }
+        // Wider than the u16 range: saturated as the cast did.
+        for value in [65_535.5, 70_000.0, 1e9, f64::INFINITY] {
+            assert_eq!(convert_scaled(value, 0.0, 1.0, 1_048_575.0), 65_535);
+        }
     }
 
     #[test]
