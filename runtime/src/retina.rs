@@ -94,14 +94,15 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
     // the order does not change it. A plain compare, not `f64::max`: a NaN never wins it
     // (and then shows in the sum), and it needs no NaN fix-up per element.
     let larger = |m: f64, v: f64| if v > m { v } else { m };
+    // Fours as arrays (`as_chunks`): a pointer step each, where `chunks_exact` splits a slice.
+    let (fours, rest) = y.as_chunks::<4>();
     let mut lanes = [0.0f64; 4];
-    let mut chunks = y.chunks_exact(4);
-    for chunk in &mut chunks {
+    for chunk in fours {
         for (lane, &v) in lanes.iter_mut().zip(chunk) {
             *lane = larger(*lane, v.abs());
         }
     }
-    let peak = chunks.remainder().iter().fold(
+    let peak = rest.iter().fold(
         larger(larger(lanes[0], lanes[1]), larger(lanes[2], lanes[3])),
         |m, &v| larger(m, v.abs()),
     );
@@ -109,13 +110,12 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
         let inverse_peak = 1.0 / peak;
         // Four partial sums: a chain of 150 dependent additions would dominate the stage.
         let mut partial = [0.0f64; 4];
-        let mut chunks = y.chunks_exact(4);
-        for chunk in &mut chunks {
+        for chunk in fours {
             for (sum, &v) in partial.iter_mut().zip(chunk) {
                 *sum += v * inverse_peak;
             }
         }
-        let sum = chunks.remainder().iter().fold(
+        let sum = rest.iter().fold(
             (partial[0] + partial[1]) + (partial[2] + partial[3]),
             |s, &v| s + v * inverse_peak,
         );
