@@ -368,6 +368,70 @@ impl Controller for Regatta {
 mod tests {
     use super::*;
 
+    /// The block-skipping search finds the maxima the definition gives, pixel by pixel with the
+    /// float tests: every resolution, contrasts from none to more than the range, images of
+    /// every length, values crowding the thresholds.
+    #[test]
+    fn light_maxima_follow_the_definition_pixel_by_pixel() {
+        let reference = |odd: &[u16], bits: u32, contrast: f64| {
+            let zero = ((1u32 << bits) - 1) as f64 / 2.0;
+            let sign = |d: u16| {
+                let x = d as f64 - zero;
+                if x <= -contrast {
+                    -1
+                } else if x >= contrast {
+                    1
+                } else {
+                    0
+                }
+            };
+            let (mut maxima, mut last) = (Vec::new(), None);
+            for (i, &d) in odd.iter().enumerate() {
+                let s = sign(d);
+                if s == 0 {
+                    continue;
+                }
+                if let (1, Some((-1, j))) = (s, last) {
+                    maxima.push((j + 1 + i) as f64 / 2.0);
+                }
+                last = Some((s, i));
+            }
+            maxima
+        };
+        let mut state = 0x853c_49e6_748f_ea9bu64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for case in 0..20_000u32 {
+            let bits = 1 + case % 16;
+            let top = (1u32 << bits) - 1;
+            let contrast = [0.0, 0.5, 1.0, 2.5, 7.0, 40_000.0][(case / 16 % 6) as usize];
+            let len = (next() % 200) as usize;
+            let zero = top / 2;
+            let odd: Vec<u16> = (0..len)
+                .map(|_| {
+                    let r = next();
+                    let near = |k: u32| (zero + k).saturating_sub(4).min(top);
+                    let value = match r % 4 {
+                        0 => near((r >> 8) as u32 % 9),
+                        1 => (r >> 8) as u32 % (top + 1),
+                        2 => [0, top][(r >> 8) as usize % 2],
+                        _ => zero,
+                    };
+                    value as u16
+                })
+                .collect();
+            assert_eq!(
+                light_maxima(&odd, bits, contrast),
+                reference(&odd, bits, contrast),
+                "bits {bits} contrast {contrast} image {odd:?}"
+            );
+        }
+    }
+
     #[test]
     fn a_light_kept_abeam_too_long_is_left_for_the_farthest_on_the_other_side() {
         let centre = 75.0;
