@@ -343,7 +343,8 @@ impl Panoramic {
         let eye = DVec3::new(pose.x, floor_y + self.rig.height, pose.z);
         out.flat_views.clear();
         out.warped.clear();
-        luminance.clear();
+        // Every optics writes every pixel (the column renderer clears its regions' pixels
+        // itself): a buffer of the right length is not cleared first.
         luminance.resize(PIXELS, 0.0);
         match self.rig.optics {
             Optics::Exact => renderer.integrate_of(

@@ -94,14 +94,15 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
     // the order does not change it. A plain compare, not `f64::max`: a NaN never wins it
     // (and then shows in the sum), and it needs no NaN fix-up per element.
     let larger = |m: f64, v: f64| if v > m { v } else { m };
+    // Fours as arrays (`as_chunks`): a pointer step each, where `chunks_exact` splits a slice.
+    let (fours, rest) = y.as_chunks::<4>();
     let mut lanes = [0.0f64; 4];
-    let mut chunks = y.chunks_exact(4);
-    for chunk in &mut chunks {
+    for chunk in fours {
         for (lane, &v) in lanes.iter_mut().zip(chunk) {
             *lane = larger(*lane, v.abs());
         }
     }
-    let peak = chunks.remainder().iter().fold(
+    let peak = rest.iter().fold(
         larger(larger(lanes[0], lanes[1]), larger(lanes[2], lanes[3])),
         |m, &v| larger(m, v.abs()),
     );
@@ -109,13 +110,12 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
         let inverse_peak = 1.0 / peak;
         // Four partial sums: a chain of 150 dependent additions would dominate the stage.
         let mut partial = [0.0f64; 4];
-        let mut chunks = y.chunks_exact(4);
-        for chunk in &mut chunks {
+        for chunk in fours {
             for (sum, &v) in partial.iter_mut().zip(chunk) {
                 *sum += v * inverse_peak;
             }
         }
-        let sum = chunks.remainder().iter().fold(
+        let sum = rest.iter().fold(
             (partial[0] + partial[1]) + (partial[2] + partial[3]),
             |s, &v| s + v * inverse_peak,
         );
@@ -176,6 +176,9 @@ pub struct Chain {
     period: f64,
     /// Shared by the chain's copies (a filter's two chains, the turrets of a swarm).
     powers: std::sync::Arc<[f64]>,
+    /// `a^(n−i)` for i = 0…n − 1: the powers a left-going pass takes, in the order it writes
+    /// them, so that its loops run forward (in vector lanes, no reversal).
+    falling: std::sync::Arc<[f64]>,
 }
 
 /// Independent blocks a recursion is cut into, so that their dependency chains overlap.
@@ -185,16 +188,22 @@ impl Chain {
     pub fn new(lambda: f64, len: usize) -> Chain {
         let lambda = lambda.max(1e-12);
         let n = len as f64;
+        let powers: std::sync::Arc<[f64]> = (0..len + 2)
+            .map(|k| libm::exp(-(k as f64) / lambda))
+            .collect::<Vec<f64>>()
+            .into();
         Chain {
             len,
             a: libm::exp(-1.0 / lambda),
             one_minus_a: -libm::expm1(-1.0 / lambda),
             a_n: libm::exp(-n / lambda),
             period: -libm::expm1(-2.0 * n / lambda),
-            powers: (0..len + 2)
-                .map(|k| libm::exp(-(k as f64) / lambda))
+            falling: (1..=len)
+                .rev()
+                .map(|k| powers[k])
                 .collect::<Vec<f64>>()
                 .into(),
+            powers,
         }
     }
 
@@ -261,8 +270,8 @@ impl Chain {
             right.copy_from_slice(x);
             self.recursion::<false>(right);
         } else {
-            // Both directions in one sweep, each in blocks as in `recursion` and with the same
-            // arithmetic per element: eight dependency chains in flight instead of four.
+            // Both directions, each in blocks as in `recursion` and with the same arithmetic
+            // per element.
             let (a, c) = (self.a, self.one_minus_a);
             let block = n.div_ceil(BLOCKS);
             let lengths: [usize; BLOCKS] =
@@ -292,10 +301,16 @@ impl Chain {
                         let (skip_y, skip_l) = ($y.len() - $len, $l.len() - $len);
                         let ($y, $l) = (&$y[skip_y..], &mut $l[skip_l..]);
                     )+
+                    // One direction at a time: four chains in flight each, with few enough
+                    // pointers to stay in registers (both at once spill on every element).
                     for i in $range {
                         $(
                             forward[$k] = a * forward[$k] + c * $x[i];
                             $r[i] = forward[$k];
+                        )+
+                    }
+                    for i in $range {
+                        $(
                             let j = $len - 1 - i;
                             backward[$k] = a * backward[$k] + c * $y[j];
                             $l[j] = backward[$k];
@@ -349,7 +364,9 @@ impl Chain {
                 }
                 let carry = left[n - k * block];
                 let end = n - k * block;
-                for (l, power) in left[end - lengths[k]..end].iter_mut().rev().zip(carried) {
+                // left[end − 1 − i] takes a^(i+1): a^(len_k − j) at end − len_k + j.
+                let carried = &self.falling[self.len - lengths[k]..];
+                for (l, power) in left[end - lengths[k]..end].iter_mut().zip(carried) {
                     *l += power * carry;
                 }
             }
@@ -387,8 +404,8 @@ impl Chain {
     pub fn odd(&self, x: &[f64], out: &mut [f64]) {
         self.with_passes(x, out, |out, left, (right_start, left_start)| {
             // a^(i+1) rising for the right-going pass, a^(n−i) falling for the left-going one.
-            let ramp = &self.powers[1..=out.len()];
-            let weights = ramp.iter().zip(ramp.iter().rev());
+            let n = out.len();
+            let weights = self.powers[1..=n].iter().zip(&self.falling[self.len - n..]);
             for ((o, l), (up, down)) in out.iter_mut().zip(left).zip(weights) {
                 let right_going = *o + up * right_start;
                 let left_going = *l + down * left_start;
@@ -412,9 +429,16 @@ impl Chain {
         }
         debug_assert_eq!(n, self.len, "a chain filters images of its own length");
         let (x, out) = (&x[..n], &mut out[..n]);
-        with_scratch(n, |left| {
-            let starts = self.zero_state_passes(x, out, left);
-            finish(out, left, starts);
+        LEFT_GOING.with(|cell| {
+            // Every element of the left-going pass is written before it is read: the buffer
+            // is kept from image to image, not zeroed.
+            let mut left = cell.take();
+            if left.len() < n {
+                left.resize(n, 0.0);
+            }
+            let starts = self.zero_state_passes(x, out, &mut left[..n]);
+            finish(out, &left[..n], starts);
+            cell.set(left);
         });
         Some(out)
     }
@@ -433,6 +457,11 @@ pub fn highpass(x: &[f64], lambda: f64, out: &mut [f64]) {
         chains: (chain.clone(), chain),
     }
     .apply(x, out);
+}
+
+thread_local! {
+    /// The left-going pass of [`Chain::with_passes`], one buffer per thread.
+    static LEFT_GOING: std::cell::Cell<Vec<f64>> = const { std::cell::Cell::new(Vec::new()) };
 }
 
 /// Runs `f` with a scratch slice of `n` zeros: on the stack up to 256, else on the heap.
@@ -645,9 +674,18 @@ pub fn convert(filtered: f64, i_bda: f64, bits: u32) -> u16 {
 #[inline]
 pub fn convert_scaled(filtered: f64, half: f64, gain: f64, top: f64) -> u16 {
     let value = half + filtered * gain + 0.5;
-    // Clamped to [0, top], then `as` truncates (floor on (0, top)). `max` returns 0 for NaN,
-    // which therefore reads 0. No branch, so a row of pixels converts in vector lanes.
-    value.max(0.0).min(top) as u16
+    // Clamped to [0, top] (and to the u16 range) by plain compares: NaN fails the first and
+    // reads 0.
+    let ceiling = if top < 65535.0 { top } else { 65535.0 };
+    let clamped = if value > 0.0 { value } else { 0.0 };
+    let clamped = if clamped < ceiling { clamped } else { ceiling };
+    // Then floored without the saturating conversion's fix-ups, so that a row of pixels
+    // converts in vector lanes: adding 2⁵² rounds to the nearest integer, which lands in the
+    // low bits, one less where that rounded up. Exact for 0 ≤ x < 2⁵².
+    const SHIFT: f64 = 4503599627370496.0;
+    let shifted = clamped + SHIFT;
+    let rounded_up = shifted - SHIFT > clamped;
+    (shifted.to_bits() - rounded_up as u64) as u16
 }
 
 #[cfg(test)]
@@ -672,6 +710,50 @@ mod tests {
         ));
         assert_eq!(analog, [0.0; 4]);
         assert!(!normalize(&[0.0; 4], &mut analog));
+    }
+
+    /// The converter floors exactly as clamping and truncating does, at every kind of value:
+    /// integers, halves, a hair either side, the ends of the range, beyond, and not finite.
+    #[test]
+    fn conversion_floors_as_truncation_does() {
+        let truncated = |value: f64, top: f64| value.max(0.0).min(top) as u16;
+        let mut values = vec![
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            -0.0,
+            0.0,
+            f64::MIN_POSITIVE,
+            1e300,
+            -1e300,
+        ];
+        for k in -3..70_000 {
+            let k = k as f64;
+            for x in [k, k + 0.5, k + 0.25, k + 0.75] {
+                values.extend([x, x.next_up(), x.next_down()]);
+            }
+        }
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..100_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            values.push((state >> 11) as f64 / (1u64 << 53) as f64 * 140_000.0 - 70_000.0);
+        }
+        for bits in [1u32, 6, 8, 12, 16] {
+            let top = ((1u32 << bits) - 1) as f64;
+            for &value in &values {
+                // half + 0·gain + 0.5 is value itself when half = value − 0.5 is exact; test
+                // the clamp and floor through gain 1 instead: half = 0.
+                let converted = convert_scaled(value - 0.5, 0.0, 1.0, top);
+                let expected = truncated(0.0 + (value - 0.5) * 1.0 + 0.5, top);
+                assert_eq!(converted, expected, "value {value} top {top}");
+            }
+        }
+        // Wider than the u16 range: saturated as the cast did.
+        for value in [65_535.5, 70_000.0, 1e9, f64::INFINITY] {
+            assert_eq!(convert_scaled(value, 0.0, 1.0, 1_048_575.0), 65_535);
+        }
     }
 
     #[test]

@@ -76,17 +76,39 @@ impl Raster<'_> {
             return;
         }
         self.out[last - 1] += partial(last - 1);
-        // Each centre from its index (one signed conversion, exact): a running `center += 1`
-        // would chain every pixel's add behind the last one's. A 32-bit index, because packed
-        // i32 → f64 conversion exists on every x86-64 and i64 → f64 does not: the loop then
-        // runs in vector lanes. Strips are far shorter than 2³¹ pixels.
-        let base = (first + 1) as i32;
-        for (k, out) in self.out[first + 1..last - 1].iter_mut().enumerate() {
-            let center = (base + k as i32) as f64 + 0.5;
-            *out += value + slope_u * (u1 - center);
+        // Each centre read from a table (the same exact value as `i + 0.5`): no conversion
+        // per pixel, and a running `center += 1` would chain every pixel's add behind the last
+        // one's. Longer strips than the table convert the index (32-bit: packed i32 → f64
+        // conversion exists on every x86-64, i64 → f64 does not; strips are far shorter than
+        // 2³¹ pixels).
+        let whole = &mut self.out[first + 1..last - 1];
+        match PIXEL_MIDDLES.get(first + 1..last - 1) {
+            Some(middles) => {
+                for (out, &center) in whole.iter_mut().zip(middles) {
+                    *out += value + slope_u * (u1 - center);
+                }
+            }
+            None => {
+                let base = (first + 1) as i32;
+                for (k, out) in whole.iter_mut().enumerate() {
+                    let center = (base + k as i32) as f64 + 0.5;
+                    *out += value + slope_u * (u1 - center);
+                }
+            }
         }
     }
 }
+
+/// `i + 0.5`, the centre of pixel `i` in pixel units, for strips of up to 256 pixels.
+static PIXEL_MIDDLES: [f64; 256] = {
+    let mut middles = [0.0; 256];
+    let mut i = 0;
+    while i < middles.len() {
+        middles[i] = i as f64 + 0.5;
+        i += 1;
+    }
+    middles
+};
 
 /// Odd polynomial atan for |t| ≲ 0.2 (exact to ~1e-10 within the retina's band); plain
 /// `libm::atan` beyond.

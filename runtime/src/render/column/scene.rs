@@ -14,7 +14,7 @@ use super::footprint::{corner_hiders, upright_of, Hider, Upright};
 use super::shading::{FastShade, Shades};
 use crate::compile::graph::{Owner, RenderGraph};
 use crate::compile::plan::Plan;
-use crate::geometry::Footprint;
+use crate::geometry::{Footprint, Frame};
 
 /// The upright objects of a graph. Immutable once built, so every viewer of a step can render
 /// from it at once; each thread keeps its own working buffers ([`Workspace`]).
@@ -207,13 +207,24 @@ impl<'g> ColumnScene<'g> {
                 .part_robot
                 .extend(self.robot_parts.iter().map(|&(_, robot)| robot));
         }
+        // A robot's parts come together: its frame (a sine and a cosine) is made once for
+        // them all.
+        let mut robot_frame: Option<(usize, Frame)> = None;
         for &(index, robot) in &self.robot_parts {
             let (mut other, mut own) = (None, None);
             if robot < poses.poses.len() {
                 let primitive = &self.graph.primitives[index];
                 let own_wanted = self.own_visible[index];
                 if self.visible[index] || own_wanted {
-                    let placed = poses.frame(robot).then(&primitive.frame);
+                    let pose = match robot_frame {
+                        Some((of, pose)) if of == robot => pose,
+                        _ => {
+                            let pose = poses.frame(robot);
+                            robot_frame = Some((robot, pose));
+                            pose
+                        }
+                    };
+                    let placed = pose.then(&primitive.frame);
                     let upright = upright_of(self.graph, index, &placed);
                     other = upright.filter(|_| self.visible[index]);
                     own = upright.filter(|_| own_wanted);
