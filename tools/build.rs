@@ -7,8 +7,8 @@
 //! instruction, and so every result, is the same.
 //!
 //! The flag is lld's (and mold's), not GNU ld's: it is passed only where Rust links with lld
-//! by default (x86_64 Linux, Rust 1.90 and later) and no other linker is configured.
-//! `REGATTA_CODE_ORDER=0` turns it off.
+//! by default (x86_64 Linux, Rust 1.90 and later), no other linker is configured and the
+//! user's rustflags pass no link options of their own. `REGATTA_CODE_ORDER=0` turns it off.
 
 use std::path::Path;
 use std::process::Command;
