@@ -16,7 +16,8 @@
 
 use glam::{DVec2, DVec3};
 
-use super::photodiode::total_key;
+use super::order::{sort_by_buckets, Buckets};
+use super::photodiode::{from_total_key, total_key};
 
 /// Impostors are at most this many photodiode windows wide: wider objects would show their
 /// shading's variation across them, and are drawn exactly.
@@ -122,8 +123,11 @@ impl Occlusion {
     /// Records an object covering `[lo, hi]` up to `top`, in the bins it covers whole.
     fn cover(&mut self, lo: f64, hi: f64, top: f64) {
         let (u0, u1) = (Self::position(lo), Self::position(hi));
-        let first = (u0.max(0.0).ceil() as usize).min(BINS);
-        let end = (u1.max(0.0).floor() as usize).min(BINS);
+        // Truncation floors a non-negative number; `ceil` and `floor` would be libm calls.
+        let (u0, u1) = (u0.max(0.0), u1.max(0.0));
+        let below = u0 as usize;
+        let first = (below + usize::from((below as f64) < u0)).min(BINS);
+        let end = (u1 as usize).min(BINS);
         if first < end {
             self.written = if self.written.is_empty() {
                 first..end
@@ -148,7 +152,7 @@ pub(super) fn settle(
     impostors: &mut [Impostor],
     standing: &[Standing],
     occlusion: &mut Occlusion,
-    order: &mut Vec<u64>,
+    (order, buckets): (&mut Vec<u64>, &mut Buckets<u64>),
 ) {
     if impostors.is_empty() {
         return;
@@ -179,7 +183,10 @@ pub(super) fn settle(
             .enumerate()
             .map(|(index, i)| ((i.distance as f32).to_bits() as u64) << 32 | index as u64),
     );
-    order.sort_unstable();
+    // Distances are positive: their bits order them.
+    sort_by_buckets(order, buckets, |key| {
+        f64::from(f32::from_bits((key >> 32) as u32))
+    });
     for &key in order.iter() {
         let impostor = &mut impostors[key as u32 as usize];
         let width = impostor.hi - impostor.lo;
@@ -330,7 +337,11 @@ fn atan2(y: f64, x: f64) -> f64 {
 
 /// The visible impostors in the order they are drawn: by the centre of their interval,
 /// ties by index.
-pub(super) fn by_centre(impostors: &[Impostor], keys: &mut Vec<u128>, order: &mut Vec<u32>) {
+pub(super) fn by_centre(
+    impostors: &[Impostor],
+    (keys, buckets): (&mut Vec<u128>, &mut Buckets<u128>),
+    order: &mut Vec<u32>,
+) {
     // Each centre's place in the order of numbers, the index below it breaking ties: one
     // integer compares both.
     keys.clear();
@@ -343,7 +354,7 @@ pub(super) fn by_centre(impostors: &[Impostor], keys: &mut Vec<u128>, order: &mu
                 (total_key(0.5 * (impostor.lo + impostor.hi)) as u128) << 32 | index as u128
             }),
     );
-    keys.sort_unstable();
+    sort_by_buckets(keys, buckets, |key| from_total_key((key >> 32) as u64));
     order.clear();
     order.extend(keys.iter().map(|&key| key as u32));
 }
@@ -452,7 +463,12 @@ mod tests {
             impostor(-0.5, -0.49, 5.0),
         ];
         let (mut occlusion, mut order) = (Occlusion::default(), Vec::new());
-        settle(&mut impostors, &[], &mut occlusion, &mut order);
+        settle(
+            &mut impostors,
+            &[],
+            &mut occlusion,
+            (&mut order, &mut Buckets::default()),
+        );
         let whole = |v: f64| (v - 1.0).abs() < 1e-9;
         assert!(whole(impostors[1].visible), "nearest shows whole");
         assert!(whole(impostors[3].visible), "alone shows whole");
@@ -478,13 +494,23 @@ mod tests {
             tall
         }];
         let (mut occlusion, mut order) = (Occlusion::default(), Vec::new());
-        settle(&mut impostors, &standing, &mut occlusion, &mut order);
+        settle(
+            &mut impostors,
+            &standing,
+            &mut occlusion,
+            (&mut order, &mut Buckets::default()),
+        );
         let whole = |v: f64| (v - 1.0).abs() < 1e-9;
         assert_eq!(impostors[0].visible, 0.0);
         assert!(whole(impostors[1].visible), "{}", impostors[1].visible);
         // A new look starts with nothing covered.
         let mut alone = [impostor(-0.01, 0.01, 2.0)];
-        settle(&mut alone, &[], &mut occlusion, &mut order);
+        settle(
+            &mut alone,
+            &[],
+            &mut occlusion,
+            (&mut order, &mut Buckets::default()),
+        );
         assert!(whole(alone[0].visible));
     }
 }

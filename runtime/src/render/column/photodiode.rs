@@ -171,6 +171,16 @@ pub(super) fn total_key(x: f64) -> u64 {
     }
 }
 
+/// The number whose [`total_key`] is `key`.
+#[inline(always)]
+pub(super) fn from_total_key(key: u64) -> f64 {
+    if key >> 63 == 1 {
+        f64::from_bits(key & !(1 << 63))
+    } else {
+        f64::from_bits(!key)
+    }
+}
+
 /// The larger of two numbers, by one compare: `f64::max` also settles NaN, at a cost on the
 /// hot paths, and none arises there (finite geometry; a NaN here picks `b`).
 #[inline(always)]

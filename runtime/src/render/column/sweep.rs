@@ -9,7 +9,8 @@ use super::crowd::CrowdGrid;
 use super::footprint::Relative;
 use super::footprint::{azimuth_interval, corner_of, wrap, Interval, PendingEdge, Upright};
 use super::impostor::{self, Impostor, Occlusion, Standing};
-use super::photodiode::{rotate_small, total_key};
+use super::order::Buckets;
+use super::photodiode::{from_total_key, rotate_small, total_key};
 use super::scene::{ColumnFrame, ColumnScene};
 use super::strip::Strip;
 use crate::geometry::Footprint;
@@ -86,6 +87,8 @@ pub struct Look {
     /// Scratch for ordering impostors.
     impostor_keys: Vec<u64>,
     centre_keys: Vec<u128>,
+    distance_buckets: Buckets<u64>,
+    centre_buckets: Buckets<u128>,
     pub(super) impostor_order: Vec<u32>,
 }
 
@@ -210,16 +213,6 @@ fn sort_small(values: &mut [f64]) {
             j -= 1;
         }
         values[j] = value;
-    }
-}
-
-/// The number whose [`total_key`] is `key`.
-#[inline(always)]
-fn from_total_key(key: u64) -> f64 {
-    if key >> 63 == 1 {
-        f64::from_bits(key & !(1 << 63))
-    } else {
-        f64::from_bits(!key)
     }
 }
 
@@ -740,11 +733,11 @@ impl ColumnScene<'_> {
             &mut look.impostors,
             &look.standing,
             &mut look.occlusion,
-            &mut look.impostor_keys,
+            (&mut look.impostor_keys, &mut look.distance_buckets),
         );
         impostor::by_centre(
             &look.impostors,
-            &mut look.centre_keys,
+            (&mut look.centre_keys, &mut look.centre_buckets),
             &mut look.impostor_order,
         );
         let breaks = &mut look.breaks;
