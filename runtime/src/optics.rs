@@ -356,6 +356,7 @@ impl Panoramic {
                     samples: self.rig.samples,
                     stride: self.rig.stride,
                     crowd_distance: self.rig.crowd_distance,
+                    far_distance: self.rig.far_distance,
                 },
                 luminance,
             ),

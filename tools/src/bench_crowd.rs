@@ -30,6 +30,10 @@ pub struct Args {
     /// Crowd distances to measure (m).
     #[arg(long, value_delimiter = ',', default_values_t = [0.25f64, 0.5, 1.0])]
     distances: Vec<f64>,
+    /// Far distances (m): each crowd distance is measured without one and with each of these
+    /// (`crowdFarDistance`: buoys farther are left out, not drawn as impostors).
+    #[arg(long, value_delimiter = ',')]
+    far_distances: Vec<f64>,
     /// Robots whose retina is compared per frame (spread evenly over the swarm).
     #[arg(long, default_value_t = 40)]
     viewers: usize,
@@ -49,6 +53,10 @@ pub struct Args {
     /// the regatta controller, exact against each crowd distance, over `--seeds` seeds.
     #[arg(long, value_name = "ROBOTS")]
     behaviour: Option<usize>,
+    /// The behaviour comparison's reference: this crowd distance (m), no far distance,
+    /// instead of exact (which a thousand robots cannot run for a minute in reasonable time).
+    #[arg(long, value_name = "METRES")]
+    behaviour_reference: Option<f64>,
     /// Seeds (placements and noise) of the behaviour comparison.
     #[arg(long, default_value_t = 5)]
     seeds: u64,
@@ -63,11 +71,34 @@ pub struct Args {
     format: crate::plot::FigureFormat,
 }
 
-/// One swarm size at one crowd distance.
+/// A level of detail: `None`, the reference (every robot and buoy drawn exactly); else the
+/// crowd distance and the far distance (`None`: impostors however far).
+type Setting = Option<(f64, Option<f64>)>;
+
+/// The settings measured: the reference, then each crowd distance without a far distance
+/// and with each far distance.
+fn settings(args: &Args) -> Vec<Setting> {
+    let mut out = vec![None];
+    for &d in &args.distances {
+        out.push(Some((d, None)));
+        out.extend(args.far_distances.iter().map(|&f| Some((d, Some(f)))));
+    }
+    out
+}
+
+/// How a setting reads in the table.
+fn label(setting: Setting) -> String {
+    match setting {
+        None => "exact".to_owned(),
+        Some((d, None)) => format!("{d} m"),
+        Some((d, Some(f))) => format!("{d} m, far {f} m"),
+    }
+}
+
+/// One swarm size at one setting.
 struct Row {
     robots: usize,
-    /// `None`: the reference (every robot drawn).
-    distance: Option<f64>,
+    distance: Setting,
     micros_per_retina: f64,
     outputs: usize,
     lsb_mean: f64,
@@ -88,6 +119,14 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     {
         bail!("--distances: {bad} is not a distance above 0 m");
     }
+    if let Some(bad) = args
+        .far_distances
+        .iter()
+        .chain(&args.behaviour_reference)
+        .find(|d| !(d.is_finite() && **d > 0.0))
+    {
+        bail!("--far-distances, --behaviour-reference: {bad} is not a distance above 0 m");
+    }
     if args.viewers == 0 || args.frames == 0 {
         bail!("--viewers and --frames must be at least 1");
     }
@@ -99,7 +138,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         args.seed, args.frames, args.spacing, args.viewers, args.repeats.max(1)
     );
     println!(
-        "{:>6} {:>10} {:>12} {:>16} {:>10} {:>10} {:>8} {:>12} {:>12}",
+        "{:>6} {:>18} {:>12} {:>16} {:>10} {:>10} {:>8} {:>12} {:>12}",
         "robots",
         "distance",
         "µs/retina",
@@ -114,10 +153,9 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     for &robots in &args.robots {
         for row in measure(robots, &args)? {
             println!(
-                "{:>6} {:>10} {:>12.2} {:>16.3} {:>10.4} {:>10.3} {:>8} {:>12.2e} {:>12.2e}",
+                "{:>6} {:>18} {:>12.2} {:>16.3} {:>10.4} {:>10.3} {:>8} {:>12.2e} {:>12.2e}",
                 row.robots,
-                row.distance
-                    .map_or("exact".to_owned(), |d| format!("{d} m")),
+                label(row.distance),
                 row.micros_per_retina,
                 row.micros_per_retina * robots as f64 / 1000.0,
                 row.lsb_mean,
@@ -129,13 +167,17 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             rows.push(row);
         }
     }
-    let mut csv = String::from("robots,crowd_distance_m,micros_per_retina,outputs_compared,digital_lsb_error_mean,share_beyond_1_lsb,digital_lsb_error_max,analog_rel_error_mean,analog_rel_error_max\n");
+    let mut csv = String::from("robots,crowd_distance_m,far_distance_m,micros_per_retina,outputs_compared,digital_lsb_error_mean,share_beyond_1_lsb,digital_lsb_error_max,analog_rel_error_mean,analog_rel_error_max\n");
     for row in &rows {
         let _ = writeln!(
             csv,
-            "{},{},{:.3},{},{:.6},{:.6},{},{:.6e},{:.6e}",
+            "{},{},{},{:.3},{},{:.6},{:.6},{},{:.6e},{:.6e}",
             row.robots,
-            row.distance.map_or("exact".to_owned(), |d| d.to_string()),
+            row.distance
+                .map_or("exact".to_owned(), |(d, _)| d.to_string()),
+            row.distance
+                .and_then(|(_, f)| f)
+                .map_or(String::new(), |f| f.to_string()),
             row.micros_per_retina,
             row.outputs,
             row.lsb_mean,
@@ -166,6 +208,7 @@ fn frames(robots: usize, args: &Args) -> anyhow::Result<Vec<Poses>> {
         ir_only: true,
         seed: args.seed,
         crowd_distance: None,
+        far_distance: None,
     };
     let compiled = compile_text("swarm-ir.wbt", swarm_world(&spec))?;
     let mut simulation = Simulation::new(&compiled, Some(args.seed))?;
@@ -190,6 +233,7 @@ fn measure(robots: usize, args: &Args) -> anyhow::Result<Vec<Row>> {
         ir_only: false,
         seed: args.seed,
         crowd_distance: None,
+        far_distance: None,
     };
     let compiled = compile_text("swarm.wbt", swarm_world(&spec))?;
     let frames = frames(robots, args)?;
@@ -200,9 +244,7 @@ fn measure(robots: usize, args: &Args) -> anyhow::Result<Vec<Row>> {
         picked
     };
     let renderer = Renderer::new(&compiled.graph, &compiled.plan, false);
-    let settings: Vec<Option<f64>> = std::iter::once(None)
-        .chain(args.distances.iter().map(|&d| Some(d)))
-        .collect();
+    let settings = settings(args);
     // outputs[setting][frame × viewer]
     let mut outputs: Vec<Vec<RetinaOutput>> = vec![Vec::new(); settings.len()];
     let mut seconds = vec![0.0f64; settings.len()];
@@ -218,7 +260,8 @@ fn measure(robots: usize, args: &Args) -> anyhow::Result<Vec<Row>> {
             let floor = compiled.rig.robots[viewer].floor_y;
             for (slot, setting) in settings.iter().enumerate() {
                 let mut rig = turret.clone();
-                rig.crowd_distance = setting.unwrap_or(f64::INFINITY);
+                rig.crowd_distance = setting.map_or(f64::INFINITY, |(d, _)| d);
+                rig.far_distance = setting.and_then(|(_, f)| f).unwrap_or(f64::INFINITY);
                 let mut retina = Panoramic::new(&rig);
                 let mut out = RetinaOutput::default();
                 let view = ViewOf::Columns(&frame, Some(viewer));
@@ -294,18 +337,27 @@ fn compare(results: &[RetinaOutput], reference: &[RetinaOutput]) -> Errors {
     }
 }
 
-/// Buoy visits per robot per minute, exact against each crowd distance, over seeds.
+/// Buoy visits per robot per minute, the reference (exact, or `--behaviour-reference`)
+/// against each setting, over seeds.
 fn behaviour(robots: usize, args: &Args) -> anyhow::Result<()> {
     println!(
         "behaviour: {robots} robots, regatta controller, {} s, seeds 1…{}",
         args.seconds, args.seeds
     );
+    let reference: Setting = args.behaviour_reference.map(|d| (d, None));
+    let mut compared = vec![reference];
+    compared.extend(
+        settings(args)
+            .into_iter()
+            .skip(1)
+            .filter(|&s| s != reference),
+    );
     println!(
-        "{:>10} {:>28} {:>12}",
+        "{:>18} {:>28} {:>12}",
         "distance", "visits/robot/min per seed", "mean"
     );
-    let mut exact_mean = None;
-    for setting in std::iter::once(None).chain(args.distances.iter().map(|&d| Some(d))) {
+    let mut reference_mean = None;
+    for setting in compared {
         let mut rates = Vec::new();
         for seed in 1..=args.seeds {
             let spec = SwarmSpec {
@@ -313,7 +365,8 @@ fn behaviour(robots: usize, args: &Args) -> anyhow::Result<()> {
                 buoys: None,
                 ir_only: false,
                 seed,
-                crowd_distance: setting,
+                crowd_distance: setting.map(|(d, _)| d),
+                far_distance: setting.and_then(|(_, f)| f),
             };
             let compiled: Compiled = compile_text("swarm.wbt", swarm_world(&spec))?;
             let mut simulation = Simulation::new(&compiled, Some(seed))?;
@@ -327,15 +380,19 @@ fn behaviour(robots: usize, args: &Args) -> anyhow::Result<()> {
             rates.push(visits as f64 / robots as f64 / (simulation.time / 60.0));
         }
         let mean = rates.iter().sum::<f64>() / rates.len().max(1) as f64;
-        let relative = exact_mean.map_or(String::new(), |e: f64| {
-            format!(" ({:+.1} % of exact)", 100.0 * (mean - e) / e.max(1e-12))
+        let relative = reference_mean.map_or(String::new(), |e: f64| {
+            format!(
+                " ({:+.1} % of {})",
+                100.0 * (mean - e) / e.max(1e-12),
+                label(reference)
+            )
         });
-        if setting.is_none() {
-            exact_mean = Some(mean);
+        if reference_mean.is_none() {
+            reference_mean = Some(mean);
         }
         println!(
-            "{:>10} {:>28} {:>12.3}{relative}",
-            setting.map_or("exact".to_owned(), |d| format!("{d} m")),
+            "{:>18} {:>28} {:>12.3}{relative}",
+            label(setting),
             rates
                 .iter()
                 .map(|r| format!("{r:.2}"))
@@ -357,16 +414,34 @@ fn chart(rows: &[Row]) -> regatta_figures::Chart {
         Axis::log("mean digital error (LSB; exact drawn at 0.0001)"),
     )
     .legend(Corner::UpperRight);
-    let mut sizes: Vec<usize> = rows.iter().map(|r| r.robots).collect();
-    sizes.dedup();
-    for robots in sizes {
+    // One series per swarm size and far distance (the reference in each).
+    let far = |r: &Row| r.distance.and_then(|(_, f)| f);
+    let mut series: Vec<(usize, Option<f64>)> = Vec::new();
+    for row in rows.iter().filter(|r| r.distance.is_some()) {
+        let key = (row.robots, far(row));
+        if !series
+            .iter()
+            .any(|s| s.0 == key.0 && s.1.map(f64::to_bits) == key.1.map(f64::to_bits))
+        {
+            series.push(key);
+        }
+    }
+    for (robots, far_distance) in series {
         let mut points: Vec<(f64, f64)> = rows
             .iter()
-            .filter(|r| r.robots == robots)
+            .filter(|r| {
+                r.robots == robots
+                    && (r.distance.is_none()
+                        || far(r).map(f64::to_bits) == far_distance.map(f64::to_bits))
+            })
             .map(|r| (r.micros_per_retina, r.lsb_mean.max(floor)))
             .collect();
         points.sort_by(|a, b| a.0.total_cmp(&b.0));
-        chart = chart.with(Series::line_markers(format!("{robots} robots"), points));
+        let name = match far_distance {
+            None => format!("{robots} robots"),
+            Some(f) => format!("{robots} robots, far {f} m"),
+        };
+        chart = chart.with(Series::line_markers(name, points));
     }
     chart
 }

@@ -47,6 +47,11 @@ pub struct Args {
     /// than this are not drawn (its error: `regatta bench crowd`). 0 draws every robot (exact).
     #[arg(long, value_name = "METRES", default_value_t = 0.5)]
     crowd_distance: f64,
+    /// Swarms, with a crowd distance: the turrets' `crowdFarDistance` (m): buoys farther than
+    /// this are left out rather than drawn as impostors (its error: `regatta bench crowd
+    /// --far-distances`). 0: impostors however far.
+    #[arg(long, value_name = "METRES", default_value_t = 5.0)]
+    far_distance: f64,
     /// Swarms: seed of the placements.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -108,12 +113,19 @@ fn swarms(args: Args, threads: usize) -> anyhow::Result<Outcome> {
     if args.robots.contains(&0) {
         bail!("--robots: every size must be at least 1");
     }
+    if !(args.far_distance.is_finite() && args.far_distance >= 0.0) {
+        bail!(
+            "--far-distance: {} is not a distance of 0 m or more",
+            args.far_distance
+        );
+    }
     let spec = |robots: usize| SwarmSpec {
         robots,
         buoys: args.buoys,
         ir_only: args.ir_only,
         seed: args.seed,
         crowd_distance: (args.crowd_distance > 0.0).then_some(args.crowd_distance),
+        far_distance: (args.far_distance > 0.0).then_some(args.far_distance),
     };
     if let Some(directory) = &args.write_worlds {
         std::fs::create_dir_all(directory)
@@ -188,7 +200,10 @@ fn swarms(args: Args, threads: usize) -> anyhow::Result<Outcome> {
         &rows,
         threads,
         args.ir_only,
-        (args.crowd_distance > 0.0).then_some(args.crowd_distance),
+        (
+            (args.crowd_distance > 0.0).then_some(args.crowd_distance),
+            (args.far_distance > 0.0).then_some(args.far_distance),
+        ),
     );
     if let Some((slope, from, to)) = crate::bench_swarm::fitted_exponent(&rows) {
         println!("fitted exponent {from}→{to}: cost per step ∝ N^{slope:.2}");

@@ -35,6 +35,8 @@ pub struct SwarmSpec {
     pub seed: u64,
     /// The turrets' `crowdDistance` (m); `None`: exact, every robot drawn.
     pub crowd_distance: Option<f64>,
+    /// The turrets' `crowdFarDistance` (m); `None`: impostors however far.
+    pub far_distance: Option<f64>,
 }
 
 impl SwarmSpec {
@@ -153,6 +155,9 @@ pub fn swarm_world(spec: &SwarmSpec) -> String {
                 "\n  turret PanoramicTurret {{\n    optics \"exact\"{}\n    filters [\n      \"odd\"\n    ]\n    lambda 5\n  }}",
                 spec.crowd_distance
                     .map_or(String::new(), |d| format!("\n    crowdDistance {d}"))
+                    + &spec
+                        .far_distance
+                        .map_or(String::new(), |d| format!("\n    crowdFarDistance {d}"))
             ),
         )
     };
@@ -305,7 +310,12 @@ pub fn fitted_exponent(rows: &[Row]) -> Option<(f64, usize, usize)> {
 }
 
 /// The table's lines.
-pub fn print_table(rows: &[Row], threads: usize, ir_only: bool, crowd_distance: Option<f64>) {
+pub fn print_table(
+    rows: &[Row],
+    threads: usize,
+    ir_only: bool,
+    (crowd_distance, far_distance): (Option<f64>, Option<f64>),
+) {
     println!(
         "swarm step bench: {} thread(s), {}; 10 robots/m²",
         threads,
@@ -316,7 +326,8 @@ pub fn print_table(rows: &[Row], threads: usize, ir_only: bool, crowd_distance: 
                     .to_owned()
             }
             (false, Some(d)) => format!(
-                "Panoramic turrets (exact optics, other robots drawn within {d} m, far buoys as impostors, odd filter), regatta controller"
+                "Panoramic turrets (exact optics, other robots drawn within {d} m, far buoys as impostors{}, odd filter), regatta controller",
+                far_distance.map_or(String::new(), |f| format!(" up to {f} m (left out beyond)"))
             ),
         }
     );
@@ -461,6 +472,7 @@ mod tests {
                 ir_only: robots == 37,
                 seed: 3,
                 crowd_distance: None,
+                far_distance: None,
             };
             let compiled = compile_text("swarm.wbt", swarm_world(&spec)).unwrap();
             assert_eq!(compiled.rig.robots.len(), robots);

@@ -329,9 +329,14 @@ fn robot_description(robot: &regatta_runtime::compile::rig::RobotRig) -> String 
                     (Optics::Exact, false) => "exact".to_owned(),
                     (Optics::Exact, true) => format!(
                         "exact (crowd level of detail: other robots drawn within {0}; buoys and other \
-                         small round static objects beyond {0} drawn as impostors; parts wholly \
+                         small round static objects beyond {0} drawn as impostors{1}; parts wholly \
                          outside the band and other robots' parts tucked under their body left out)",
-                        mm(p.crowd_distance)
+                        mm(p.crowd_distance),
+                        if p.far_distance.is_finite() {
+                            format!(", left out beyond {}", mm(p.far_distance))
+                        } else {
+                            String::new()
+                        }
                     ),
                 },
                 p.samples,

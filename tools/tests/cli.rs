@@ -401,8 +401,9 @@ fn bench_crowd_measures_error_against_every_robot_drawn() {
         .map(|l| l.split(',').collect())
         .collect();
     assert_eq!(rows.len(), 3, "{csv}");
-    // Columns: robots, distance, µs, outputs, LSB mean, share > 1, LSB max, analog mean, max.
-    let analog = |row: &[&str]| row[7].parse::<f64>().unwrap();
+    // Columns: robots, distance, far distance, µs, outputs, LSB mean, share > 1, LSB max,
+    // analog mean, max.
+    let analog = |row: &[&str]| row[8].parse::<f64>().unwrap();
     assert_eq!((rows[0][1], analog(&rows[0])), ("exact", 0.0), "{csv}");
     assert!(
         analog(&rows[1]) > 0.0,

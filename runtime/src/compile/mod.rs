@@ -890,6 +890,10 @@ impl Compiler<'_> {
                         d if d > 0.0 => d,
                         _ => f64::INFINITY,
                     },
+                    far_distance: match scene.float(node, "crowdFarDistance") {
+                        d if d > 0.0 => d,
+                        _ => f64::INFINITY,
+                    },
                     filters: filter_set(scene.strings(node, "filters")),
                     lambda: scene.float(node, "lambda"),
                     bandpass: (bandpass[0].min(bandpass[1]), bandpass[0].max(bandpass[1])),

@@ -174,6 +174,9 @@ pub struct PanoramicRig {
     pub stride: usize,
     /// Exact optics: other robots farther than this (m) are not drawn (infinite: all are).
     pub crowd_distance: f64,
+    /// Exact optics with a crowd distance: small static objects wholly farther than this (m)
+    /// are left out (infinite: none are).
+    pub far_distance: f64,
     pub filters: FilterSet,
     pub lambda: f64,
     pub bandpass: (f64, f64),

@@ -29,6 +29,9 @@ pub struct Detail {
     /// Other robots whose centre is farther than this from the eye (m) are left out: the
     /// crowd level of detail. Infinite: every robot (the reference). Columns only.
     pub crowd_distance: f64,
+    /// With a crowd distance: small static objects (buoys, their lamps) wholly farther than
+    /// this from the eye (m) are left out instead of drawn as impostors. Infinite: none are.
+    pub far_distance: f64,
 }
 
 impl Detail {
@@ -38,6 +41,7 @@ impl Detail {
             samples,
             stride,
             crowd_distance: f64::INFINITY,
+            far_distance: f64::INFINITY,
         }
     }
 }

@@ -210,18 +210,18 @@ pub(super) struct Viewpoint {
     cos_h: f64,
     sin_h: f64,
     crowd_distance: f64,
+    far_distance: f64,
     width: f64,
     reach_cos: f64,
 }
 
 impl Viewpoint {
-    /// For an eye at `eye` facing `heading`, with a strip over relative azimuths `extent`.
-    /// For an eye at `eye` facing the heading whose cosine and sine are `(cos_h, sin_h)`;
-    /// `reach_cos` from [`Viewpoint::reach_cos`].
+    /// For an eye at `eye` facing the heading whose cosine and sine are `(cos_h, sin_h)`, with
+    /// the crowd and far distances; `reach_cos` from [`Viewpoint::reach_cos`].
     pub(super) fn new(
         eye: DVec3,
         (cos_h, sin_h): (f64, f64),
-        crowd_distance: f64,
+        (crowd_distance, far_distance): (f64, f64),
         width: f64,
         reach_cos: f64,
     ) -> Viewpoint {
@@ -230,6 +230,7 @@ impl Viewpoint {
             cos_h,
             sin_h,
             crowd_distance,
+            far_distance,
             width,
             reach_cos,
         }
@@ -250,7 +251,8 @@ impl Viewpoint {
     /// A round footprint's azimuth interval (relative to the heading, in (−π, π] and not
     /// passing ±π) and distance from the eye, if it is an impostor's: farther than the crowd
     /// distance beyond its radius, at most the widest impostor wide. `Some` with an empty
-    /// interval (`lo > hi`) when it is one but lies behind the strip, or passes ±π. The
+    /// interval (`lo > hi`) when it is one but is left out: wholly beyond the far distance,
+    /// behind the strip, or passing ±π. The
     /// distance is tested first, so that near objects cost no square root; the interval
     /// comes from polynomials (within 2e-8 rad), as an impostor's place needs no more.
     #[inline]
@@ -278,10 +280,13 @@ impl Viewpoint {
         if 2.0 * half > self.width {
             return None;
         }
+        const BEHIND: Option<(f64, f64, f64)> = Some((1.0, 0.0, 0.0));
+        if distance - radius > self.far_distance {
+            return BEHIND;
+        }
         // Azimuth is anticlockwise from +x towards −z: the offset turned by −heading.
         let (u, v) = (offset.x, -offset.y);
         let along = u * self.cos_h + v * self.sin_h;
-        const BEHIND: Option<(f64, f64, f64)> = Some((1.0, 0.0, 0.0));
         if along < distance * self.reach_cos {
             return BEHIND;
         }
@@ -397,7 +402,8 @@ mod tests {
             let crowd = [0.25, 0.5, 1.0][case % 3];
             let heading_turn = (libm::cos(heading), libm::sin(heading));
             let reach_cos = Viewpoint::reach_cos(width, extent);
-            let viewpoint = Viewpoint::new(eye, heading_turn, crowd, width, reach_cos);
+            let viewpoint =
+                Viewpoint::new(eye, heading_turn, (crowd, f64::INFINITY), width, reach_cos);
             let center = DVec2::new(unit() * 10.0 - 5.0, unit() * 10.0 - 5.0);
             let radius = 0.005 + 0.03 * unit();
             let offset = center - DVec2::new(eye.x, eye.z);

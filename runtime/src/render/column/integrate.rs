@@ -165,6 +165,7 @@ impl ColumnScene<'_> {
         let reach = Reach {
             sector,
             crowd_distance: detail.crowd_distance,
+            far_distance: detail.far_distance,
             impostor_width: if impostors {
                 IMPOSTOR_PIXELS * strip.width
             } else {

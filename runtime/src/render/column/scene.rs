@@ -47,6 +47,10 @@ pub struct ColumnScene<'g> {
     pub(super) rounds: Vec<Round>,
     /// Per static object, 1 + the index in `rounds` of the group it starts; 0 for the others.
     pub(super) round_at: Vec<u32>,
+    /// The far distance's shortcut: the round groups binned by centre, so that a look with a
+    /// far distance tells only those it may reach; the static objects in no round group; the
+    /// round groups widest first (a wide one far away is drawn exactly, not left out).
+    pub(super) round_index: RoundIndex,
     /// Per entry of `robot_parts`, whether the part is tucked under its robot's body: within
     /// [`TUCK`] of the body's round footprint and no higher than it (a Khepera's wheels). The
     /// crowd level of detail leaves such parts of other robots out.
@@ -137,7 +141,9 @@ impl<'g> ColumnScene<'g> {
             cullable[hider.object as usize] = false;
         }
         let (rounds, round_at) = round_groups(&statics, &same_footprint, &cullable);
+        let round_index = RoundIndex::new(&rounds, statics.len());
         ColumnScene {
+            round_index,
             rounds,
             round_at,
             graph,
@@ -271,6 +277,50 @@ pub(super) struct Round {
     pub(super) y1: f64,
     pub(super) first: u32,
     pub(super) pieces: u32,
+}
+
+/// Where the round groups are, for a look with a far distance ([`ColumnScene::round_index`]).
+pub(super) struct RoundIndex {
+    /// Each group's centre, and the groups binned by it (1 m cells).
+    pub(super) centers: Vec<DVec2>,
+    pub(super) grid: CrowdGrid,
+    /// The static objects in no round group, ascending.
+    pub(super) loose: Vec<u32>,
+    /// The groups by radius, widest first (a radius that is not a number first).
+    pub(super) widest: Vec<u32>,
+    /// The groups whose centre is not finite: the grid cannot say where they are.
+    pub(super) unplaced: Vec<u32>,
+}
+
+impl RoundIndex {
+    fn new(rounds: &[Round], statics: usize) -> RoundIndex {
+        let centers: Vec<DVec2> = rounds.iter().map(|r| r.center).collect();
+        let mut grouped = vec![false; statics];
+        for round in rounds {
+            grouped[round.first as usize..(round.first + round.pieces) as usize].fill(true);
+        }
+        let mut widest: Vec<u32> = (0..rounds.len() as u32).collect();
+        let radius = |k: u32| {
+            let r = rounds[k as usize].radius;
+            if r.is_nan() {
+                f64::INFINITY
+            } else {
+                r
+            }
+        };
+        widest.sort_by(|&a, &b| radius(b).total_cmp(&radius(a)).then(a.cmp(&b)));
+        RoundIndex {
+            grid: CrowdGrid::new(&centers, 1.0),
+            centers,
+            loose: (0..statics as u32)
+                .filter(|&s| !grouped[s as usize])
+                .collect(),
+            widest,
+            unplaced: (0..rounds.len() as u32)
+                .filter(|&k| !rounds[k as usize].center.is_finite())
+                .collect(),
+        }
+    }
 }
 
 /// The round groups of `statics` (see [`ColumnScene::rounds`]), and per static object 1 + the

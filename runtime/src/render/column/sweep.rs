@@ -81,6 +81,8 @@ pub struct Look {
     occlusion: Occlusion,
     /// Per round group of the scene, whether this look made it an impostor or left it out.
     round_far: Vec<bool>,
+    /// With a far distance, the round groups this look tells (the others lie beyond it).
+    round_visit: Vec<u32>,
     /// The last strip's reach for impostors ([`impostor::Viewpoint::reach_cos`]), by the bits
     /// of its width and extent.
     reach_cos: ((u64, u64, u64), f64),
@@ -196,8 +198,14 @@ pub(super) fn eye_object(object: &Upright, eye: DVec3, lo: f64, hi: f64) -> EyeO
 }
 
 /// A closure over a frame's objects, typed so that it may keep references to them.
-fn typed<'f, F: FnMut(usize, &'f Upright) -> usize>(_frame: &'f ColumnFrame, f: F) -> F {
+fn typed<'f, F: FnMut(usize, &'f Upright, bool) -> usize>(_frame: &'f ColumnFrame, f: F) -> F {
     f
+}
+
+/// Whether a look keeps each static object's place among its objects: where some may be left
+/// out.
+fn keep_slots_for(reach: Reach) -> bool {
+    reach.sector.is_some() || reach.impostor_width > 0.0
 }
 
 /// Below this many objects (or edges), testing each is cheaper than keeping them in order.
@@ -352,6 +360,8 @@ pub(super) struct Reach {
     /// Static objects without hiders, round, farther than the crowd distance and at most this
     /// wide (radians) are drawn as impostors (0: none are).
     pub(super) impostor_width: f64,
+    /// Would-be impostors wholly farther than this are left out (infinite: none are).
+    pub(super) far_distance: f64,
     /// The strip's relative azimuths: impostors wholly outside are left out.
     pub(super) extent: (f64, f64),
     /// With a crowd distance, the band's half-height (tangent): robot parts and static
@@ -367,6 +377,7 @@ impl Reach {
         sector: None,
         crowd_distance: f64::INFINITY,
         impostor_width: 0.0,
+        far_distance: f64::INFINITY,
         extent: (f64::NEG_INFINITY, f64::INFINITY),
         out_of_band: f64::INFINITY,
     };
@@ -460,6 +471,43 @@ impl ColumnScene<'_> {
         look
     }
 
+    /// With a far distance, the round groups a look must tell, ascending, into `out`: every
+    /// other group lies wholly beyond the far distance and is narrow enough to be an impostor
+    /// there, which [`impostor::Viewpoint::far`] leaves out. `None`: tell every group.
+    fn reachable_rounds<'v>(
+        &self,
+        eye: DVec2,
+        reach: Reach,
+        out: &'v mut Vec<u32>,
+    ) -> Option<&'v [u32]> {
+        if !(reach.far_distance.is_finite() && reach.impostor_width > 0.0)
+            || self.rounds.len() <= FEW
+        {
+            return None;
+        }
+        let beyond = reach.far_distance.max(reach.crowd_distance);
+        // A group of radius at most `small` wholly beyond `beyond` subtends a ratio r/d below
+        // `q`: an impostor's (below 0.1, and its width below the impostor width), by a margin.
+        let q = (0.09f64).min(0.9 * libm::sin(0.5 * reach.impostor_width.min(1.0)));
+        let small = beyond * q / (1.0 - q);
+        let index = &self.round_index;
+        index
+            .grid
+            .within(&index.centers, eye, (beyond + small) * (1.0 + 1e-9), out);
+        let wide = index
+            .widest
+            .iter()
+            .take_while(|&&k| !(self.rounds[k as usize].radius <= small))
+            .chain(&index.unplaced);
+        let before = out.len();
+        out.extend(wide);
+        if out.len() > before {
+            out.sort_unstable();
+            out.dedup();
+        }
+        Some(out)
+    }
+
     /// [`ColumnScene::look`] into `look`, reusing its buffers, for `viewer`. With a sector,
     /// robot parts wholly outside it are left out (they could face no photodiode); with a
     /// crowd distance, other robots farther than it.
@@ -484,6 +532,7 @@ impl ColumnScene<'_> {
             impostors,
             standing,
             round_far,
+            round_visit,
             reach_cos,
             ..
         } = look;
@@ -491,15 +540,20 @@ impl ColumnScene<'_> {
         breaks.clear();
         edges.clear();
         static_slots.clear();
+        if keep_slots_for(reach) {
+            static_slots.resize(frame.statics.len(), 0);
+        }
         impostors.clear();
         standing.clear();
         let statics = frame.statics.len();
         let impostor_width = reach.impostor_width;
         // Where objects may be left out, each static object's place among `objects`.
-        let keep_slots = sector.is_some() || impostor_width > 0.0;
+        let keep_slots = keep_slots_for(reach);
         // Far small round static objects first, with their pieces: each an impostor, or left
-        // out beyond the strip. A tight loop over the scene's round groups.
+        // out beyond the strip or the far distance. A tight loop over the scene's round groups,
+        // or with a far distance over those it may reach.
         round_far.clear();
+        let mut limited = false;
         if impostor_width > 0.0 {
             let (first, last) = reach.extent;
             // The strip's reach, worked out once per strip and width.
@@ -517,11 +571,11 @@ impl ColumnScene<'_> {
             let viewpoint = impostor::Viewpoint::new(
                 eye,
                 (cos_h, sin_h),
-                reach.crowd_distance,
+                (reach.crowd_distance, reach.far_distance),
                 impostor_width,
                 reach_cos.1,
             );
-            round_far.extend(self.rounds.iter().map(|round| {
+            let mut tell = |round: &super::scene::Round| {
                 let Some((lo, hi, distance)) = viewpoint.far(round.center, round.radius) else {
                     return false;
                 };
@@ -539,7 +593,19 @@ impl ColumnScene<'_> {
                     });
                 }
                 true
-            }));
+            };
+            match self.reachable_rounds(eye2, reach, round_visit) {
+                Some(visit) => {
+                    // The groups not visited lie wholly beyond the far distance: left out. The
+                    // visited ones are told in group order, as the full loop would.
+                    limited = true;
+                    round_far.resize(self.rounds.len(), true);
+                    for &group in visit.iter() {
+                        round_far[group as usize] = tell(&self.rounds[group as usize]);
+                    }
+                }
+                None => round_far.extend(self.rounds.iter().map(tell)),
+            }
         }
         let round_far = &*round_far;
         // The previous object placed, its interval, and what became of it.
@@ -549,7 +615,10 @@ impl ColumnScene<'_> {
         // Each call places the object of order `order` (static objects first, robot parts
         // from `statics` on) and says how many static objects it took: a far buoy and its
         // lamp become one impostor at once.
-        let mut place = typed(frame, |order: usize, object| -> usize {
+        let mut place = typed(frame, |order: usize, object, fresh: bool| -> usize {
+            if fresh {
+                previous = None;
+            }
             let index = objects.len();
             // A far small round static object, with the pieces on its footprint, was made an
             // impostor (or left out beyond the strip) before: its pieces are passed over.
@@ -557,14 +626,14 @@ impl ColumnScene<'_> {
             if group > 0 && round_far.get(group - 1) == Some(&true) {
                 let pieces = self.rounds[group - 1].pieces as usize;
                 if keep_slots {
-                    static_slots.extend(std::iter::repeat_n(index as u32, pieces));
+                    static_slots[order..order + pieces].fill(index as u32);
                 }
                 previous = None;
                 return pieces;
             }
             // Static objects keep their order unless some may be left out.
             if order < statics && keep_slots {
-                static_slots.push(index as u32);
+                static_slots[order] = index as u32;
             }
             // A lamp on its buoy has the buoy's footprint: its interval is the buoy's.
             let shares_previous = |before: &Upright| match self.same_footprint.get(order) {
@@ -655,9 +724,37 @@ impl ColumnScene<'_> {
             objects.push(placed);
             1
         });
-        let mut order = 0;
-        while order < statics {
-            order += place(order, &frame.statics[order]);
+        if limited {
+            // The static objects in no round group and the visited groups, in static order.
+            let (loose, visit) = (&self.round_index.loose, &*round_visit);
+            let (mut l, mut g, mut next) = (0, 0, 0);
+            loop {
+                let loose_first = match (loose.get(l), visit.get(g)) {
+                    (Some(&s), Some(&k)) => s < self.rounds[k as usize].first,
+                    (Some(_), None) => true,
+                    (None, Some(_)) => false,
+                    (None, None) => break,
+                };
+                let (start, end) = if loose_first {
+                    let s = loose[l] as usize;
+                    l += 1;
+                    (s, s + 1)
+                } else {
+                    let round = &self.rounds[visit[g] as usize];
+                    g += 1;
+                    (round.first as usize, (round.first + round.pieces) as usize)
+                };
+                let mut order = start;
+                while order < end.min(statics) {
+                    order += place(order, &frame.statics[order], order != next);
+                    next = order;
+                }
+            }
+        } else {
+            let mut order = 0;
+            while order < statics {
+                order += place(order, &frame.statics[order], false);
+            }
         }
         let part = |entry: usize| {
             if Some(frame.part_robot[entry]) == viewer {
@@ -697,7 +794,7 @@ impl ColumnScene<'_> {
                             continue;
                         }
                         if let Some(object) = part(entry) {
-                            place(statics, object);
+                            place(statics, object, false);
                         }
                     }
                 }
@@ -719,7 +816,7 @@ impl ColumnScene<'_> {
                         && Some(robot) != viewer
                         && self.tucked.get(entry).copied().unwrap_or(false);
                     if let Some(object) = part(entry).filter(|_| !far && !tucked) {
-                        place(statics, object);
+                        place(statics, object, false);
                     }
                 }
             }
