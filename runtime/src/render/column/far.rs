@@ -246,16 +246,19 @@ pub(super) fn fast_effect(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::super::super::Poses;
     use super::*;
     use crate::render::Detail;
     use crate::retina::{pixel_azimuth, HALF_BAND, PIXELS, PIXEL_WIDTH};
+    use crate::Compiled;
     use glam::DVec3;
 
     thread_local! {
         /// Every impostor by the general path (a test's switch).
         pub(super) static GENERAL_ONLY: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+        /// Every round group told, the far distance's grid unused (a test's switch).
+        pub(in super::super) static EVERY_ROUND: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
     }
 
     /// The short path draws the same impostors as the general one: random buoy fields (most
@@ -325,5 +328,97 @@ mod tests {
         }
         assert!(drawn > 0);
         assert!(worst <= 1e-7, "{worst:e}");
+    }
+
+    /// A buoy field's world text: a lit arena of `side` metres with a robot (whose turret
+    /// makes the arena visible; it is not placed) and buoys at `buoys`.
+    fn field_world(side: f64, buoys: &[(f64, f64)]) -> Compiled {
+        let mut text = format!(
+            "#VRML_SIM R2023b utf8\nWorldInfo {{ coordinateSystem \"NUE\" }}\n\
+             DirectionalLight {{ direction 0.3 -1 0.2 intensity 0.6 ambientIntensity 0.2 }}\n\
+             Arena {{ size {side} {side} }}\n\
+             Khepera {{ turret PanoramicTurret {{ }} }}\n"
+        );
+        for (x, z) in buoys {
+            text += &format!("Buoy {{ translation {x} 0 {z} }}\n");
+        }
+        let source = regatta_parser::SourceText::from_bytes("t.wbt".to_owned(), text.into_bytes());
+        let checked = regatta_schema::check(source, &regatta_schema::Options::default());
+        assert!(!checked.has_errors(), "{}", checked.render(false));
+        crate::compile(&checked.scene)
+    }
+
+    /// With a far distance, the buoys wholly beyond it are left out: the image is the one of
+    /// the same field without them (to rounding: the scene's objects are numbered
+    /// differently), and the grid that spares a look from telling them gives the full loop's
+    /// image bit for bit.
+    #[test]
+    fn the_far_distance_leaves_out_the_buoys_beyond_it_and_its_grid_changes_nothing() {
+        let mut unit = crate::test_random::unit_stream(43);
+        let centers: Vec<f64> = (0..PIXELS).map(pixel_azimuth).collect();
+        let strip = Strip::new(centers, PIXEL_WIDTH, HALF_BAND);
+        let (mut left_out, mut compared) = (0, 0);
+        for field in 0..6 {
+            let side = 4.0 + field as f64;
+            let buoys: Vec<(f64, f64)> = (0..(40 + 15 * field))
+                .map(|_| ((unit() - 0.5) * side * 0.9, (unit() - 0.5) * side * 0.9))
+                .collect();
+            let compiled = field_world(side, &buoys);
+            let scene = ColumnScene::new(&compiled.graph, &compiled.plan);
+            let frame = scene.prepare(&compiled.plan, &Poses::default(), None);
+            for _ in 0..6 {
+                let eye = DVec3::new(
+                    (unit() - 0.5) * side * 0.8,
+                    0.05,
+                    (unit() - 0.5) * side * 0.8,
+                );
+                let heading = unit() * std::f64::consts::TAU;
+                let far = 0.6 + 3.0 * unit();
+                for stride in [1, 16] {
+                    let detail = Detail {
+                        crowd_distance: 0.5,
+                        far_distance: far,
+                        ..Detail::new(1, stride)
+                    };
+                    let (mut grid, mut every) = (vec![0.0; PIXELS], vec![0.0; PIXELS]);
+                    scene.integrate(&frame, eye, heading, &strip, detail, &mut grid);
+                    EVERY_ROUND.with(|e| e.set(true));
+                    scene.integrate(&frame, eye, heading, &strip, detail, &mut every);
+                    EVERY_ROUND.with(|e| e.set(false));
+                    assert_eq!(grid, every, "field {field}, eye {eye}, far {far}");
+                    // The field without the buoys wholly beyond the far distance.
+                    let kept: Vec<(f64, f64)> = buoys
+                        .iter()
+                        .copied()
+                        .filter(|&(x, z)| DVec2::new(x - eye.x, z - eye.z).length() - 0.02 <= far)
+                        .collect();
+                    left_out += buoys.len() - kept.len();
+                    let fewer = field_world(side, &kept);
+                    let fewer_scene = ColumnScene::new(&fewer.graph, &fewer.plan);
+                    let fewer_frame = fewer_scene.prepare(&fewer.plan, &Poses::default(), None);
+                    let without_far = Detail {
+                        far_distance: f64::INFINITY,
+                        ..detail
+                    };
+                    let mut expected = vec![0.0; PIXELS];
+                    fewer_scene.integrate(
+                        &fewer_frame,
+                        eye,
+                        heading,
+                        &strip,
+                        without_far,
+                        &mut expected,
+                    );
+                    for (pixel, (a, b)) in grid.iter().zip(&expected).enumerate() {
+                        assert!(
+                            (a - b).abs() <= 1e-9 * b.abs().max(1e-6),
+                            "field {field}, eye {eye}, far {far}, pixel {pixel}: {a} vs {b}"
+                        );
+                    }
+                    compared += 1;
+                }
+            }
+        }
+        assert!(left_out > 100 && compared == 72, "{left_out} left out");
     }
 }
