@@ -19,17 +19,21 @@ work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 
 python3 "$swarm" 1000 | sed 's/PanoramicTurret { lambda 5 }/PanoramicTurret { lambda 5 crowdDistance 0.5 }/' \
   > "$work/crowd1000.wbt"
+python3 "$swarm" 1000 | sed 's/PanoramicTurret { lambda 5 }/PanoramicTurret { lambda 5 crowdDistance 0.5 crowdFarDistance 5 }/' \
+  > "$work/far1000.wbt"
 python3 "$swarm" 1000 --ir-only > "$work/ir1000.wbt"
 python3 "$swarm" 1 | sed 's/PanoramicTurret { lambda 5 }/PanoramicTurret { lambda 5 crowdDistance 0.5 }/' \
   > "$work/crowd1.wbt"
 
-# The workloads: the crowd benchmarks' worlds, and the paper's regatta with a log.
+# The workloads: the crowd benchmarks' worlds (with and without a far distance), and the
+# paper's regatta with a log.
 trace() {
   local name=$1; shift
   valgrind --tool=callgrind --dump-instr=yes --compress-strings=no --compress-pos=no \
     --callgrind-out-file="$work/$name.cg" "$regatta" "$@" > /dev/null 2>&1
 }
 trace crowd1000 run "$work/crowd1000.wbt" --steps 10 --threads 1
+trace far1000 run "$work/far1000.wbt" --steps 10 --threads 1
 trace ir1000 run "$work/ir1000.wbt" --steps 100 --threads 1
 trace crowd1 run "$work/crowd1.wbt" --steps 1000 --threads 1
 trace regatta run "$root/worlds/regatta.wbt" --steps 500 --threads 1 --log "$work/regatta.mcap"

@@ -4,7 +4,8 @@
 //! uniform grid, on the first look that asks (every viewer of the step shares it), and a look
 //! reads the cells its distance reaches. The answer is a set, returned in robot order, so it
 //! does not depend on the grid's cell size nor on which viewer built it: the image is the same
-//! for any thread count.
+//! for any thread count. The scene bins its round static groups (buoys) in the same kind of
+//! grid once, for the far distance (`scene.rs`'s `RoundIndex`).
 
 use glam::DVec2;
 

@@ -501,7 +501,13 @@ impl ColumnScene<'_> {
         let wide = index
             .widest
             .iter()
-            .take_while(|&&k| !(self.rounds[k as usize].radius <= small))
+            // Wider than `small`, or a radius that is not a number (sorted first).
+            .take_while(|&&k| {
+                !matches!(
+                    self.rounds[k as usize].radius.partial_cmp(&small),
+                    Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+                )
+            })
             .chain(&index.unplaced);
         let before = out.len();
         out.extend(wide);
