@@ -16,8 +16,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::order::{sort_by_buckets, Buckets};
-use super::photodiode::{from_total_key, total_key};
+use super::photodiode::total_key;
 
 /// Impostors are at most this many photodiode windows wide: wider objects would show their
 /// shading's variation across them, and are drawn exactly.
@@ -152,7 +151,7 @@ pub(super) fn settle(
     impostors: &mut [Impostor],
     standing: &[Standing],
     occlusion: &mut Occlusion,
-    (order, buckets): (&mut Vec<u64>, &mut Buckets<u64>),
+    order: &mut Vec<u64>,
 ) {
     if impostors.is_empty() {
         return;
@@ -183,10 +182,7 @@ pub(super) fn settle(
             .enumerate()
             .map(|(index, i)| ((i.distance as f32).to_bits() as u64) << 32 | index as u64),
     );
-    // Distances are positive: their bits order them.
-    sort_by_buckets(order, buckets, |key| {
-        f64::from(f32::from_bits((key >> 32) as u32))
-    });
+    order.sort_unstable();
     for &key in order.iter() {
         let impostor = &mut impostors[key as u32 as usize];
         let width = impostor.hi - impostor.lo;
@@ -342,11 +338,7 @@ fn atan2(y: f64, x: f64) -> f64 {
 
 /// The visible impostors in the order they are drawn: by the centre of their interval,
 /// ties by index.
-pub(super) fn by_centre(
-    impostors: &[Impostor],
-    (keys, buckets): (&mut Vec<u128>, &mut Buckets<u128>),
-    order: &mut Vec<u32>,
-) {
+pub(super) fn by_centre(impostors: &[Impostor], keys: &mut Vec<u128>, order: &mut Vec<u32>) {
     // Each centre's place in the order of numbers, the index below it breaking ties: one
     // integer compares both.
     keys.clear();
@@ -359,7 +351,7 @@ pub(super) fn by_centre(
                 (total_key(0.5 * (impostor.lo + impostor.hi)) as u128) << 32 | index as u128
             }),
     );
-    sort_by_buckets(keys, buckets, |key| from_total_key((key >> 32) as u64));
+    keys.sort_unstable();
     order.clear();
     order.extend(keys.iter().map(|&key| key as u32));
 }
@@ -469,12 +461,7 @@ mod tests {
             impostor(-0.5, -0.49, 5.0),
         ];
         let (mut occlusion, mut order) = (Occlusion::default(), Vec::new());
-        settle(
-            &mut impostors,
-            &[],
-            &mut occlusion,
-            (&mut order, &mut Buckets::default()),
-        );
+        settle(&mut impostors, &[], &mut occlusion, &mut order);
         let whole = |v: f64| (v - 1.0).abs() < 1e-9;
         assert!(whole(impostors[1].visible), "nearest shows whole");
         assert!(whole(impostors[3].visible), "alone shows whole");
@@ -500,23 +487,13 @@ mod tests {
             tall
         }];
         let (mut occlusion, mut order) = (Occlusion::default(), Vec::new());
-        settle(
-            &mut impostors,
-            &standing,
-            &mut occlusion,
-            (&mut order, &mut Buckets::default()),
-        );
+        settle(&mut impostors, &standing, &mut occlusion, &mut order);
         let whole = |v: f64| (v - 1.0).abs() < 1e-9;
         assert_eq!(impostors[0].visible, 0.0);
         assert!(whole(impostors[1].visible), "{}", impostors[1].visible);
         // A new look starts with nothing covered.
         let mut alone = [impostor(-0.01, 0.01, 2.0)];
-        settle(
-            &mut alone,
-            &[],
-            &mut occlusion,
-            (&mut order, &mut Buckets::default()),
-        );
+        settle(&mut alone, &[], &mut occlusion, &mut order);
         assert!(whole(alone[0].visible));
     }
 }

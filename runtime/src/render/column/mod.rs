@@ -19,7 +19,6 @@
 //! and the band over each photodiode window, `footprint.rs` the placed upright objects,
 //! `shading.rs` the fast shading, `crowd.rs` which other robots an eye draws, `impostor.rs`
 //! which far small static objects stand in as impostors and `far.rs` how they are drawn,
-//! `order.rs` how a look's impostors are ordered,
 //! `strip.rs` the pixels to integrate.
 
 mod crowd;
@@ -27,7 +26,6 @@ mod far;
 mod footprint;
 mod impostor;
 mod integrate;
-mod order;
 mod photodiode;
 mod scene;
 mod shading;

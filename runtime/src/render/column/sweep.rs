@@ -9,7 +9,6 @@ use super::crowd::CrowdGrid;
 use super::footprint::Relative;
 use super::footprint::{azimuth_interval, corner_of, wrap, Interval, PendingEdge, Upright};
 use super::impostor::{self, Impostor, Occlusion, Standing};
-use super::order::Buckets;
 use super::photodiode::{from_total_key, rotate_small, total_key};
 use super::scene::{ColumnFrame, ColumnScene};
 use super::strip::Strip;
@@ -89,8 +88,6 @@ pub struct Look {
     /// Scratch for ordering impostors.
     impostor_keys: Vec<u64>,
     centre_keys: Vec<u128>,
-    distance_buckets: Buckets<u64>,
-    centre_buckets: Buckets<u128>,
     pub(super) impostor_order: Vec<u32>,
 }
 
@@ -840,11 +837,11 @@ impl ColumnScene<'_> {
             &mut look.impostors,
             &look.standing,
             &mut look.occlusion,
-            (&mut look.impostor_keys, &mut look.distance_buckets),
+            &mut look.impostor_keys,
         );
         impostor::by_centre(
             &look.impostors,
-            (&mut look.centre_keys, &mut look.centre_buckets),
+            &mut look.centre_keys,
             &mut look.impostor_order,
         );
         let breaks = &mut look.breaks;
