@@ -10,7 +10,8 @@
 # valgrind and python3). Run it after changes that rename or add much of the run's code: a
 # symbol the file names and the build lacks is passed over, and a function it does not name
 # is laid out after the named ones, as before, so a stale file costs memory, never
-# correctness.
+# correctness. Give it a binary from `cargo build --release -p regatta`: one that `cargo test`
+# built has other features unified and other symbol names.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 regatta=$(realpath "${1:-$root/target/release/regatta}")

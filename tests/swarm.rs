@@ -279,6 +279,25 @@ proptest! {
     }
 }
 
+/// Six robots, headings any, within 0.3 m of `centre` (in `crowd_world`'s units of the arena's
+/// side): all within the crowd distance of each other.
+fn robots_near(
+    unit: &mut impl FnMut() -> f64,
+    centre: (f64, f64),
+    side: f64,
+) -> Vec<(f64, f64, f64)> {
+    let near = 0.3 / (side * 0.96);
+    (0..6)
+        .map(|_| {
+            (
+                centre.0 + near * (unit() - 0.5),
+                centre.1 + near * (unit() - 0.5),
+                unit() * 6.4 - 3.2,
+            )
+        })
+        .collect()
+}
+
 /// The documented bound of impostors alone (docs/crowd.md): a buoy field's mean 6-bit error,
 /// its largest, and the photocurrents' mean relative error. Leaving the far buoys out instead
 /// fails it (0.26 LSB on the first field tried), and so does drawing them at 4 times their
@@ -302,11 +321,7 @@ proptest! {
         stride in prop::sample::select(vec![1u32, 16]),
     ) {
         let mut unit = uniform(seed);
-        // Robots within 0.3 m of the arena's centre.
-        let near = 0.3 / (side * 0.96);
-        let robots: Vec<(f64, f64, f64)> = (0..6)
-            .map(|_| (0.5 + near * (unit() - 0.5), 0.5 + near * (unit() - 0.5), unit() * 6.4 - 3.2))
-            .collect();
+        let robots = robots_near(&mut unit, (0.5, 0.5), side);
         let field: Vec<(f64, f64)> = (0..buoys).map(|_| (unit(), unit())).collect();
         let text = crowd_world(side, &robots, &field, &[], stride, 1);
         let exact = crowd_retinas(&text, |d| d);
@@ -343,11 +358,8 @@ proptest! {
         stride in prop::sample::select(vec![1u32, 16]),
     ) {
         let mut unit = uniform(seed);
-        let (cx, cz) = (0.2 + 0.6 * unit(), 0.2 + 0.6 * unit());
-        let near = 0.3 / (side * 0.96);
-        let robots: Vec<(f64, f64, f64)> = (0..6)
-            .map(|_| (cx + near * (unit() - 0.5), cz + near * (unit() - 0.5), unit() * 6.4 - 3.2))
-            .collect();
+        let centre = (0.2 + 0.6 * unit(), 0.2 + 0.6 * unit());
+        let robots = robots_near(&mut unit, centre, side);
         let field: Vec<(f64, f64)> = (0..(density * side * side) as usize)
             .map(|_| (unit(), unit()))
             .collect();

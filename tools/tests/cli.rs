@@ -366,6 +366,51 @@ fn bench_step_measures_swarms_and_plots_them() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// A CSV's rows after its header, split at commas.
+fn csv_rows(csv: &str) -> Vec<Vec<&str>> {
+    csv.lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect()
+}
+
+/// `bench crowd --far-distances` adds a row per far distance to each crowd distance, and
+/// says which far distances it refuses.
+#[test]
+fn bench_crowd_measures_each_far_distance() {
+    let dir = temp_dir("bench-crowd-far");
+    let output = regatta()
+        .args(["bench", "crowd", "--robots", "10", "--distances", "0.5"])
+        .args(["--far-distances", "5", "--viewers", "2", "--frames", "1"])
+        .args(["--repeats", "1", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(0), "{text}");
+    assert!(text.contains("0.5 m, far 5 m"), "{text}");
+    let csv = std::fs::read_to_string(dir.join("crowd.csv")).unwrap();
+    let rows = csv_rows(&csv);
+    // Exact, 0.5 m, 0.5 m with far 5 m: the crowd and far distance columns.
+    let settings: Vec<(&str, &str)> = rows.iter().map(|r| (r[1], r[2])).collect();
+    assert_eq!(
+        settings,
+        [("exact", ""), ("0.5", ""), ("0.5", "5")],
+        "{csv}"
+    );
+    std::fs::remove_dir_all(dir).ok();
+    let refused = regatta()
+        .args(["bench", "crowd", "--far-distances", "0"])
+        .output()
+        .unwrap();
+    assert_ne!(refused.status.code(), Some(0));
+    assert!(
+        String::from_utf8_lossy(&refused.stderr).contains("is not a distance above 0 m"),
+        "{}",
+        String::from_utf8_lossy(&refused.stderr)
+    );
+}
+
 /// `bench crowd` compares each crowd distance with every robot drawn: the exact row has no
 /// error, a distance that leaves robots out some, and the CSV and chart are written.
 #[test]
@@ -395,11 +440,7 @@ fn bench_crowd_measures_error_against_every_robot_drawn() {
         String::from_utf8_lossy(&output.stderr)
     );
     let csv = std::fs::read_to_string(dir.join("crowd.csv")).unwrap();
-    let rows: Vec<Vec<&str>> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect())
-        .collect();
+    let rows = csv_rows(&csv);
     assert_eq!(rows.len(), 3, "{csv}");
     // Columns: robots, distance, far distance, µs, outputs, LSB mean, share > 1, LSB max,
     // analog mean, max.

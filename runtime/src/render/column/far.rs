@@ -276,21 +276,10 @@ pub(super) mod tests {
         let (mut drawn, mut worst) = (0, 0.0f64);
         for field in 0..6 {
             let side = 2.0 + field as f64;
-            let mut text = format!(
-                "#VRML_SIM R2023b utf8\nWorldInfo {{ coordinateSystem \"NUE\" }}\n\
-                 DirectionalLight {{ direction 0.3 -1 0.2 intensity 0.6 ambientIntensity 0.2 }}\n\
-                 Arena {{ size {side} {side} }}\n\
-                 Khepera {{ turret PanoramicTurret {{ }} }}\n"
-            );
-            for _ in 0..(30 + 20 * field) {
-                let (x, z) = ((unit() - 0.5) * side * 0.9, (unit() - 0.5) * side * 0.9);
-                text += &format!("Buoy {{ translation {x} 0 {z} }}\n");
-            }
-            let source =
-                regatta_parser::SourceText::from_bytes("t.wbt".to_owned(), text.into_bytes());
-            let checked = regatta_schema::check(source, &regatta_schema::Options::default());
-            assert!(!checked.has_errors(), "{}", checked.render(false));
-            let compiled = crate::compile(&checked.scene);
+            let buoys: Vec<(f64, f64)> = (0..(30 + 20 * field))
+                .map(|_| ((unit() - 0.5) * side * 0.9, (unit() - 0.5) * side * 0.9))
+                .collect();
+            let compiled = field_world(side, &buoys);
             let scene = ColumnScene::new(&compiled.graph, &compiled.plan);
             let frame = scene.prepare(&compiled.plan, &Poses::default(), None);
             let centers: Vec<f64> = (0..PIXELS).map(pixel_azimuth).collect();
