@@ -102,6 +102,19 @@ impl CrowdGrid {
         out: &mut Vec<u32>,
     ) {
         out.clear();
+        self.append_within(positions, eye, distance, out);
+        out.sort_unstable();
+    }
+
+    /// [`CrowdGrid::within`]'s robots appended to `out` cell by cell: each once, in no
+    /// particular order (for a caller that orders them its own way).
+    pub(super) fn append_within(
+        &self,
+        positions: &[DVec2],
+        eye: DVec2,
+        distance: f64,
+        out: &mut Vec<u32>,
+    ) {
         let reach = DVec2::splat(distance);
         let (c0, r0) = self.coordinates(eye - reach);
         let (c1, r1) = self.coordinates(eye + reach);
@@ -119,7 +132,6 @@ impl CrowdGrid {
                     .filter(|&robot| positions[robot as usize].distance_squared(eye) <= limit),
             );
         }
-        out.sort_unstable();
     }
 }
 

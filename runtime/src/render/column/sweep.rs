@@ -80,8 +80,10 @@ pub struct Look {
     occlusion: Occlusion,
     /// Per round group of the scene, whether this look made it an impostor or left it out.
     round_far: Vec<bool>,
-    /// With a far distance, the round groups this look tells (the others lie beyond it).
+    /// With a far distance, the round groups this look tells (the others lie beyond it),
+    /// then those of them it places; and a bitmap ordering them.
     round_visit: Vec<u32>,
+    round_bits: Vec<u64>,
     /// The last strip's reach for impostors ([`impostor::Viewpoint::reach_cos`]), by the bits
     /// of its width and extent.
     reach_cos: ((u64, u64, u64), f64),
@@ -207,6 +209,32 @@ fn keep_slots_for(reach: Reach) -> bool {
 
 /// Below this many objects (or edges), testing each is cheaper than keeping them in order.
 pub(super) const FEW: usize = 32;
+
+/// Sorts `values` (each below `bound`) ascending and drops repeats. Where the bound is small
+/// beside their count, by a bitmap over `0..bound` read back word by word (a look's reachable
+/// groups: dozens of a few hundred, where sorting cost 2,500 instructions a look); otherwise by
+/// sorting.
+fn ascending_once(values: &mut Vec<u32>, bound: usize, bits: &mut Vec<u64>) {
+    let words = bound.div_ceil(64);
+    if words > 4 * values.len().max(1) || values.iter().any(|&v| v as usize >= bound) {
+        values.sort_unstable();
+        values.dedup();
+        return;
+    }
+    bits.clear();
+    bits.resize(words, 0);
+    for &v in values.iter() {
+        bits[v as usize / 64] |= 1 << (v % 64);
+    }
+    values.clear();
+    for (w, &word) in bits.iter().enumerate() {
+        let mut word = word;
+        while word != 0 {
+            values.push((w * 64) as u32 + word.trailing_zeros());
+            word &= word - 1;
+        }
+    }
+}
 
 /// Sorts a few numbers ascending (insertion sort).
 fn sort_small(values: &mut [f64]) {
@@ -476,6 +504,7 @@ impl ColumnScene<'_> {
         eye: DVec2,
         reach: Reach,
         out: &'v mut Vec<u32>,
+        bits: &mut Vec<u64>,
     ) -> Option<&'v [u32]> {
         if !(reach.far_distance.is_finite() && reach.impostor_width > 0.0)
             || self.rounds.len() <= FEW
@@ -492,9 +521,10 @@ impl ColumnScene<'_> {
         let q = (0.09f64).min(0.9 * libm::sin(0.5 * reach.impostor_width.min(1.0)));
         let small = beyond * q / (1.0 - q);
         let index = &self.round_index;
+        out.clear();
         index
             .grid
-            .within(&index.centers, eye, (beyond + small) * (1.0 + 1e-9), out);
+            .append_within(&index.centers, eye, (beyond + small) * (1.0 + 1e-9), out);
         let wide = index
             .widest
             .iter()
@@ -506,12 +536,8 @@ impl ColumnScene<'_> {
                 )
             })
             .chain(&index.unplaced);
-        let before = out.len();
         out.extend(wide);
-        if out.len() > before {
-            out.sort_unstable();
-            out.dedup();
-        }
+        ascending_once(out, self.rounds.len(), bits);
         Some(out)
     }
 
@@ -540,6 +566,7 @@ impl ColumnScene<'_> {
             standing,
             round_far,
             round_visit,
+            round_bits,
             reach_cos,
             ..
         } = look;
@@ -601,7 +628,7 @@ impl ColumnScene<'_> {
                 }
                 true
             };
-            match self.reachable_rounds(eye2, reach, round_visit) {
+            match self.reachable_rounds(eye2, reach, round_visit, round_bits) {
                 Some(visit) => {
                     // The groups not visited lie wholly beyond the far distance: left out. The
                     // visited ones are told in group order, as the full loop would.
@@ -615,6 +642,12 @@ impl ColumnScene<'_> {
             }
         }
         let round_far = &*round_far;
+        // The groups told as impostors (or left out) are passed over, pieces and all, before
+        // `place` is called: the loops below skip them. Their static slots are left as they
+        // are: only hiders' slots are read, and a round group never hides.
+        if limited {
+            round_visit.retain(|&group| !round_far[group as usize]);
+        }
         // The previous object placed, its interval, and what became of it.
         let mut previous: Option<(&Upright, Option<Interval>, Fate)> = None;
         // Static objects, then robot parts (each viewer's own as its turret sees them), by
@@ -627,17 +660,6 @@ impl ColumnScene<'_> {
                 previous = None;
             }
             let index = objects.len();
-            // A far small round static object, with the pieces on its footprint, was made an
-            // impostor (or left out beyond the strip) before: its pieces are passed over.
-            let group = self.round_at.get(order).map_or(0, |&g| g as usize);
-            if group > 0 && round_far.get(group - 1) == Some(&true) {
-                let pieces = self.rounds[group - 1].pieces as usize;
-                if keep_slots {
-                    static_slots[order..order + pieces].fill(index as u32);
-                }
-                previous = None;
-                return pieces;
-            }
             // Static objects keep their order unless some may be left out.
             if order < statics && keep_slots {
                 static_slots[order] = index as u32;
@@ -758,9 +780,17 @@ impl ColumnScene<'_> {
                 }
             }
         } else {
-            let mut order = 0;
+            // A group passed over ends the run of shared footprints, as a placed object would.
+            let (mut order, mut fresh) = (0, false);
             while order < statics {
-                order += place(order, &frame.statics[order], false);
+                let group = self.round_at.get(order).map_or(0, |&g| g as usize);
+                if group > 0 && round_far.get(group - 1) == Some(&true) {
+                    order += self.rounds[group - 1].pieces as usize;
+                    fresh = true;
+                    continue;
+                }
+                order += place(order, &frame.statics[order], fresh);
+                fresh = false;
             }
         }
         let part = |entry: usize| {
