@@ -929,6 +929,29 @@ mod tests {
     use super::*;
 
     #[test]
+    fn ascending_once_sorts_and_drops_repeats_by_bitmap_or_by_sorting() {
+        let mut unit = crate::test_random::unit_stream(47);
+        let mut bits = Vec::new();
+        for case in 0..200 {
+            // Bounds from one word to many words per value: both ways are taken.
+            let bound = 1 + (unit() * [70.0, 700.0, 70_000.0][case % 3]) as usize;
+            let count = (unit() * 120.0) as usize;
+            let mut values: Vec<u32> = (0..count)
+                .map(|_| (unit() * bound as f64) as u32 % bound as u32)
+                .collect();
+            let mut expected = values.clone();
+            expected.sort_unstable();
+            expected.dedup();
+            ascending_once(&mut values, bound, &mut bits);
+            assert_eq!(values, expected, "bound {bound}, {count} values");
+        }
+        // A value at or past the bound is sorted, not lost.
+        let mut values = vec![9, 3, 70, 3];
+        ascending_once(&mut values, 64, &mut bits);
+        assert_eq!(values, [3, 9, 70]);
+    }
+
+    #[test]
     fn sorting_by_keys_is_total_cmp_order() {
         let mut values = vec![
             0.5,
