@@ -67,7 +67,8 @@ fn no_source_file_is_too_long() {
 /// test code that is left out.
 #[test]
 fn the_checker_finds_circles_and_leaves_tests_out() {
-    let dir = std::env::temp_dir().join(format!("regatta-architecture-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("regatta-architecture-{}", std::process::id()));
     let src = dir.join("src");
     std::fs::create_dir_all(src.join("a")).unwrap();
     let write = |name: &str, text: &str| std::fs::write(src.join(name), text).unwrap();

@@ -196,7 +196,8 @@ fn gzip_compressed_worlds_are_read() {
     use std::io::Write;
     let path = corpus().join("vrml97/mrdoob+three.js/examples/models/vrml/simple.wrl");
     let plain = std::fs::read(&path).unwrap();
-    let dir = std::env::temp_dir().join(format!("regatta-gz-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("regatta-gz-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let gz = dir.join("simple.wrl.gz");
     let mut encoder = flate2_encoder(std::fs::File::create(&gz).unwrap());

@@ -12,7 +12,7 @@ use regatta_schema::{check_path, Checked, Limits};
 
 /// A fresh project folder for one test.
 fn project(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
         "regatta-gltf-geometry-{}-{name}",
         std::process::id()
     ));

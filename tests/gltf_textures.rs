@@ -85,7 +85,7 @@ fn the_geometry_world_embeds_its_images_with_coordinates_and_transforms() {
 }
 
 fn project(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
         "regatta-gltf-textures-{}-{name}",
         std::process::id()
     ));

@@ -129,7 +129,8 @@ fn every_bad_input_gets_its_one_clear_error() {
         "the bad-input corpus is missing ({})",
         all.len()
     );
-    let work = std::env::temp_dir().join(format!("regatta-bad-{}", std::process::id()));
+    let work = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("regatta-bad-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&work);
     copy_tree(&source, &work);
     let mut failures = Vec::new();

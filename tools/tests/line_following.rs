@@ -15,7 +15,8 @@ use common::{ok, regatta, root, temp_dir};
 const WORLD: &str = "examples/line_following/worlds/line_following.wbt";
 
 fn cache() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("regatta-line-cache-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("regatta-line-cache-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }

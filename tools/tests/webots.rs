@@ -242,7 +242,8 @@ fn controllers_are_mapped_refused_or_overridden() {
 
 #[test]
 fn a_robot_driving_off_its_floor_is_reported_in_the_summary_and_the_log() {
-    let dir = std::env::temp_dir().join(format!("regatta-falls-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("regatta-falls-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let world = dir.join("off_the_edge.wbt");
     std::fs::write(
@@ -271,7 +272,8 @@ fn a_robot_driving_off_its_floor_is_reported_in_the_summary_and_the_log() {
 /// 64×64, enlarged four times, and their pixels as JSON.
 #[test]
 fn render_draws_the_epuck_and_gripper_cameras() {
-    let dir = std::env::temp_dir().join(format!("regatta-cameras-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("regatta-cameras-{}", std::process::id()));
     let epuck =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/webots/e-puck_camera.wbt");
     let gripper =
@@ -318,7 +320,8 @@ fn render_draws_the_epuck_and_gripper_cameras() {
 /// `run` does, refuse what `run` refuses, and fall back in lenient mode as `run` does.
 #[test]
 fn batch_maps_webots_controllers_as_run_does() {
-    let dir = std::env::temp_dir().join(format!("regatta-batch-webots-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("regatta-batch-webots-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let world = |name: &str, controller: &str| {
         let path = dir.join(name);
@@ -390,7 +393,8 @@ fn batch_maps_webots_controllers_as_run_does() {
 fn an_extern_epuck_is_driven_by_serve() {
     use std::io::BufRead;
     use std::process::Stdio;
-    let dir = std::env::temp_dir().join(format!("regatta-extern-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("regatta-extern-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let world = corpus().join(
         "webots-ext/cyberbotics+webots_ros2/_versions/R2023b/webots_ros2_epuck/worlds/epuck_world.wbt",
@@ -476,7 +480,8 @@ fn an_extern_epuck_is_driven_by_serve() {
 /// same file rules as the world's own urls: a link out of the folder is refused and named.
 #[test]
 fn proto_path_lookups_obey_the_file_rules() {
-    let dir = std::env::temp_dir().join(format!("regatta-proto-path-cli-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("regatta-proto-path-cli-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let webots = dir.join("webots");
     let protos = webots.join("projects/objects/misc/protos");

@@ -12,7 +12,8 @@ use common::{regatta, root, run_waiting_for_extern, temp_dir};
 
 /// A cache of compiled controllers shared by these tests.
 fn cache() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("regatta-controller-cache-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("regatta-controller-cache-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }

@@ -15,7 +15,8 @@ use std::path::{Path, PathBuf};
 use common::{regatta, root, run_waiting_for_extern, temp_dir};
 
 fn cache() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("regatta-python-cache-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("regatta-python-cache-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }

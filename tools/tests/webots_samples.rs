@@ -27,7 +27,8 @@ struct Sample {
 
 fn sample(world: &str) -> Option<Sample> {
     let world = shared()?.join(world);
-    let cache = std::env::temp_dir().join(format!("regatta-samples-cache-{}", std::process::id()));
+    let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("regatta-samples-cache-{}", std::process::id()));
     let output = regatta()
         .env("REGATTA_CACHE_DIR", cache)
         .env_remove("REGATTA_PYTHON")
@@ -238,8 +239,8 @@ fn the_python_twins_of_the_c_samples_drive_as_the_c_ones_do() {
         )
         .unwrap();
         let c = sample(&format!("projects/samples/devices/{world}")).unwrap();
-        let cache =
-            std::env::temp_dir().join(format!("regatta-samples-cache-{}", std::process::id()));
+        let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+            .join(format!("regatta-samples-cache-{}", std::process::id()));
         let output = regatta()
             .env("REGATTA_CACHE_DIR", cache)
             .env_remove("REGATTA_PYTHON")

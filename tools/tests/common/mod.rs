@@ -25,13 +25,16 @@ pub fn root() -> PathBuf {
         .to_owned()
 }
 
-/// A fresh folder for one test: `regatta-{name}-{process id}` in the temporary directory.
+/// A fresh folder for one test: `regatta-{name}-{process id}-{n}` in Cargo's temporary
+/// directory for integration tests (`target/tmp`): the system's stays clean, and `cargo clean`
+/// removes them.
 pub fn temp_dir(name: &str) -> PathBuf {
     // Unique within the process too (tests run side by side), and emptied first: a folder
     // left by an earlier process with the same id would hold its files.
     static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!("regatta-{name}-{}-{n}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("regatta-{name}-{}-{n}", std::process::id()));
     std::fs::remove_dir_all(&dir).ok();
     std::fs::create_dir_all(&dir).unwrap();
     dir
