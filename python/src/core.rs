@@ -608,8 +608,11 @@ fn open_log(
         variations: (!experiment.drawn.is_empty())
             .then(|| serde_json::to_string(&experiment.drawn).unwrap_or_default()),
     };
-    let recorder =
-        Recorder::new(BufWriter::new(file), simulation, &run).map_err(|e| failed(e.to_string()))?;
+    let recorder = Recorder::new(BufWriter::new(file), simulation, &run).map_err(|e| {
+        // A log that could not start holds no message: no half-written file is left behind.
+        std::fs::remove_file(path).ok();
+        failed(e.to_string())
+    })?;
     Ok(Log {
         recorder,
         path: shown,

@@ -163,6 +163,8 @@ struct RobotChannels {
 /// Writes a run's messages, step by step.
 pub struct Recorder<W: Write + Seek> {
     writer: mcap::Writer<W>,
+    /// The channels added so far, against what one file can number.
+    budget: ChannelBudget,
     robots: Vec<RobotChannels>,
     foxglove: Option<foxglove::Foxglove>,
     /// What robots can touch, named once ([`Simulation::obstacle_names`]).
@@ -184,6 +186,39 @@ pub struct Recorder<W: Write + Seek> {
 /// Simulated seconds as a log time (ns).
 fn ns(seconds: f64) -> u64 {
     (seconds.max(0.0) * 1e9).round() as u64
+}
+
+/// Channels one log may hold. MCAP numbers channels with 16 bits; the `mcap` writer numbers
+/// them from 1 and cannot go past 65,534 (its counter overflows on the next), so the log
+/// refuses the channel after that itself, with the way out.
+pub const MOST_CHANNELS: usize = 65_534;
+
+/// The channels a log has added, and its robots (for the error that names them).
+pub(super) struct ChannelBudget {
+    added: usize,
+    robots: usize,
+}
+
+impl ChannelBudget {
+    /// Adds a channel to `writer`, or refuses it past [`MOST_CHANNELS`].
+    pub(super) fn add_channel<W: Write + Seek>(
+        &mut self,
+        writer: &mut mcap::Writer<W>,
+        schema: u16,
+        topic: &str,
+        metadata: &BTreeMap<String, String>,
+    ) -> Result<u16, LogError> {
+        if self.added >= MOST_CHANNELS {
+            return Err(LogError::TooManyChannels {
+                robots: self.robots,
+            });
+        }
+        let channel = writer
+            .add_channel(schema, topic, "cdr", metadata)
+            .map_err(LogError::Write)?;
+        self.added += 1;
+        Ok(channel)
+    }
 }
 
 /// Simulated seconds a chunk covers at most: a crash or a full disk loses at most this much
@@ -277,6 +312,10 @@ impl<W: Write + Seek> Recorder<W> {
             }
         }
         let tokens = robot_tokens(simulation.robots.iter().map(|r| r.name.as_str()));
+        let mut budget = ChannelBudget {
+            added: 0,
+            robots: simulation.robots.len(),
+        };
         let mut robots = Vec::new();
         for (robot, token) in simulation.robots.iter().zip(&tokens) {
             let owner = BTreeMap::from([("robot".to_owned(), robot.name.clone())]);
@@ -289,15 +328,14 @@ impl<W: Write + Seek> Recorder<W> {
                     .find(|(c, _)| *c == kind)
                     .map(|(_, s)| *s)
                     .expect("every regatta channel has a schema");
-                writer
+                budget
                     .add_channel(
+                        &mut writer,
                         schema[schema_name],
                         &format!("/{token}/{}", kind.name()),
-                        "cdr",
                         &owner,
                     )
                     .map(Some)
-                    .map_err(LogError::Write)
             };
             robots.push(RobotChannels {
                 pose: channel(Channel::Pose, true)?,
@@ -318,6 +356,7 @@ impl<W: Write + Seek> Recorder<W> {
         let foxglove = if wanted.any_foxglove() {
             Some(foxglove::Foxglove::new(
                 &mut writer,
+                &mut budget,
                 &mut cdr,
                 &mut sequence,
                 simulation,
@@ -330,6 +369,7 @@ impl<W: Write + Seek> Recorder<W> {
         };
         Ok(Recorder {
             writer,
+            budget,
             robots,
             foxglove,
             obstacle_names: simulation.obstacle_names(),
@@ -549,6 +589,7 @@ impl<W: Write + Seek> Recorder<W> {
         self.programs[kind]
             .channel(
                 &mut self.writer,
+                &mut self.budget,
                 kind,
                 robot,
                 &self.tokens[robot],

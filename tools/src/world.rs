@@ -382,11 +382,11 @@ pub fn create_recorder(
             .then(|| serde_json::to_string(&loaded.drawn))
             .transpose()?,
     };
-    Ok(Recorder::new(
-        std::io::BufWriter::new(file),
-        simulation,
-        &run,
-    )?)
+    Recorder::new(std::io::BufWriter::new(file), simulation, &run).map_err(|error| {
+        // A log that could not start holds no message: no half-written file is left behind.
+        std::fs::remove_file(path).ok();
+        error.into()
+    })
 }
 
 /// Rays traced per update above which `check` warns (about 10 ms per update at 20 ns a ray).

@@ -94,6 +94,7 @@ impl Foxglove {
     /// compiler's warnings.
     pub(super) fn new<W: Write + Seek>(
         writer: &mut mcap::Writer<W>,
+        budget: &mut super::ChannelBudget,
         cdr: &mut Cdr,
         sequence: &mut u32,
         simulation: &Simulation,
@@ -112,9 +113,7 @@ impl Foxglove {
         }
         let none = BTreeMap::new();
         let mut add = |topic: &str, schema_name: &str, metadata: &BTreeMap<String, String>| {
-            writer
-                .add_channel(schema[schema_name], topic, "cdr", metadata)
-                .map_err(LogError::Write)
+            budget.add_channel(writer, schema[schema_name], topic, metadata)
         };
         let latched = BTreeMap::from([("offered_qos_profiles".to_owned(), LATCHED_QOS.to_owned())]);
         let scene = if channels.contains(Channel::Scene) {

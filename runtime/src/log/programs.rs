@@ -34,6 +34,7 @@ impl Lazy {
     pub(super) fn channel<W: Write + Seek>(
         &mut self,
         writer: &mut mcap::Writer<W>,
+        budget: &mut super::ChannelBudget,
         kind: usize,
         robot: usize,
         token: &str,
@@ -58,9 +59,7 @@ impl Lazy {
         };
         let topic = format!("/{token}/{}", if kind == 0 { "output" } else { "leds" });
         let owner = BTreeMap::from([("robot".to_owned(), robot_name.to_owned())]);
-        let channel = writer
-            .add_channel(schema, &topic, "cdr", &owner)
-            .map_err(LogError::Write)?;
+        let channel = budget.add_channel(writer, schema, &topic, &owner)?;
         self.channels[robot] = Some(channel);
         Ok(channel)
     }
