@@ -609,8 +609,11 @@ fn open_log(
             .then(|| serde_json::to_string(&experiment.drawn).unwrap_or_default()),
     };
     let recorder = Recorder::new(BufWriter::new(file), simulation, &run).map_err(|e| {
-        // A log that could not start holds no message: no half-written file is left behind.
-        std::fs::remove_file(path).ok();
+        // A log that could not start holds no message: no half-written file is left behind
+        // (only a plain file is removed: a device such as /dev/full stays).
+        if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_file()) {
+            std::fs::remove_file(path).ok();
+        }
         failed(e.to_string())
     })?;
     Ok(Log {

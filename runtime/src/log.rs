@@ -30,12 +30,15 @@ use sha2::{Digest, Sha256};
 use crate::khepera::Senses;
 use crate::sim::Simulation;
 
+mod budget;
 mod cdr;
 mod channels;
 mod error;
 mod foxglove;
 mod programs;
 
+use budget::ChannelBudget;
+pub use budget::MOST_CHANNELS;
 pub use cdr::{Cdr, CdrReader, ShortMessage};
 pub use channels::{is_ros2_topic, robot_tokens, sanitize, Channel, Channels, UnknownChannel};
 pub use error::LogError;
@@ -188,39 +191,6 @@ fn ns(seconds: f64) -> u64 {
     (seconds.max(0.0) * 1e9).round() as u64
 }
 
-/// Channels one log may hold. MCAP numbers channels with 16 bits; the `mcap` writer numbers
-/// them from 1 and cannot go past 65,534 (its counter overflows on the next), so the log
-/// refuses the channel after that itself, with the way out.
-pub const MOST_CHANNELS: usize = 65_534;
-
-/// The channels a log has added, and its robots (for the error that names them).
-pub(super) struct ChannelBudget {
-    added: usize,
-    robots: usize,
-}
-
-impl ChannelBudget {
-    /// Adds a channel to `writer`, or refuses it past [`MOST_CHANNELS`].
-    pub(super) fn add_channel<W: Write + Seek>(
-        &mut self,
-        writer: &mut mcap::Writer<W>,
-        schema: u16,
-        topic: &str,
-        metadata: &BTreeMap<String, String>,
-    ) -> Result<u16, LogError> {
-        if self.added >= MOST_CHANNELS {
-            return Err(LogError::TooManyChannels {
-                robots: self.robots,
-            });
-        }
-        let channel = writer
-            .add_channel(schema, topic, "cdr", metadata)
-            .map_err(LogError::Write)?;
-        self.added += 1;
-        Ok(channel)
-    }
-}
-
 /// Simulated seconds a chunk covers at most: a crash or a full disk loses at most this much
 /// of a run (or [`CHUNK_BYTES`] of messages, whichever is less). Chunks close at simulated
 /// times, never at clock times, so that the same run writes the same bytes.
@@ -355,8 +325,7 @@ impl<W: Write + Seek> Recorder<W> {
         let mut sequence = 0;
         let foxglove = if wanted.any_foxglove() {
             Some(foxglove::Foxglove::new(
-                &mut writer,
-                &mut budget,
+                (&mut writer, &mut budget),
                 &mut cdr,
                 &mut sequence,
                 simulation,

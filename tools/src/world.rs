@@ -383,10 +383,17 @@ pub fn create_recorder(
             .transpose()?,
     };
     Recorder::new(std::io::BufWriter::new(file), simulation, &run).map_err(|error| {
-        // A log that could not start holds no message: no half-written file is left behind.
-        std::fs::remove_file(path).ok();
+        remove_unstarted_log(path);
         error.into()
     })
+}
+
+/// Removes what a log that could not start wrote: it holds no message. Only a plain file is
+/// removed (a device such as /dev/full, a pipe or a link stays as it was).
+pub fn remove_unstarted_log(path: &Path) {
+    if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_file()) {
+        std::fs::remove_file(path).ok();
+    }
 }
 
 /// Rays traced per update above which `check` warns (about 10 ms per update at 20 ns a ray).

@@ -669,6 +669,10 @@ fn a_full_disk_is_reported_as_such() {
         "{stderr}"
     );
     assert!(!stderr.contains("panicked"), "{stderr}");
+    // A log that fails is cleaned up only where it is a plain file: the device stays.
+    use std::os::unix::fs::FileTypeExt;
+    let device = std::fs::symlink_metadata("/dev/full").unwrap().file_type();
+    assert!(device.is_char_device(), "/dev/full is no longer a device");
 }
 
 #[cfg(unix)]

@@ -6,7 +6,7 @@ pub enum LogError {
     #[error("cannot write the log: {0}")]
     Write(#[source] mcap::McapError),
     /// MCAP numbers channels with 16 bits: a large swarm logging every channel of every robot
-    /// passes that ([`super::MOST_CHANNELS`]).
+    /// passes that (`MOST_CHANNELS` in `budget.rs`).
     #[error(
         "cannot write the log: {robots} robots with these channels need more than the 65,534 \
          channels one MCAP file holds (one a robot for each kind); log fewer with --channels \

@@ -90,11 +90,10 @@ pub(super) struct Foxglove {
 }
 
 impl Foxglove {
-    /// Adds the schemas and channels in `channels` and writes the scene (at t = 0) and the
-    /// compiler's warnings.
+    /// Adds the schemas and channels in `channels` (counted in `budget`) and writes the scene
+    /// (at t = 0) and the compiler's warnings.
     pub(super) fn new<W: Write + Seek>(
-        writer: &mut mcap::Writer<W>,
-        budget: &mut super::ChannelBudget,
+        (writer, budget): (&mut mcap::Writer<W>, &mut super::budget::ChannelBudget),
         cdr: &mut Cdr,
         sequence: &mut u32,
         simulation: &Simulation,

@@ -34,7 +34,7 @@ impl Lazy {
     pub(super) fn channel<W: Write + Seek>(
         &mut self,
         writer: &mut mcap::Writer<W>,
-        budget: &mut super::ChannelBudget,
+        budget: &mut super::budget::ChannelBudget,
         kind: usize,
         robot: usize,
         token: &str,
