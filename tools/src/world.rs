@@ -390,7 +390,7 @@ pub fn create_recorder(
 
 /// Removes what a log that could not start wrote: it holds no message. Only a plain file is
 /// removed (a device such as /dev/full, a pipe or a link stays as it was).
-pub fn remove_unstarted_log(path: &Path) {
+fn remove_unstarted_log(path: &Path) {
     if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_file()) {
         std::fs::remove_file(path).ok();
     }

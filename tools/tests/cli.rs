@@ -3,12 +3,12 @@
 //! package's tests; the rest of the integration tests are in `tests/`.)
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Output, Stdio};
 
 mod common;
 
-use common::{regatta, root};
+use common::{regatta, root, run_logged};
 
 fn run_with_stdin(args: &[&str], input: &[u8]) -> Output {
     let mut child = regatta()
@@ -227,23 +227,6 @@ fn a_closed_pipe_ends_quietly() {
     // The reading end is dropped here, like `| head -c 16`.
     let output = child.wait_with_output().unwrap();
     assert!(!String::from_utf8_lossy(&output.stderr).contains("panicked"));
-}
-
-fn run_logged(dir: &Path, name: &str, steps: &str) -> PathBuf {
-    let log = dir.join(name);
-    let status = regatta()
-        .args(["run", "--steps", steps, "--log"])
-        .arg(&log)
-        .arg(root().join("worlds/regatta.wbt"))
-        .output()
-        .unwrap();
-    assert_eq!(
-        status.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&status.stderr)
-    );
-    log
 }
 
 #[test]
@@ -510,56 +493,6 @@ fn exported_csv_has_a_header_and_a_row_per_pose() {
     std::fs::remove_dir_all(dir).ok();
 }
 
-/// Exports a log that ends early: it succeeds with a warning; returns the pose.csv line count.
-fn export_cut_log(log: &Path, out: &Path) -> usize {
-    let export = regatta()
-        .args(["log", "export"])
-        .arg(log)
-        .arg("--csv")
-        .arg(out)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&export.stderr);
-    assert_eq!(export.status.code(), Some(0), "{stderr}");
-    assert!(
-        stderr.contains("warning:") && stderr.contains("ends early"),
-        "{stderr}"
-    );
-    std::fs::read_to_string(out.join("pose.csv"))
-        .unwrap()
-        .lines()
-        .count()
-}
-
-#[test]
-fn a_cut_log_still_exports_its_complete_chunks_and_garbage_is_an_error() {
-    let dir = temp_dir("cut");
-    let log = run_logged(&dir, "run.mcap", "3000");
-    let bytes = std::fs::read(&log).unwrap();
-    let cut = dir.join("cut.mcap");
-    std::fs::write(&cut, &bytes[..bytes.len() * 3 / 4]).unwrap();
-    let out = dir.join("csv");
-    let rows = export_cut_log(&cut, &out);
-    assert!(rows > 100 && rows < 3001, "{rows} rows");
-    let garbage = dir.join("garbage.mcap");
-    std::fs::write(&garbage, b"this is not an mcap file at all").unwrap();
-    for args in [vec!["log", "export"], vec!["replay", "--verify"]] {
-        let mut command = regatta();
-        command.args(&args).arg(&garbage);
-        if args[0] == "log" {
-            command.arg("--csv").arg(&out);
-        }
-        let output = command.output().unwrap();
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        assert_eq!(output.status.code(), Some(1), "{stderr}");
-        assert!(
-            stderr.contains("is not a regatta log") && !stderr.contains("panicked"),
-            "{stderr}"
-        );
-    }
-    std::fs::remove_dir_all(dir).ok();
-}
-
 #[test]
 fn plot_draws_the_top_view_and_a_kymograph() {
     let dir = temp_dir("plot");
@@ -582,123 +515,6 @@ fn plot_draws_the_top_view_and_a_kymograph() {
         let bytes = std::fs::read(out.join(name)).unwrap();
         assert!(bytes.starts_with(b"\x89PNG"), "{name} is a PNG");
     }
-    std::fs::remove_dir_all(dir).ok();
-}
-
-#[cfg(unix)]
-/// Runs a long logged run, sends it `signal` once it has started, and checks that it ends
-/// with 128 + signal and a complete log marked interrupted, which replays.
-fn a_signal_ends_a_run_with_a_complete_log(signal: i32, name: &str) {
-    let dir = temp_dir(&format!("interrupt-{signal}"));
-    let log = dir.join("run.mcap");
-    let child = regatta()
-        .args(["run", "--steps", "100000000", "--log"])
-        .arg(&log)
-        .arg(root().join("worlds/regatta.wbt"))
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    // The log exists once the world is loaded and the handlers are installed.
-    let started = std::time::Instant::now();
-    while std::fs::metadata(&log).map_or(true, |m| m.len() == 0) && started.elapsed().as_secs() < 30
-    {
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    }
-    std::thread::sleep(std::time::Duration::from_millis(300));
-    // SAFETY: sending a signal to our own child process.
-    unsafe {
-        libc::kill(child.id() as i32, signal);
-    }
-    let output = child.wait_with_output().unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(128 + signal), "{stderr}");
-    assert!(
-        stderr.contains(&format!("interrupted by {name} after"))
-            && stderr.contains("marked interrupted"),
-        "{stderr}"
-    );
-    // Complete: no warning on reading (summary and footer written); and it replays.
-    let export = regatta()
-        .args(["log", "export"])
-        .arg(&log)
-        .arg("--csv")
-        .arg(dir.join("csv"))
-        .output()
-        .unwrap();
-    assert!(
-        export.status.success() && !String::from_utf8_lossy(&export.stderr).contains("warning"),
-        "{}",
-        String::from_utf8_lossy(&export.stderr)
-    );
-    let replay = regatta()
-        .args(["replay", "--verify"])
-        .arg(&log)
-        .output()
-        .unwrap();
-    assert!(
-        String::from_utf8_lossy(&replay.stdout).starts_with("OK"),
-        "{}",
-        String::from_utf8_lossy(&replay.stdout)
-    );
-    std::fs::remove_dir_all(dir).ok();
-}
-
-#[test]
-fn ctrl_c_ends_a_run_with_exit_130_and_a_complete_log() {
-    a_signal_ends_a_run_with_a_complete_log(libc::SIGINT, "SIGINT");
-}
-
-#[test]
-fn sigterm_ends_a_run_with_exit_143_and_a_complete_log() {
-    a_signal_ends_a_run_with_a_complete_log(libc::SIGTERM, "SIGTERM");
-}
-
-#[cfg(target_os = "linux")]
-#[test]
-fn a_full_disk_is_reported_as_such() {
-    let output = regatta()
-        .args(["run", "--steps", "3000", "--log", "/dev/full"])
-        .arg(root().join("worlds/regatta.wbt"))
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(1), "{stderr}");
-    assert!(
-        stderr.contains("cannot write the log") && stderr.contains("No space left on device"),
-        "{stderr}"
-    );
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    // A log that fails is cleaned up only where it is a plain file: the device stays.
-    use std::os::unix::fs::FileTypeExt;
-    let device = std::fs::symlink_metadata("/dev/full").unwrap().file_type();
-    assert!(device.is_char_device(), "/dev/full is no longer a device");
-}
-
-#[cfg(unix)]
-#[test]
-fn a_recording_killed_with_sigkill_still_exports_its_complete_chunks() {
-    let dir = temp_dir("sigkill");
-    let log = dir.join("run.mcap");
-    let mut child = regatta()
-        .args(["run", "--steps", "100000000", "--log"])
-        .arg(&log)
-        .arg(root().join("worlds/regatta.wbt"))
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    // Wait until at least one 1 MB chunk is on disk, then kill without warning.
-    let started = std::time::Instant::now();
-    while std::fs::metadata(&log).map(|m| m.len()).unwrap_or(0) < 3_000_000
-        && started.elapsed().as_secs() < 60
-    {
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    }
-    child.kill().unwrap();
-    child.wait().unwrap();
-    let rows = export_cut_log(&log, &dir.join("csv"));
-    assert!(rows > 1000, "{rows} poses recovered");
     std::fs::remove_dir_all(dir).ok();
 }
 

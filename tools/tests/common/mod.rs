@@ -40,6 +40,25 @@ pub fn temp_dir(name: &str) -> PathBuf {
     dir
 }
 
+/// `regatta run worlds/regatta.wbt --steps STEPS --log DIR/NAME`, which must succeed; the
+/// log's path.
+pub fn run_logged(dir: &Path, name: &str, steps: &str) -> PathBuf {
+    let log = dir.join(name);
+    let status = regatta()
+        .args(["run", "--steps", steps, "--log"])
+        .arg(&log)
+        .arg(root().join("worlds/regatta.wbt"))
+        .output()
+        .unwrap();
+    assert_eq!(
+        status.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    log
+}
+
 /// `regatta run WORLD --duration SECONDS --extern`, started, and the REGATTA_CONTROLLER_URL it
 /// prints for its `<extern>` robot (read from its standard error as it comes).
 pub fn run_waiting_for_extern(world: &Path, seconds: &str) -> (std::process::Child, String) {
