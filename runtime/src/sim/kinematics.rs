@@ -20,7 +20,12 @@ fn sinc(x: f64) -> f64 {
 /// Wraps a heading to (−π, π].
 pub fn normalize_heading(heading: f64) -> f64 {
     let two_pi = 2.0 * std::f64::consts::PI;
-    let mut h = heading % two_pi;
+    // `%` returns a heading already within one turn unchanged: only larger ones pay for it.
+    let mut h = if heading.abs() < two_pi {
+        heading
+    } else {
+        heading % two_pi
+    };
     if h <= -std::f64::consts::PI {
         h += two_pi;
     } else if h > std::f64::consts::PI {
@@ -37,9 +42,11 @@ pub fn advance(pose: Pose2, left: f64, right: f64, axle: f64, dt: f64) -> Pose2 
     let delta = (right - left) / axle * dt;
     let chord = v * dt * sinc(0.5 * delta);
     let middle = pose.heading + 0.5 * delta;
+    // One range reduction for both (bit for bit `sin` and `cos`: see the noise's test).
+    let (sin, cos) = libm::sincos(middle);
     Pose2 {
-        x: pose.x + chord * libm::cos(middle),
-        z: pose.z - chord * libm::sin(middle),
+        x: pose.x + chord * cos,
+        z: pose.z - chord * sin,
         heading: normalize_heading(pose.heading + delta),
     }
 }

@@ -50,24 +50,28 @@ impl SenseShared<'_, '_> {
         let mut nearby_found = false;
         // Sensors that share a period and a due time are due alike: one division for all.
         let mut last_due: Option<(u64, f64, bool, f64)> = None;
-        for (s, sensor) in rig
+        // Each sensor's state side by side, not indexed: no bounds check per sensor.
+        let ir_sensors = rig
             .distance_sensors
             .iter()
+            .zip(robot.ir_due.iter_mut())
+            .zip(robot.ir_streams.iter_mut())
+            .zip(robot.ir_nothing.iter())
             .enumerate()
-            .take(proximity_sensors)
-        {
+            .take(proximity_sensors);
+        for (s, (((sensor, next_due), stream), nothing)) in ir_sensors {
             let period = robot.ir_period.unwrap_or(sensor.period);
-            let before = robot.ir_due[s];
+            let before = *next_due;
             let is_due = match last_due {
                 Some((bits, last_period, was_due, after))
                     if bits == before.to_bits() && last_period.to_bits() == period.to_bits() =>
                 {
-                    robot.ir_due[s] = after;
+                    *next_due = after;
                     was_due
                 }
                 _ => {
-                    let is_due = due(&mut robot.ir_due[s], t, period);
-                    last_due = Some((before.to_bits(), period, is_due, robot.ir_due[s]));
+                    let is_due = due(next_due, t, period);
+                    last_due = Some((before.to_bits(), period, is_due, *next_due));
                     is_due
                 }
             };
@@ -102,12 +106,12 @@ impl SenseShared<'_, '_> {
                     });
                 }
                 nearby_found = true;
+                robot.updated.proximity = true;
             }
-            robot.updated.proximity = true;
-            let value = if robot.nearby.is_empty() && robot.nearby_robots.is_empty() {
-                sensors::value_of_nothing(robot.ir_nothing[s], &mut robot.ir_streams[s])
+            let (reading, value) = if robot.nearby.is_empty() && robot.nearby_robots.is_empty() {
+                sensors::proximity_of_nothing(nothing, stream)
             } else {
-                sensors::proximity_value(
+                let value = sensors::proximity_value(
                     self.slab,
                     &robot.nearby,
                     &robot.nearby_robots,
@@ -115,11 +119,12 @@ impl SenseShared<'_, '_> {
                     index,
                     &compiled.rig.robots,
                     sensor,
-                    &mut robot.ir_streams[s],
-                )
+                    stream,
+                );
+                (sensors::to_reading(value), value)
             };
             if let Some(slot) = robot.proximity.get_mut(s) {
-                *slot = sensors::to_reading(value);
+                *slot = reading;
             }
             if let Some(raw) = &mut robot.raw {
                 raw.distance[s] = value;

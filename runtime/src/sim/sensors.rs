@@ -192,23 +192,39 @@ pub fn proximity_value(
     })
 }
 
-/// A proximity sensor's (mean, spread) when every ray misses: what [`proximity`] reads with
-/// nothing in range, worked out once per sensor.
-pub fn nothing_in_range(sensor: &DistanceSensorRig) -> (f64, f64) {
-    sums(sensor, |_| None)
+/// What a proximity sensor reads when every ray misses, worked out once per sensor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NothingInRange {
+    /// The table's response to nothing (its far row).
+    pub mean: f64,
+    /// Its relative noise.
+    pub spread: f64,
+    /// The reading, rounded and clamped, when `spread` is 0: with no noise to add, a robot
+    /// alone in open floor reads this without rounding each step.
+    pub reading: u16,
 }
 
-/// One proximity reading when nothing at all is within the robot's IR reach, from the
-/// sensor's [`nothing_in_range`] (the same reading [`proximity`] gives with empty lists).
-#[inline]
-pub fn proximity_of_nothing(nothing: (f64, f64), stream: &mut Stream) -> u16 {
-    to_reading(value_of_nothing(nothing, stream))
+/// A proximity sensor's [`NothingInRange`]: what [`proximity`] reads with nothing in range.
+pub fn nothing_in_range(sensor: &DistanceSensorRig) -> NothingInRange {
+    let (mean, spread) = sums(sensor, |_| None);
+    NothingInRange {
+        mean,
+        spread,
+        reading: to_reading(mean),
+    }
 }
 
-/// [`proximity_of_nothing`] before rounding and clamping.
+/// One proximity reading when nothing at all is within the robot's IR reach (the same reading
+/// [`proximity`] gives with empty lists), and its value before rounding and clamping.
 #[inline]
-pub fn value_of_nothing((mean, spread): (f64, f64), stream: &mut Stream) -> f64 {
-    value(mean, spread, stream)
+pub fn proximity_of_nothing(nothing: &NothingInRange, stream: &mut Stream) -> (u16, f64) {
+    if nothing.spread == 0.0 {
+        // What `value` does without noise, with the rounding done once.
+        stream.skip_gaussian();
+        return (nothing.reading, nothing.mean);
+    }
+    let value = value(nothing.mean, nothing.spread, stream);
+    (to_reading(value), value)
 }
 
 /// One reading from the rays' hits: `hit(cos, sin)` of each ray's turn gives its nearest hit

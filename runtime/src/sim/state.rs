@@ -160,9 +160,9 @@ pub struct RobotState {
     pub(super) ir_period: Option<f64>,
     pub(super) ir_due: Vec<f64>,
     pub(super) ir_streams: Vec<Stream>,
-    /// Each IR sensor's (mean, spread) with nothing in range
+    /// Each IR sensor's reading with nothing in range
     /// ([`super::sensors::nothing_in_range`]), shared by robots with the same sensors.
-    pub(super) ir_nothing: std::sync::Arc<[(f64, f64)]>,
+    pub(super) ir_nothing: std::sync::Arc<[super::sensors::NothingInRange]>,
     /// Working lists, kept from step to step (the robot's own, so that robots can be sensed
     /// side by side): static obstacles and robots near enough for the IR sensors, obstacles
     /// touched in this step.

@@ -33,7 +33,7 @@ use crate::vision::{VisionBackend, VisionError, VisionRequest, WorldInstance};
 
 /// Each IR sensor's (mean, spread) with nothing in range, shared by robots with the same
 /// sensors.
-type Nothing = Arc<[(f64, f64)]>;
+type Nothing = Arc<[sensors::NothingInRange]>;
 
 /// Why a simulation could not start.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
