@@ -204,13 +204,22 @@ impl Motion<'_> {
                     DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z),
                     max_drift,
                 );
+                // Only b > a, and only those whose filed centre lies within the square's
+                // half side of the anchor: b touches a only if |anchor − filed b| < ra + rb +
+                // (a's motion since the anchor) + (b's drift), which the asking again below
+                // keeps under that half side. The rest would fail the exact test anyway, so
+                // the pushes are the same; their lines are never read.
+                let centres = &self.broad.centres;
                 let query = |anchor: DVec2, drift_then: f64, out: &mut Vec<u32>| {
-                    let (lo, hi) =
-                        broad_phase::square(anchor, ra + max_radius + drift_then + SLACK);
-                    self.broad.robots.query(lo, hi, out);
+                    let half = ra + max_radius + drift_then + SLACK;
+                    let (lo, hi) = broad_phase::square(anchor, half);
+                    let within = hi.x - anchor.x;
+                    self.broad.robots.query_where(lo, hi, out, |b| {
+                        b as usize > a && centres[b as usize].distance(anchor) <= within
+                    });
                 };
                 query(anchor, drift_then, &mut candidates);
-                let mut next = candidates.partition_point(|&c| c as usize <= a);
+                let mut next = 0;
                 let mut moved = 0.0;
                 while let Some(&b) = candidates.get(next) {
                     next += 1;

@@ -91,19 +91,20 @@ impl SenseShared<'_, '_> {
                 if self.placements.len() > 1 {
                     let reach = robot.ir_reach + self.broad.max_radius;
                     let (lo, hi) = broad_phase::square(DVec2::new(placement.x, placement.z), reach);
-                    self.broad.robots.query(lo, hi, &mut robot.nearby_robots);
                     // The grid's square holds its corners too: only robots whose bodies come
                     // within reach are worth a sensor's test (in a crowd, most sensors then
-                    // have none and trace nothing).
-                    // The centres just filed are the placements' (x, z).
+                    // have none and trace nothing). The centres just filed are the
+                    // placements' (x, z).
                     let center = DVec2::new(placement.x, placement.z);
                     let sensor_reach = robot.ir_reach;
                     let (centres, radii) = (&self.broad.centres, &self.broad.radii);
-                    robot.nearby_robots.retain(|&other| {
-                        let other = other as usize;
-                        other != index
-                            && centres[other].distance(center) <= sensor_reach + radii[other]
-                    });
+                    self.broad
+                        .robots
+                        .query_where(lo, hi, &mut robot.nearby_robots, |other| {
+                            let other = other as usize;
+                            other != index
+                                && centres[other].distance(center) <= sensor_reach + radii[other]
+                        });
                 }
                 nearby_found = true;
                 robot.updated.proximity = true;

@@ -73,10 +73,12 @@ pub fn nearby_obstacles(
         // A few: each tested (the same list the grid would give).
         nearby.clear();
         nearby.extend(0..slab.obstacles.len() as u32);
+        nearby.retain(|&index| slab.obstacles[index as usize].shape.distance(center) <= reach);
     } else {
-        grid.query(center - reach, center + reach, nearby);
+        grid.query_where(center - reach, center + reach, nearby, |index| {
+            slab.obstacles[index as usize].shape.distance(center) <= reach
+        });
     }
-    nearby.retain(|&index| slab.obstacles[index as usize].shape.distance(center) <= reach);
 }
 
 /// One proximity reading, 0…1023; `nearby` lists the obstacles worth testing (see
