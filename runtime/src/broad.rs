@@ -117,13 +117,40 @@ impl Grid {
             self.spans.push(span);
         }
         self.single_cells = single_cells;
+        self.file_spans();
+    }
+
+    /// Files points anew (`point(i)` is item `i`): [`Grid::rebuild`] with boxes of no size,
+    /// one cell each, found in half the arithmetic.
+    pub fn rebuild_points(&mut self, items: usize, mut point: impl FnMut(usize) -> DVec2) {
+        self.spans.clear();
+        for item in 0..items {
+            let p = point(item);
+            let column = self.index(p.x, self.origin.x, self.last_column);
+            let row = self.index(p.y, self.origin.y, self.last_row);
+            self.spans.push([column, row, column, row]);
+        }
+        self.single_cells = true;
+        self.file_spans();
+    }
+
+    /// Fills the cells' lists from the items' spans.
+    fn file_spans(&mut self) {
         let cells = self.columns * self.rows;
         self.starts.clear();
         self.starts.resize(cells + 1, 0);
-        for span in &self.spans {
-            for row in span[1]..=span[3] {
-                for column in span[0]..=span[2] {
-                    self.starts[row as usize * self.columns + column as usize + 1] += 1;
+        let cell_of =
+            |span: &[u32; 4], columns: usize| span[1] as usize * columns + span[0] as usize;
+        if self.single_cells {
+            for span in &self.spans {
+                self.starts[cell_of(span, self.columns) + 1] += 1;
+            }
+        } else {
+            for span in &self.spans {
+                for row in span[1]..=span[3] {
+                    for column in span[0]..=span[2] {
+                        self.starts[row as usize * self.columns + column as usize + 1] += 1;
+                    }
                 }
             }
         }
@@ -135,6 +162,14 @@ impl Grid {
         self.entries.clear();
         self.entries.resize(self.starts[cells] as usize, 0);
         // Items in ascending order: each cell's list is sorted.
+        if self.single_cells {
+            for (item, span) in self.spans.iter().enumerate() {
+                let cell = cell_of(span, self.columns);
+                self.entries[self.cursor[cell] as usize] = item as u32;
+                self.cursor[cell] += 1;
+            }
+            return;
+        }
         for (item, span) in self.spans.iter().enumerate() {
             for row in span[1]..=span[3] {
                 for column in span[0]..=span[2] {
@@ -144,6 +179,21 @@ impl Grid {
                 }
             }
         }
+    }
+
+    /// The items whose boxes may hold the point `p`, each once, ascending, into `out`:
+    /// [`Grid::query`] of a box of no size.
+    pub fn query_point(&self, p: DVec2, out: &mut Vec<u32>) {
+        out.clear();
+        if self.spans.is_empty() {
+            return;
+        }
+        let column = self.index(p.x, self.origin.x, self.last_column) as usize;
+        let row = self.index(p.y, self.origin.y, self.last_row) as usize;
+        let cell = row * self.columns + column;
+        out.extend_from_slice(
+            &self.entries[self.starts[cell] as usize..self.starts[cell + 1] as usize],
+        );
     }
 
     /// The items whose boxes may meet the box `[min, max]`, each once, ascending, into `out`.
@@ -373,6 +423,61 @@ mod tests {
             }
         }
         assert!(one_cell > 0, "some queries fall in one cell");
+    }
+
+    /// Points filed as points are filed as boxes of no size would be, and a point's query is
+    /// a box query of no size.
+    #[test]
+    fn points_filed_as_points_match_points_filed_as_boxes() {
+        let points: Vec<DVec2> = boxes().iter().map(|b| (b.0 + b.1) * 0.5).collect();
+        let mut as_boxes = Grid::new(DVec2::ZERO, DVec2::splat(10.0), 0.7, points.len());
+        let mut as_points = as_boxes.clone();
+        as_boxes.rebuild(points.len(), |i| (points[i], points[i]));
+        as_points.rebuild_points(points.len(), |i| points[i]);
+        assert!(as_points.single_cells);
+        assert_eq!(as_points.starts, as_boxes.starts);
+        assert_eq!(as_points.entries, as_boxes.entries);
+        assert_eq!(as_points.spans, as_boxes.spans);
+        let (mut by_box, mut by_point) = (Vec::new(), Vec::new());
+        // Beyond the grid too, and a NaN (filed at the first cell).
+        let probes = boxes().into_iter().map(|b| b.0 * 1.3 - 2.0).chain([
+            DVec2::NAN,
+            DVec2::splat(-50.0),
+            DVec2::splat(50.0),
+        ]);
+        for p in probes {
+            as_points.query(p, p, &mut by_box);
+            as_points.query_point(p, &mut by_point);
+            assert_eq!(by_box, by_point);
+        }
+    }
+
+    /// `query_where` hands exactly the items `query` hands that pass its test, ascending, and
+    /// asks the test once per item, on grids of boxes and of points.
+    #[test]
+    fn query_where_keeps_what_passes_in_order() {
+        let items = boxes();
+        let points: Vec<DVec2> = items.iter().map(|b| (b.0 + b.1) * 0.5).collect();
+        let mut of_boxes = Grid::new(DVec2::ZERO, DVec2::splat(10.0), 0.7, items.len());
+        of_boxes.rebuild(items.len(), |i| items[i]);
+        let mut of_points = Grid::new(DVec2::ZERO, DVec2::splat(10.0), 0.7, points.len());
+        of_points.rebuild_points(points.len(), |i| points[i]);
+        let (mut all, mut kept) = (Vec::new(), Vec::new());
+        for grid in [&of_boxes, &of_points] {
+            for (k, query) in boxes().iter().enumerate() {
+                let keep = |item: u32| (item as usize * 7 + k) % 3 != 0;
+                grid.query(query.0, query.1, &mut all);
+                let mut asked = Vec::new();
+                grid.query_where(query.0, query.1, &mut kept, |item| {
+                    asked.push(item);
+                    keep(item)
+                });
+                let expected: Vec<u32> = all.iter().copied().filter(|&i| keep(i)).collect();
+                assert_eq!(kept, expected);
+                asked.sort_unstable();
+                assert_eq!(asked, all, "each candidate asked once");
+            }
+        }
     }
 
     #[test]

@@ -84,7 +84,7 @@ impl BroadPhase {
         self.centres.clear();
         self.centres.extend((0..count).map(center));
         let centres = &self.centres;
-        self.robots.rebuild(count, |i| (centres[i], centres[i]));
+        self.robots.rebuild_points(count, |i| centres[i]);
     }
 }
 

@@ -28,7 +28,7 @@ pub(super) fn track_visits(
             candidates.clear();
             candidates.extend(0..compiled.landmarks.len() as u32);
         } else {
-            broad.landmarks.query(center, center, &mut candidates);
+            broad.landmarks.query_point(center, &mut candidates);
         }
         let visits = &mut robot.visits;
         was.clear();
