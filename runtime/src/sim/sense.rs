@@ -47,90 +47,7 @@ impl SenseShared<'_, '_> {
             (true, false) => 8,
             (true, true) => usize::MAX,
         };
-        let mut nearby_found = false;
-        // Sensors that share a period and a due time are due alike: one division for all.
-        let mut last_due: Option<(u64, f64, bool, f64)> = None;
-        // Each sensor's state side by side, not indexed: no bounds check per sensor.
-        let ir_sensors = rig
-            .distance_sensors
-            .iter()
-            .zip(robot.ir_due.iter_mut())
-            .zip(robot.ir_streams.iter_mut())
-            .zip(robot.ir_nothing.iter())
-            .enumerate()
-            .take(proximity_sensors);
-        for (s, (((sensor, next_due), stream), nothing)) in ir_sensors {
-            let period = robot.ir_period.unwrap_or(sensor.period);
-            let before = *next_due;
-            let is_due = match last_due {
-                Some((bits, last_period, was_due, after))
-                    if bits == before.to_bits() && last_period.to_bits() == period.to_bits() =>
-                {
-                    *next_due = after;
-                    was_due
-                }
-                _ => {
-                    let is_due = due(next_due, t, period);
-                    last_due = Some((before.to_bits(), period, is_due, *next_due));
-                    is_due
-                }
-            };
-            if !is_due {
-                continue;
-            }
-            if !nearby_found {
-                let placement = &self.placements[index];
-                sensors::nearby_obstacles(
-                    self.slab,
-                    &self.broad.statics,
-                    placement,
-                    robot.ir_reach,
-                    &mut robot.nearby,
-                );
-                robot.nearby_robots.clear();
-                if self.placements.len() > 1 {
-                    let reach = robot.ir_reach + self.broad.max_radius;
-                    let (lo, hi) = broad_phase::square(DVec2::new(placement.x, placement.z), reach);
-                    // The grid's square holds its corners too: only robots whose bodies come
-                    // within reach are worth a sensor's test (in a crowd, most sensors then
-                    // have none and trace nothing). The centres just filed are the
-                    // placements' (x, z).
-                    let center = DVec2::new(placement.x, placement.z);
-                    let sensor_reach = robot.ir_reach;
-                    let (centres, radii) = (&self.broad.centres, &self.broad.radii);
-                    self.broad
-                        .robots
-                        .query_where(lo, hi, &mut robot.nearby_robots, |other| {
-                            let other = other as usize;
-                            other != index
-                                && centres[other].distance(center) <= sensor_reach + radii[other]
-                        });
-                }
-                nearby_found = true;
-                robot.updated.proximity = true;
-            }
-            let (reading, value) = if robot.nearby.is_empty() && robot.nearby_robots.is_empty() {
-                sensors::proximity_of_nothing(nothing, stream)
-            } else {
-                let value = sensors::proximity_value(
-                    self.slab,
-                    &robot.nearby,
-                    &robot.nearby_robots,
-                    self.placements,
-                    index,
-                    &compiled.rig.robots,
-                    sensor,
-                    stream,
-                );
-                (sensors::to_reading(value), value)
-            };
-            if let Some(slot) = robot.proximity.get_mut(s) {
-                *slot = reading;
-            }
-            if let Some(raw) = &mut robot.raw {
-                raw.distance[s] = value;
-            }
-        }
+        self.sense_proximity(index, robot, proximity_sensors);
         let ambient_sensors = match (senses.ambient, robot.raw.is_some()) {
             (false, _) => 0,
             (true, false) => 8,
@@ -236,6 +153,182 @@ impl SenseShared<'_, '_> {
                     .model
                     .update_of(renderer, view, robot.pose, rig.floor_y, &mut camera.output);
             }
+        }
+    }
+
+    /// Refreshes a robot's first `count` due IR sensors.
+    #[inline(never)]
+    fn sense_proximity(&self, index: usize, robot: &mut RobotState, count: usize) {
+        let t = self.t;
+        let rig = &self.compiled.rig.robots[index];
+        let count = count.min(robot.ir_due.len());
+        if count == 0 {
+            return;
+        }
+        // Sensors that share a period and a due time (a Khepera's eight always do) are due
+        // alike: one test for all, and, with nothing in reach and no noise to add, readings
+        // that need no more than their streams moved on.
+        if let Some(period) = robot.ir_period {
+            let first = robot.ir_due[0];
+            if robot.ir_due[1..count]
+                .iter()
+                .all(|d| d.to_bits() == first.to_bits())
+            {
+                let mut next = first;
+                if !due(&mut next, t, period) {
+                    return;
+                }
+                robot.ir_due[..count].fill(next);
+                self.find_nearby(
+                    index,
+                    robot.ir_reach,
+                    &mut robot.nearby,
+                    &mut robot.nearby_robots,
+                );
+                robot.updated.proximity = true;
+                let sensors = robot.ir_streams[..count]
+                    .iter_mut()
+                    .zip(robot.ir_nothing.iter());
+                if robot.nearby.is_empty() && robot.nearby_robots.is_empty() && robot.raw.is_none()
+                {
+                    for ((stream, nothing), slot) in sensors.zip(&mut robot.proximity) {
+                        *slot = sensors::proximity_of_nothing(nothing, stream).0;
+                    }
+                    return;
+                }
+                for (s, ((stream, nothing), sensor)) in
+                    sensors.zip(rig.distance_sensors.iter()).enumerate()
+                {
+                    let (reading, value) = self.read_proximity(
+                        index,
+                        (&robot.nearby, &robot.nearby_robots),
+                        sensor,
+                        stream,
+                        nothing,
+                    );
+                    if let Some(slot) = robot.proximity.get_mut(s) {
+                        *slot = reading;
+                    }
+                    if let Some(raw) = &mut robot.raw {
+                        raw.distance[s] = value;
+                    }
+                }
+                return;
+            }
+        }
+        // Otherwise each sensor is tested; those that share a period and a due time with the
+        // last one tested take its answer without a division.
+        let mut nearby_found = false;
+        let mut last_due: Option<(u64, f64, bool, f64)> = None;
+        let ir_sensors = rig
+            .distance_sensors
+            .iter()
+            .zip(robot.ir_due.iter_mut())
+            .zip(robot.ir_streams.iter_mut())
+            .zip(robot.ir_nothing.iter())
+            .enumerate()
+            .take(count);
+        for (s, (((sensor, next_due), stream), nothing)) in ir_sensors {
+            let period = robot.ir_period.unwrap_or(sensor.period);
+            let before = *next_due;
+            let is_due = match last_due {
+                Some((bits, last_period, was_due, after))
+                    if bits == before.to_bits() && last_period.to_bits() == period.to_bits() =>
+                {
+                    *next_due = after;
+                    was_due
+                }
+                _ => {
+                    let is_due = due(next_due, t, period);
+                    last_due = Some((before.to_bits(), period, is_due, *next_due));
+                    is_due
+                }
+            };
+            if !is_due {
+                continue;
+            }
+            if !nearby_found {
+                self.find_nearby(
+                    index,
+                    robot.ir_reach,
+                    &mut robot.nearby,
+                    &mut robot.nearby_robots,
+                );
+                nearby_found = true;
+                robot.updated.proximity = true;
+            }
+            let (reading, value) = self.read_proximity(
+                index,
+                (&robot.nearby, &robot.nearby_robots),
+                sensor,
+                stream,
+                nothing,
+            );
+            if let Some(slot) = robot.proximity.get_mut(s) {
+                *slot = reading;
+            }
+            if let Some(raw) = &mut robot.raw {
+                raw.distance[s] = value;
+            }
+        }
+    }
+
+    /// One IR sensor's reading (rounded, and before rounding) from the obstacles and robots
+    /// found near its robot.
+    #[inline]
+    fn read_proximity(
+        &self,
+        index: usize,
+        (nearby, nearby_robots): (&[u32], &[u32]),
+        sensor: &crate::compile::rig::DistanceSensorRig,
+        stream: &mut super::noise::Stream,
+        nothing: &sensors::NothingInRange,
+    ) -> (u16, f64) {
+        if nearby.is_empty() && nearby_robots.is_empty() {
+            return sensors::proximity_of_nothing(nothing, stream);
+        }
+        let value = sensors::proximity_value(
+            self.slab,
+            nearby,
+            nearby_robots,
+            self.placements,
+            index,
+            &self.compiled.rig.robots,
+            sensor,
+            stream,
+        );
+        (sensors::to_reading(value), value)
+    }
+
+    /// Fills a robot's lists of the static obstacles and the robots within its IR sensors'
+    /// `reach` (m), ascending.
+    #[inline(never)]
+    fn find_nearby(
+        &self,
+        index: usize,
+        reach: f64,
+        nearby: &mut Vec<u32>,
+        nearby_robots: &mut Vec<u32>,
+    ) {
+        let placement = &self.placements[index];
+        sensors::nearby_obstacles(self.slab, &self.broad.statics, placement, reach, nearby);
+        nearby_robots.clear();
+        if self.placements.len() > 1 {
+            let (lo, hi) = broad_phase::square(
+                DVec2::new(placement.x, placement.z),
+                reach + self.broad.max_radius,
+            );
+            // The grid's square holds its corners too: only robots whose bodies come within
+            // reach are worth a sensor's test (in a crowd, most sensors then have none and
+            // trace nothing). The centres just filed are the placements' (x, z).
+            let center = DVec2::new(placement.x, placement.z);
+            let (centres, radii) = (&self.broad.centres, &self.broad.radii);
+            self.broad
+                .robots
+                .query_where(lo, hi, nearby_robots, |other| {
+                    let other = other as usize;
+                    other != index && centres[other].distance(center) <= reach + radii[other]
+                });
         }
     }
 }
