@@ -465,7 +465,7 @@ mod tests {
         let (mut all, mut kept) = (Vec::new(), Vec::new());
         for grid in [&of_boxes, &of_points] {
             for (k, query) in boxes().iter().enumerate() {
-                let keep = |item: u32| (item as usize * 7 + k) % 3 != 0;
+                let keep = |item: u32| !(item as usize * 7 + k).is_multiple_of(3);
                 grid.query(query.0, query.1, &mut all);
                 let mut asked = Vec::new();
                 grid.query_where(query.0, query.1, &mut kept, |item| {
