@@ -34,7 +34,7 @@ trace() {
     --callgrind-out-file="$work/$name.cg" "$regatta" "$@" > /dev/null 2>&1
 }
 trace crowd1000 run "$work/crowd1000.wbt" --steps 10 --threads 1
-trace far1000 run "$work/far1000.wbt" --steps 10 --threads 1
+trace far1000 run "$work/far1000.wbt" --steps 200 --threads 1
 trace ir1000 run "$work/ir1000.wbt" --steps 100 --threads 1
 trace crowd1 run "$work/crowd1.wbt" --steps 1000 --threads 1
 trace regatta run "$root/worlds/regatta.wbt" --steps 500 --threads 1 --log "$work/regatta.mcap"
