@@ -199,19 +199,14 @@ impl SenseShared<'_, '_> {
                 for (s, ((stream, nothing), sensor)) in
                     sensors.zip(rig.distance_sensors.iter()).enumerate()
                 {
-                    let (reading, value) = self.read_proximity(
+                    let read = self.read_proximity(
                         index,
                         (&robot.nearby, &robot.nearby_robots),
                         sensor,
                         stream,
                         nothing,
                     );
-                    if let Some(slot) = robot.proximity.get_mut(s) {
-                        *slot = reading;
-                    }
-                    if let Some(raw) = &mut robot.raw {
-                        raw.distance[s] = value;
-                    }
+                    keep_reading(&mut robot.proximity, &mut robot.raw, s, read);
                 }
                 return;
             }
@@ -257,19 +252,14 @@ impl SenseShared<'_, '_> {
                 nearby_found = true;
                 robot.updated.proximity = true;
             }
-            let (reading, value) = self.read_proximity(
+            let read = self.read_proximity(
                 index,
                 (&robot.nearby, &robot.nearby_robots),
                 sensor,
                 stream,
                 nothing,
             );
-            if let Some(slot) = robot.proximity.get_mut(s) {
-                *slot = reading;
-            }
-            if let Some(raw) = &mut robot.raw {
-                raw.distance[s] = value;
-            }
+            keep_reading(&mut robot.proximity, &mut robot.raw, s, read);
         }
     }
 
@@ -330,6 +320,23 @@ impl SenseShared<'_, '_> {
                     other != index && centres[other].distance(center) <= reach + radii[other]
                 });
         }
+    }
+}
+
+/// Keeps IR sensor `s`'s reading: rounded in the Khepera API's eight slots, and before
+/// rounding where the robot's raw readings are kept.
+#[inline]
+fn keep_reading(
+    proximity: &mut [u16; 8],
+    raw: &mut Option<super::state::RawReadings>,
+    s: usize,
+    (reading, value): (u16, f64),
+) {
+    if let Some(slot) = proximity.get_mut(s) {
+        *slot = reading;
+    }
+    if let Some(raw) = raw {
+        raw.distance[s] = value;
     }
 }
 

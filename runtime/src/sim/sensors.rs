@@ -384,6 +384,51 @@ mod tests {
         assert_eq!(to_reading(f64::NAN), 0);
     }
 
+    /// A reading of nothing, kept rounded where the far row has no noise, is the reading the
+    /// rays give with nothing to hit, and moves the stream on as that reading does.
+    #[test]
+    fn readings_of_nothing_match_the_rays_with_nothing_to_hit() {
+        let placements = [Placement {
+            x: 0.3,
+            z: -0.2,
+            floor_y: 0.0,
+            sin: 0.6,
+            cos: 0.8,
+        }];
+        // Far rows without noise (the Khepera's), with noise, and past the 0…1023 clamp.
+        for far_row in [[0.06, 3.0, 0.0], [0.06, 40.0, 0.1], [0.06, 1500.0, 0.0]] {
+            let sensor = DistanceSensorRig {
+                name: "ds0".into(),
+                position: DVec3::new(0.02, 0.01, 0.0),
+                direction: DVec3::X,
+                lookup: vec![[0.0, 1023.0, 0.05], far_row].into(),
+                rays: 3,
+                aperture: 0.5,
+                range: 0.06,
+                period: 0.032,
+                ray_turns: DistanceSensorRig::turns(3, 0.5).into(),
+            };
+            let nothing = nothing_in_range(&sensor);
+            let (mut kept, mut traced) = (Stream::new(4, 0, 2, 0), Stream::new(4, 0, 2, 0));
+            for _ in 0..50 {
+                let (reading, value) = proximity_of_nothing(&nothing, &mut kept);
+                let expected = proximity_value(
+                    &Slab::default(),
+                    &[],
+                    &[],
+                    &placements,
+                    0,
+                    &[],
+                    &sensor,
+                    &mut traced,
+                );
+                assert_eq!(value.to_bits(), expected.to_bits(), "{far_row:?}");
+                assert_eq!(reading, to_reading(expected), "{far_row:?}");
+            }
+            assert_eq!(kept.uniform().to_bits(), traced.uniform().to_bits());
+        }
+    }
+
     #[test]
     fn lookup_interpolates_and_clamps() {
         let table = [[0.0, 1023.0, 0.0], [0.02, 1023.0, 0.01], [0.04, 0.0, 0.0]];
