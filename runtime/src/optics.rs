@@ -17,7 +17,7 @@ use glam::DVec3;
 use crate::compile::graph::RenderGraph;
 use crate::compile::plan::{Plan, RendererChoice};
 use crate::compile::rig::{LinearCameraRig, Optics, PanoramicRig, Pose2};
-use crate::render::column::{ColumnFrame, ColumnScene, Look, Strip};
+use crate::render::column::{ColumnFrame, ColumnScene, KeptImpostors, Look, Strip};
 use crate::render::raycast::{Prepared, RayCaster};
 use crate::render::{Detail, Poses};
 use crate::retina::{
@@ -226,6 +226,14 @@ pub struct Panoramic {
     i_bda: Vec<(FilterKind, f64)>,
     /// The enabled filters, built for the retina's length, in the order of `i_bda`.
     filters: Vec<Filter>,
+    /// With `crowdKeepDistance`, the impostors kept from one update to the next.
+    kept: Option<Box<KeptImpostors>>,
+}
+
+/// A turret's kept impostors: with a crowd distance and `crowdKeepDistance`, else none.
+fn kept_for(rig: &PanoramicRig) -> Option<Box<KeptImpostors>> {
+    (rig.crowd_distance.is_finite() && rig.keep_distance > 0.0 && rig.keep_distance.is_finite())
+        .then(|| Box::new(KeptImpostors::new(rig.keep_distance)))
 }
 
 impl Panoramic {
@@ -250,6 +258,7 @@ impl Panoramic {
                 settings,
                 i_bda: like.i_bda.clone(),
                 filters: like.filters.clone(),
+                kept: kept_for(rig),
             };
         }
         let i_bda = rig
@@ -274,6 +283,7 @@ impl Panoramic {
             settings,
             i_bda,
             filters,
+            kept: kept_for(rig),
         }
     }
 
@@ -347,19 +357,38 @@ impl Panoramic {
         // itself): a buffer of the right length is not cleared first.
         luminance.resize(PIXELS, 0.0);
         match self.rig.optics {
-            Optics::Exact => renderer.integrate_of(
-                view,
-                eye,
-                pose.heading,
-                &self.strip,
-                Detail {
+            Optics::Exact => {
+                let detail = Detail {
                     samples: self.rig.samples,
                     stride: self.rig.stride,
                     crowd_distance: self.rig.crowd_distance,
                     far_distance: self.rig.far_distance,
-                },
-                luminance,
-            ),
+                };
+                match (&mut self.kept, renderer, view) {
+                    (
+                        Some(kept),
+                        Renderer::Columns(scene),
+                        ViewOf::Columns(frame, viewer),
+                    ) => scene.integrate_kept(
+                        frame,
+                        viewer,
+                        eye,
+                        pose.heading,
+                        &self.strip,
+                        detail,
+                        kept,
+                        luminance,
+                    ),
+                    _ => renderer.integrate_of(
+                        view,
+                        eye,
+                        pose.heading,
+                        &self.strip,
+                        detail,
+                        luminance,
+                    ),
+                }
+            }
             Optics::Paper => paper(
                 renderer,
                 view,

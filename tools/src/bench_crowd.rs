@@ -34,6 +34,11 @@ pub struct Args {
     /// (`crowdFarDistance`: buoys farther are left out, not drawn as impostors).
     #[arg(long, value_delimiter = ',')]
     far_distances: Vec<f64>,
+    /// Keep distances (m): each crowd and far distance is also measured with impostors kept
+    /// (`crowdKeepDistance`), each retina's kept ones worked out with the eye up to this far
+    /// away (a seeded offset and turn) and then drawn where the eye is.
+    #[arg(long, value_delimiter = ',')]
+    keep_distances: Vec<f64>,
     /// Robots whose retina is compared per frame (spread evenly over the swarm).
     #[arg(long, default_value_t = 40)]
     viewers: usize,
@@ -71,17 +76,28 @@ pub struct Args {
     format: crate::plot::FigureFormat,
 }
 
-/// A level of detail: `None`, the reference (every robot and buoy drawn exactly); else the
-/// crowd distance and the far distance (`None`: impostors however far).
-type Setting = Option<(f64, Option<f64>)>;
+/// A crowd level of detail: the crowd distance, the far distance (`None`: impostors however
+/// far) and the keep distance (`None`: impostors worked out on every update).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Lod {
+    crowd: f64,
+    far: Option<f64>,
+    keep: Option<f64>,
+}
+
+/// A level of detail: `None`, the reference (every robot and buoy drawn exactly).
+type Setting = Option<Lod>;
 
 /// The settings measured: the reference, then each crowd distance without a far distance
-/// and with each far distance.
+/// and with each far distance, each also with each keep distance.
 fn settings(args: &Args) -> Vec<Setting> {
     let mut out = vec![None];
-    for &d in &args.distances {
-        out.push(Some((d, None)));
-        out.extend(args.far_distances.iter().map(|&f| Some((d, Some(f)))));
+    for &crowd in &args.distances {
+        let fars = std::iter::once(None).chain(args.far_distances.iter().map(|&f| Some(f)));
+        for far in fars {
+            let keeps = std::iter::once(None).chain(args.keep_distances.iter().map(|&k| Some(k)));
+            out.extend(keeps.map(|keep| Some(Lod { crowd, far, keep })));
+        }
     }
     out
 }
@@ -90,8 +106,11 @@ fn settings(args: &Args) -> Vec<Setting> {
 fn label(setting: Setting) -> String {
     match setting {
         None => "exact".to_owned(),
-        Some((d, None)) => format!("{d} m"),
-        Some((d, Some(f))) => format!("{d} m, far {f} m"),
+        Some(Lod { crowd, far, keep }) => {
+            format!("{crowd} m")
+                + &far.map_or(String::new(), |f| format!(", far {f} m"))
+                + &keep.map_or(String::new(), |k| format!(", keep {k} m"))
+        }
     }
 }
 
@@ -122,10 +141,11 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     if let Some(bad) = args
         .far_distances
         .iter()
+        .chain(&args.keep_distances)
         .chain(&args.behaviour_reference)
         .find(|d| !(d.is_finite() && **d > 0.0))
     {
-        bail!("--far-distances, --behaviour-reference: {bad} is not a distance above 0 m");
+        bail!("--far-distances, --keep-distances, --behaviour-reference: {bad} is not a distance above 0 m");
     }
     if args.viewers == 0 || args.frames == 0 {
         bail!("--viewers and --frames must be at least 1");
@@ -138,7 +158,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         args.seed, args.frames, args.spacing, args.viewers, args.repeats.max(1)
     );
     println!(
-        "{:>6} {:>18} {:>12} {:>16} {:>10} {:>10} {:>8} {:>12} {:>12}",
+        "{:>6} {:>30} {:>12} {:>16} {:>10} {:>10} {:>8} {:>12} {:>12}",
         "robots",
         "distance",
         "µs/retina",
@@ -153,7 +173,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     for &robots in &args.robots {
         for row in measure(robots, &args)? {
             println!(
-                "{:>6} {:>18} {:>12.2} {:>16.3} {:>10.4} {:>10.3} {:>8} {:>12.2e} {:>12.2e}",
+                "{:>6} {:>30} {:>12.2} {:>16.3} {:>10.4} {:>10.3} {:>8} {:>12.2e} {:>12.2e}",
                 row.robots,
                 label(row.distance),
                 row.micros_per_retina,
@@ -167,17 +187,20 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             rows.push(row);
         }
     }
-    let mut csv = String::from("robots,crowd_distance_m,far_distance_m,micros_per_retina,outputs_compared,digital_lsb_error_mean,share_beyond_1_lsb,digital_lsb_error_max,analog_rel_error_mean,analog_rel_error_max\n");
+    let mut csv = String::from("robots,crowd_distance_m,far_distance_m,keep_distance_m,micros_per_retina,outputs_compared,digital_lsb_error_mean,share_beyond_1_lsb,digital_lsb_error_max,analog_rel_error_mean,analog_rel_error_max\n");
     for row in &rows {
         let _ = writeln!(
             csv,
-            "{},{},{},{:.3},{},{:.6},{:.6},{},{:.6e},{:.6e}",
+            "{},{},{},{},{:.3},{},{:.6},{:.6},{},{:.6e},{:.6e}",
             row.robots,
             row.distance
-                .map_or("exact".to_owned(), |(d, _)| d.to_string()),
+                .map_or("exact".to_owned(), |lod| lod.crowd.to_string()),
             row.distance
-                .and_then(|(_, f)| f)
+                .and_then(|lod| lod.far)
                 .map_or(String::new(), |f| f.to_string()),
+            row.distance
+                .and_then(|lod| lod.keep)
+                .map_or(String::new(), |k| k.to_string()),
             row.micros_per_retina,
             row.outputs,
             row.lsb_mean,
@@ -209,6 +232,7 @@ fn frames(robots: usize, args: &Args) -> anyhow::Result<Vec<Poses>> {
         seed: args.seed,
         crowd_distance: None,
         far_distance: None,
+        keep_distance: None,
     };
     let compiled = compile_text("swarm-ir.wbt", swarm_world(&spec))?;
     let mut simulation = Simulation::new(&compiled, Some(args.seed))?;
@@ -234,6 +258,7 @@ fn measure(robots: usize, args: &Args) -> anyhow::Result<Vec<Row>> {
         seed: args.seed,
         crowd_distance: None,
         far_distance: None,
+        keep_distance: None,
     };
     let compiled = compile_text("swarm.wbt", swarm_world(&spec))?;
     let frames = frames(robots, args)?;
@@ -245,6 +270,7 @@ fn measure(robots: usize, args: &Args) -> anyhow::Result<Vec<Row>> {
     };
     let renderer = Renderer::new(&compiled.graph, &compiled.plan, false);
     let settings = settings(args);
+    let mut offsets = Unit(args.seed ^ 0x4b45_4550);
     // outputs[setting][frame × viewer]
     let mut outputs: Vec<Vec<RetinaOutput>> = vec![Vec::new(); settings.len()];
     let mut seconds = vec![0.0f64; settings.len()];
@@ -260,11 +286,18 @@ fn measure(robots: usize, args: &Args) -> anyhow::Result<Vec<Row>> {
             let floor = compiled.rig.robots[viewer].floor_y;
             for (slot, setting) in settings.iter().enumerate() {
                 let mut rig = turret.clone();
-                rig.crowd_distance = setting.map_or(f64::INFINITY, |(d, _)| d);
-                rig.far_distance = setting.and_then(|(_, f)| f).unwrap_or(f64::INFINITY);
+                rig.crowd_distance = setting.map_or(f64::INFINITY, |lod| lod.crowd);
+                rig.far_distance = setting.and_then(|lod| lod.far).unwrap_or(f64::INFINITY);
+                let keep = setting.and_then(|lod| lod.keep);
+                rig.keep_distance = keep.unwrap_or(0.0);
                 let mut retina = Panoramic::new(&rig);
                 let mut out = RetinaOutput::default();
                 let view = ViewOf::Columns(&frame, Some(viewer));
+                if let Some(keep) = keep {
+                    // The kept impostors worked out where the eye was up to `keep` ago.
+                    let then = moved_within(pose, keep, &mut offsets);
+                    retina.update_of(&renderer, view, then, floor, &mut out);
+                }
                 let mut fastest = f64::INFINITY;
                 for _ in 0..args.repeats.max(1) {
                     let started = Instant::now();
@@ -295,6 +328,31 @@ fn measure(robots: usize, args: &Args) -> anyhow::Result<Vec<Row>> {
             }
         })
         .collect())
+}
+
+/// A uniform stream in [0, 1) (SplitMix64), for the kept impostors' offsets.
+struct Unit(u64);
+
+impl Unit {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Where an eye now at `pose` was when its impostors were worked out: up to `keep` away in
+/// any direction (uniform over the disc, just inside it), turned by up to a radian either way.
+fn moved_within(pose: Pose2, keep: f64, unit: &mut Unit) -> Pose2 {
+    let radius = 0.999 * keep * unit.next().sqrt();
+    let angle = std::f64::consts::TAU * unit.next();
+    Pose2 {
+        x: pose.x + radius * angle.cos(),
+        z: pose.z + radius * angle.sin(),
+        heading: pose.heading + 2.0 * unit.next() - 1.0,
+    }
 }
 
 struct Errors {
@@ -344,7 +402,11 @@ fn behaviour(robots: usize, args: &Args) -> anyhow::Result<()> {
         "behaviour: {robots} robots, regatta controller, {} s, seeds 1…{}",
         args.seconds, args.seeds
     );
-    let reference: Setting = args.behaviour_reference.map(|d| (d, None));
+    let reference: Setting = args.behaviour_reference.map(|crowd| Lod {
+        crowd,
+        far: None,
+        keep: None,
+    });
     let mut compared = vec![reference];
     compared.extend(
         settings(args)
@@ -365,8 +427,9 @@ fn behaviour(robots: usize, args: &Args) -> anyhow::Result<()> {
                 buoys: None,
                 ir_only: false,
                 seed,
-                crowd_distance: setting.map(|(d, _)| d),
-                far_distance: setting.and_then(|(_, f)| f),
+                crowd_distance: setting.map(|lod| lod.crowd),
+                far_distance: setting.and_then(|lod| lod.far),
+                keep_distance: setting.and_then(|lod| lod.keep),
             };
             let compiled: Compiled = compile_text("swarm.wbt", swarm_world(&spec))?;
             let mut simulation = Simulation::new(&compiled, Some(seed))?;
@@ -414,33 +477,33 @@ fn chart(rows: &[Row]) -> regatta_figures::Chart {
         Axis::log("mean digital error (LSB; exact drawn at 0.0001)"),
     )
     .legend(Corner::UpperRight);
-    // One series per swarm size and far distance (the reference in each).
-    let far = |r: &Row| r.distance.and_then(|(_, f)| f);
-    let mut series: Vec<(usize, Option<f64>)> = Vec::new();
-    for row in rows.iter().filter(|r| r.distance.is_some()) {
-        let key = (row.robots, far(row));
+    // One series per swarm size, far distance and keep distance (the reference in each).
+    let bits = |v: Option<f64>| v.map(f64::to_bits);
+    let key = |r: &Row| {
+        r.distance
+            .map(|lod| (bits(lod.far), bits(lod.keep)))
+            .unwrap_or((None, None))
+    };
+    let mut series: Vec<(usize, (Option<u64>, Option<u64>), Lod)> = Vec::new();
+    for row in rows {
+        let Some(lod) = row.distance else { continue };
         if !series
             .iter()
-            .any(|s| s.0 == key.0 && s.1.map(f64::to_bits) == key.1.map(f64::to_bits))
+            .any(|s| s.0 == row.robots && s.1 == key(row))
         {
-            series.push(key);
+            series.push((row.robots, key(row), lod));
         }
     }
-    for (robots, far_distance) in series {
+    for (robots, wanted, lod) in series {
         let mut points: Vec<(f64, f64)> = rows
             .iter()
-            .filter(|r| {
-                r.robots == robots
-                    && (r.distance.is_none()
-                        || far(r).map(f64::to_bits) == far_distance.map(f64::to_bits))
-            })
+            .filter(|r| r.robots == robots && (r.distance.is_none() || key(r) == wanted))
             .map(|r| (r.micros_per_retina, r.lsb_mean.max(floor)))
             .collect();
         points.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let name = match far_distance {
-            None => format!("{robots} robots"),
-            Some(f) => format!("{robots} robots, far {f} m"),
-        };
+        let name = format!("{robots} robots")
+            + &lod.far.map_or(String::new(), |f| format!(", far {f} m"))
+            + &lod.keep.map_or(String::new(), |k| format!(", keep {k} m"));
         chart = chart.with(Series::line_markers(name, points));
     }
     chart

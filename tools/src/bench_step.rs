@@ -52,6 +52,11 @@ pub struct Args {
     /// --far-distances`). 0: impostors however far.
     #[arg(long, value_name = "METRES", default_value_t = 5.0)]
     far_distance: f64,
+    /// Swarms, with a crowd distance: the turrets' `crowdKeepDistance` (m): impostors are
+    /// worked out again only once a retina has moved this far (its error: `regatta bench
+    /// crowd --keep-distances`). 0: on every update.
+    #[arg(long, value_name = "METRES", default_value_t = 0.0)]
+    keep_distance: f64,
     /// Swarms: seed of the placements.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -113,11 +118,13 @@ fn swarms(args: Args, threads: usize) -> anyhow::Result<Outcome> {
     if args.robots.contains(&0) {
         bail!("--robots: every size must be at least 1");
     }
-    if !(args.far_distance.is_finite() && args.far_distance >= 0.0) {
-        bail!(
-            "--far-distance: {} is not a distance of 0 m or more",
-            args.far_distance
-        );
+    for (flag, value) in [
+        ("--far-distance", args.far_distance),
+        ("--keep-distance", args.keep_distance),
+    ] {
+        if !(value.is_finite() && value >= 0.0) {
+            bail!("{flag}: {value} is not a distance of 0 m or more");
+        }
     }
     let spec = |robots: usize| SwarmSpec {
         robots,
@@ -126,6 +133,7 @@ fn swarms(args: Args, threads: usize) -> anyhow::Result<Outcome> {
         seed: args.seed,
         crowd_distance: (args.crowd_distance > 0.0).then_some(args.crowd_distance),
         far_distance: (args.far_distance > 0.0).then_some(args.far_distance),
+        keep_distance: (args.keep_distance > 0.0).then_some(args.keep_distance),
     };
     if let Some(directory) = &args.write_worlds {
         std::fs::create_dir_all(directory)
@@ -203,6 +211,7 @@ fn swarms(args: Args, threads: usize) -> anyhow::Result<Outcome> {
         (
             (args.crowd_distance > 0.0).then_some(args.crowd_distance),
             (args.far_distance > 0.0).then_some(args.far_distance),
+            (args.keep_distance > 0.0).then_some(args.keep_distance),
         ),
     );
     if let Some((slope, from, to)) = crate::bench_swarm::fitted_exponent(&rows) {

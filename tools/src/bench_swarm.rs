@@ -37,6 +37,8 @@ pub struct SwarmSpec {
     pub crowd_distance: Option<f64>,
     /// The turrets' `crowdFarDistance` (m); `None`: impostors however far.
     pub far_distance: Option<f64>,
+    /// The turrets' `crowdKeepDistance` (m); `None`: impostors worked out on every update.
+    pub keep_distance: Option<f64>,
 }
 
 impl SwarmSpec {
@@ -158,6 +160,9 @@ pub fn swarm_world(spec: &SwarmSpec) -> String {
                     + &spec
                         .far_distance
                         .map_or(String::new(), |d| format!("\n    crowdFarDistance {d}"))
+                    + &spec
+                        .keep_distance
+                        .map_or(String::new(), |d| format!("\n    crowdKeepDistance {d}"))
             ),
         )
     };
@@ -314,7 +319,7 @@ pub fn print_table(
     rows: &[Row],
     threads: usize,
     ir_only: bool,
-    (crowd_distance, far_distance): (Option<f64>, Option<f64>),
+    (crowd_distance, far_distance, keep_distance): (Option<f64>, Option<f64>, Option<f64>),
 ) {
     println!(
         "swarm step bench: {} thread(s), {}; 10 robots/m²",
@@ -328,6 +333,7 @@ pub fn print_table(
             (false, Some(d)) => format!(
                 "Panoramic turrets (exact optics, other robots drawn within {d} m, far buoys as impostors{}, odd filter), regatta controller",
                 far_distance.map_or(String::new(), |f| format!(" up to {f} m (left out beyond)"))
+                    + &keep_distance.map_or(String::new(), |k| format!(", kept while the eye moves less than {k} m"))
             ),
         }
     );
@@ -473,6 +479,7 @@ mod tests {
                 seed: 3,
                 crowd_distance: None,
                 far_distance: None,
+                keep_distance: None,
             };
             let compiled = compile_text("swarm.wbt", swarm_world(&spec)).unwrap();
             assert_eq!(compiled.rig.robots.len(), robots);

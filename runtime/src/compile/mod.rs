@@ -894,6 +894,10 @@ impl Compiler<'_> {
                         d if d > 0.0 => d,
                         _ => f64::INFINITY,
                     },
+                    keep_distance: match scene.float(node, "crowdKeepDistance") {
+                        d if d > 0.0 && d.is_finite() => d,
+                        _ => 0.0,
+                    },
                     filters: filter_set(scene.strings(node, "filters")),
                     lambda: scene.float(node, "lambda"),
                     bandpass: (bandpass[0].min(bandpass[1]), bandpass[0].max(bandpass[1])),

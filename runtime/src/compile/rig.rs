@@ -177,6 +177,9 @@ pub struct PanoramicRig {
     /// Exact optics with a crowd distance: small static objects wholly farther than this (m)
     /// are left out (infinite: none are).
     pub far_distance: f64,
+    /// Exact optics with a crowd distance: impostors are worked out again once the eye has
+    /// moved this far (m) since they last were (0: on every update).
+    pub keep_distance: f64,
     pub filters: FilterSet,
     pub lambda: f64,
     pub bandpass: (f64, f64),

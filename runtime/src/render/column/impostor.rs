@@ -119,6 +119,33 @@ impl Occlusion {
         open * (std::f64::consts::TAU / BINS as f64)
     }
 
+    /// [`Occlusion::uncovered`] for an interval that may pass ±π by less than a turn (told
+    /// all around the eye): its two pieces, each within (−π, π].
+    fn uncovered_around(&self, lo: f64, hi: f64, top: f64) -> f64 {
+        use std::f64::consts::{PI, TAU};
+        if lo < -PI {
+            self.uncovered(lo + TAU, PI, top) + self.uncovered(-PI, hi, top)
+        } else if hi > PI {
+            self.uncovered(lo, PI, top) + self.uncovered(-PI, hi - TAU, top)
+        } else {
+            self.uncovered(lo, hi, top)
+        }
+    }
+
+    /// [`Occlusion::cover`] for an interval that may pass ±π by less than a turn.
+    fn cover_around(&mut self, lo: f64, hi: f64, top: f64) {
+        use std::f64::consts::{PI, TAU};
+        if lo < -PI {
+            self.cover(lo + TAU, PI, top);
+            self.cover(-PI, hi, top);
+        } else if hi > PI {
+            self.cover(lo, PI, top);
+            self.cover(-PI, hi - TAU, top);
+        } else {
+            self.cover(lo, hi, top);
+        }
+    }
+
     /// Records an object covering `[lo, hi]` up to `top`, in the bins it covers whole.
     fn cover(&mut self, lo: f64, hi: f64, top: f64) {
         let (u0, u1) = (Self::position(lo), Self::position(hi));
@@ -188,12 +215,12 @@ pub(super) fn settle(
         let width = impostor.hi - impostor.lo;
         let top = impostor.top();
         impostor.visible = if width > 0.0 {
-            (occlusion.uncovered(impostor.lo, impostor.hi, top) / width).min(1.0)
+            (occlusion.uncovered_around(impostor.lo, impostor.hi, top) / width).min(1.0)
         } else {
             0.0
         };
         if impostor.y0 <= base {
-            occlusion.cover(impostor.lo, impostor.hi, top);
+            occlusion.cover_around(impostor.lo, impostor.hi, top);
         }
     }
 }
@@ -209,6 +236,9 @@ pub(super) struct Viewpoint {
     far_distance: f64,
     width: f64,
     reach_cos: f64,
+    /// Whether impostors all around the eye are kept, their interval passing ±π where it does
+    /// ([`Viewpoint::keep_all_around`]).
+    around: bool,
 }
 
 impl Viewpoint {
@@ -229,7 +259,15 @@ impl Viewpoint {
             far_distance,
             width,
             reach_cos,
+            around: false,
         }
+    }
+
+    /// Keeps every impostor within the far distance, wherever it lies around the eye: none is
+    /// behind the strip, and an interval may pass ±π (then its centre lies within (−π, π]).
+    pub(super) fn keep_all_around(&mut self) {
+        self.reach_cos = f64::NEG_INFINITY;
+        self.around = true;
     }
 
     /// The cosine of the largest angle from the heading at which an impostor at most `width`
@@ -288,7 +326,7 @@ impl Viewpoint {
         }
         let middle = atan2(v * self.cos_h - u * self.sin_h, along);
         let (lo, hi) = (middle - half, middle + half);
-        if lo <= -std::f64::consts::PI || hi > std::f64::consts::PI {
+        if (lo <= -std::f64::consts::PI || hi > std::f64::consts::PI) && !self.around {
             return BEHIND;
         }
         Some((lo, hi, distance))
@@ -297,7 +335,7 @@ impl Viewpoint {
 
 /// `atan2(y, x)` by an odd polynomial after reducing the argument to |w| ≤ tan(π/8)
 /// (error below 2e-8 rad), plain arithmetic: the same on every platform.
-fn atan2(y: f64, x: f64) -> f64 {
+pub(super) fn atan2(y: f64, x: f64) -> f64 {
     use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
     let (ax, ay) = (x.abs(), y.abs());
     let (num, den, swapped) = if ay > ax {

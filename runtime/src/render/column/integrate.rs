@@ -8,13 +8,14 @@ use glam::{DVec2, DVec3};
 use super::super::shade;
 use super::impostor::Impostor;
 use super::impostor::IMPOSTOR_PIXELS;
+use super::kept::{KeptImpostors, Refresh};
 use super::photodiode::{
     band_atan, index_below, nearest_index, Band, Face, Free, LitSegments, LitSink, Raster, Scratch,
     Segment, SegmentSink, Segments, Shown,
 };
 use super::scene::{ColumnFrame, ColumnScene};
 use super::strip::Strip;
-use super::sweep::{self, eye_object, EyeObject, Look, Reach, Sector, Sweep};
+use super::sweep::{self, eye_object, EyeObject, Look, Reach, Rounds, Sector, Sweep};
 use crate::compile::graph::LightKind;
 use crate::render::Detail;
 use crate::retina::luminance;
@@ -102,7 +103,39 @@ impl ColumnScene<'_> {
     ) {
         with_workspace(|workspace| {
             self.integrate_with(
-                workspace, frame, viewer, eye, heading, strip, detail, false, out,
+                workspace, frame, viewer, eye, heading, strip, detail, false, None, out,
+            )
+        })
+    }
+
+    /// [`ColumnScene::integrate_for`] with the impostors `kept` from the eye's earlier
+    /// updates (`crowdKeepDistance`, `kept.rs`): worked out again only when the eye has moved
+    /// farther than its distance. Without a crowd distance, or on a strip sampled pixel by
+    /// pixel, the same as [`ColumnScene::integrate_for`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn integrate_kept(
+        &self,
+        frame: &ColumnFrame,
+        viewer: Option<usize>,
+        eye: DVec3,
+        heading: f64,
+        strip: &Strip,
+        detail: Detail,
+        kept: &mut KeptImpostors,
+        out: &mut [f64],
+    ) {
+        with_workspace(|workspace| {
+            self.integrate_with(
+                workspace,
+                frame,
+                viewer,
+                eye,
+                heading,
+                strip,
+                detail,
+                false,
+                Some(kept),
+                out,
             )
         })
     }
@@ -123,7 +156,7 @@ impl ColumnScene<'_> {
     ) {
         with_workspace(|workspace| {
             self.integrate_with(
-                workspace, frame, viewer, eye, heading, strip, detail, true, out,
+                workspace, frame, viewer, eye, heading, strip, detail, true, None, out,
             )
         })
     }
@@ -139,6 +172,7 @@ impl ColumnScene<'_> {
         strip: &Strip,
         detail: Detail,
         exhaustive: bool,
+        kept: Option<&mut KeptImpostors>,
         out: &mut [f64],
     ) {
         let (samples, stride) = (detail.samples, detail.stride);
@@ -162,7 +196,7 @@ impl ColumnScene<'_> {
             .flatten();
         // Far small static objects become impostors, drawn as boxes over contiguous windows.
         let impostors = detail.crowd_distance.is_finite() && strip.contiguous;
-        let reach = Reach {
+        let mut reach = Reach {
             sector,
             crowd_distance: detail.crowd_distance,
             far_distance: detail.far_distance,
@@ -177,13 +211,74 @@ impl ColumnScene<'_> {
             } else {
                 f64::INFINITY
             },
+            rounds: Rounds::Tell,
         };
-        self.look_into(frame, viewer, eye, heading, reach, look);
-        let look = &*look;
-        sweep.start(look, exhaustive);
         let band = 2.0 * band_atan(strip.tan_half_band);
         let sky = luminance(self.background(1.0));
         let ground = luminance(self.background(-1.0));
+        // Kept impostors, on a strip sampled by regions with impostors: told all around the
+        // eye and worked out when stale, else the groups placed last time placed again.
+        let kept = kept.filter(|_| impostors && stride > 1 && !exhaustive);
+        if let Some(kept) = kept {
+            let setting = [
+                detail.crowd_distance.to_bits(),
+                detail.far_distance.to_bits(),
+                reach.impostor_width.to_bits(),
+                strip.tan_half_band.to_bits(),
+            ];
+            let stale = kept.stale(&frame.statics, eye, setting);
+            if stale {
+                reach.rounds = Rounds::TellAround;
+                reach.extent = (f64::NEG_INFINITY, f64::INFINITY);
+            } else {
+                reach.rounds = Rounds::Given;
+                look.keep_rounds(kept.near());
+            }
+            self.look_into(frame, viewer, eye, heading, reach, look);
+            if stale {
+                let column_band = Band {
+                    tan_half: strip.tan_half_band,
+                    band,
+                    sky,
+                    ground,
+                };
+                self.keep_impostors(
+                    frame,
+                    look,
+                    setting,
+                    kept,
+                    Refresh {
+                        band: &column_band,
+                        facing: &mut buffers.facing,
+                        pieces: &mut buffers.pieces,
+                        profile: &mut buffers.profile,
+                        scratch,
+                    },
+                );
+                // The regions draw none: the kept boxes stand in for them all.
+                look.impostor_order.clear();
+            }
+            let look = &*look;
+            sweep.start(look, exhaustive);
+            self.integrate_regions(
+                look,
+                sweep,
+                frame,
+                strip,
+                stride,
+                band,
+                sky,
+                ground,
+                buffers,
+                scratch,
+                &mut out[..pixels],
+            );
+            self.draw_kept(look, kept, strip, &mut out[..pixels]);
+            return;
+        }
+        self.look_into(frame, viewer, eye, heading, reach, look);
+        let look = &*look;
+        sweep.start(look, exhaustive);
         if stride > 1 && strip.contiguous {
             self.integrate_regions(
                 look,

@@ -18,7 +18,8 @@
 //! `integrate.rs` the strip integrated region by region, `photodiode.rs` a column's segments
 //! and the band over each photodiode window, `footprint.rs` the placed upright objects,
 //! `shading.rs` the fast shading, `crowd.rs` which other robots an eye draws, `impostor.rs`
-//! which far small static objects stand in as impostors and `far.rs` how they are drawn,
+//! which far small static objects stand in as impostors, `far.rs` how they are drawn and
+//! `kept.rs` how an eye keeps them from one update to the next,
 //! `strip.rs` the pixels to integrate.
 
 mod crowd;
@@ -26,12 +27,14 @@ mod far;
 mod footprint;
 mod impostor;
 mod integrate;
+mod kept;
 mod photodiode;
 mod scene;
 mod shading;
 mod strip;
 mod sweep;
 
+pub use kept::KeptImpostors;
 pub use scene::{ColumnFrame, ColumnScene};
 pub use strip::Strip;
 pub use sweep::{EyeObject, Look};

@@ -84,6 +84,8 @@ pub struct Look {
     /// then those of them it places; and a bitmap ordering them.
     round_visit: Vec<u32>,
     round_bits: Vec<u64>,
+    /// Whether `round_visit` holds the groups placed (else `round_far` says which were not).
+    rounds_listed: bool,
     /// The last strip's reach for impostors ([`impostor::Viewpoint::reach_cos`]), by the bits
     /// of its width and extent.
     reach_cos: ((u64, u64, u64), f64),
@@ -141,6 +143,29 @@ impl Look {
             self.sin_h * ca + self.cos_h * sa,
         );
         DVec2::new(cw, -sw)
+    }
+
+    /// Sets the round groups the next look with [`Rounds::Given`] places, ascending.
+    pub(super) fn keep_rounds(&mut self, groups: &[u32]) {
+        self.round_visit.clear();
+        self.round_visit.extend_from_slice(groups);
+    }
+
+    /// The round groups this look placed exactly (told near, or too wide to be impostors),
+    /// ascending, into `out`.
+    pub(super) fn placed_rounds(&self, out: &mut Vec<u32>) {
+        out.clear();
+        if self.rounds_listed {
+            out.extend_from_slice(&self.round_visit);
+        } else {
+            out.extend(
+                self.round_far
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, &far)| !far)
+                    .map(|(group, _)| group as u32),
+            );
+        }
     }
 }
 
@@ -394,6 +419,21 @@ pub(super) struct Reach {
     /// anywhere on their footprint, face no photodiode and are left out (a robot's wheels,
     /// another robot nearer than about 17 cm, the viewer's own body). Infinite: none are.
     pub(super) out_of_band: f64,
+    /// How the scene's round groups are told (with impostors).
+    pub(super) rounds: Rounds,
+}
+
+/// How a look tells the scene's round groups (buoys with their lamps) apart, with impostors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Rounds {
+    /// Each is told near (placed exactly), an impostor meeting the strip, or left out.
+    Tell,
+    /// As `Tell`, but every impostor around the eye is kept, whatever the strip, its interval
+    /// passing ±π where it does (the kept impostors' refresh: `kept.rs`).
+    TellAround,
+    /// None is told: the look places the groups the caller gave ([`Look::keep_rounds`]) and
+    /// makes no impostor (the kept impostors stand in for them).
+    Given,
 }
 
 impl Reach {
@@ -405,6 +445,7 @@ impl Reach {
         far_distance: f64::INFINITY,
         extent: (f64::NEG_INFINITY, f64::INFINITY),
         out_of_band: f64::INFINITY,
+        rounds: Rounds::Tell,
     };
 }
 
@@ -567,6 +608,7 @@ impl ColumnScene<'_> {
             round_far,
             round_visit,
             round_bits,
+            rounds_listed,
             reach_cos,
             ..
         } = look;
@@ -588,7 +630,10 @@ impl ColumnScene<'_> {
         // or with a far distance over those it may reach.
         round_far.clear();
         let mut limited = false;
-        if impostor_width > 0.0 {
+        if impostor_width > 0.0 && reach.rounds == Rounds::Given {
+            // The caller's groups are placed (`round_visit`, ascending); none is told.
+            limited = true;
+        } else if impostor_width > 0.0 {
             let (first, last) = reach.extent;
             // The strip's reach, worked out once per strip and width.
             let key = (
@@ -602,13 +647,16 @@ impl ColumnScene<'_> {
                     impostor::Viewpoint::reach_cos(impostor_width, reach.extent),
                 );
             }
-            let viewpoint = impostor::Viewpoint::new(
+            let mut viewpoint = impostor::Viewpoint::new(
                 eye,
                 (cos_h, sin_h),
                 (reach.crowd_distance, reach.far_distance),
                 impostor_width,
                 reach_cos.1,
             );
+            if reach.rounds == Rounds::TellAround {
+                viewpoint.keep_all_around();
+            }
             let mut tell = |round: &super::scene::Round| {
                 let Some((lo, hi, distance)) = viewpoint.far(round.center, round.radius) else {
                     return false;
@@ -645,9 +693,10 @@ impl ColumnScene<'_> {
         // The groups told as impostors (or left out) are passed over, pieces and all, before
         // `place` is called: the loops below skip them. Their static slots are left as they
         // are: only hiders' slots are read, and a round group never hides.
-        if limited {
+        if limited && reach.rounds != Rounds::Given {
             round_visit.retain(|&group| !round_far[group as usize]);
         }
+        *rounds_listed = limited;
         // The previous object placed, its interval, and what became of it.
         let mut previous: Option<(&Upright, Option<Interval>, Fate)> = None;
         // Static objects, then robot parts (each viewer's own as its turret sees them), by

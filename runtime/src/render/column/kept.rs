@@ -1,0 +1,276 @@
+//! Kept impostors: the crowd setting's far buoys worked out once and drawn again on the
+//! updates after, while the eye stays within a distance (`crowdKeepDistance`) of where they
+//! were worked out. This module owns that state, one per eye ([`KeptImpostors`]), when it is
+//! worked out again, and how a kept box is drawn.
+//!
+//! Why it is cheap: telling a hundred round groups, hiding the impostors behind one another
+//! and compositing each into its column cost a retina at 1000 robots about 60,000
+//! instructions, two thirds of its update. An eye moves a few millimetres an update, and what
+//! a far buoy adds to the image depends on where the eye is, not on where it faces: its box's
+//! height (its effect on its column, times the share no nearer buoy hides) is kept, and only
+//! its place is worked out anew, from the eye's position and heading (an arctangent). Why the
+//! error is small: beyond the crowd distance a buoy's box changes by about the eye's offset
+//! over its distance (under 4 % at 0.5 m for 2 cm); `regatta bench crowd --keep-distances`
+//! measures it with the eye moved that far since the boxes were worked out.
+//!
+//! Reproducible: the state belongs to one eye and changes only with that eye's updates, so a
+//! run is the same on any number of threads. It is worked out again when the eye has moved
+//! farther than the distance horizontally, or at all vertically, or in another scene or
+//! setting.
+
+use std::sync::Arc;
+
+use glam::{DVec2, DVec3};
+
+use super::footprint::{wrap, Upright};
+use super::impostor;
+use super::photodiode::{Band, Raster, Scratch, Shown};
+use super::scene::{ColumnFrame, ColumnScene};
+use super::strip::Strip;
+use super::sweep::{EyeObject, Look};
+
+/// One far round group's box, kept: its group (for its centre and radius) and its height, in
+/// four bytes (a thousand eyes keep about fifty each, within the half megabyte a 1000-robot
+/// run has to spare). The height keeps the 8 leading bits of its significand (a float's
+/// upper half, rounded to nearest): within 0.2 % of a box's effect, a fraction of a 6-bit
+/// step of the photodiode under it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct KeptBox {
+    group: u16,
+    amount: u16,
+}
+
+impl KeptBox {
+    /// `None` for a group past the 16-bit index, or a height that is not finite or is zero.
+    fn new(group: u32, amount: f64) -> Option<KeptBox> {
+        let group = u16::try_from(group).ok()?;
+        let bits = (amount as f32).to_bits();
+        // Round the lower half to nearest, ties to even; a finite height stays finite short
+        // of the largest floats, which no photodiode reads.
+        let rounded = bits.checked_add(0x7FFF + ((bits >> 16) & 1))? >> 16;
+        let amount = rounded as u16;
+        let value = f32::from_bits(u32::from(amount) << 16);
+        (value.is_finite() && value != 0.0).then_some(KeptBox { group, amount })
+    }
+
+    fn amount(self) -> f64 {
+        f64::from(f32::from_bits(u32::from(self.amount) << 16))
+    }
+}
+
+/// Where and for what the boxes were worked out.
+struct Anchor {
+    /// The scene's static objects (the groups index them): kept alive, so compared by address.
+    statics: Arc<[Upright]>,
+    eye: DVec3,
+    /// The bits of the crowd distance, far distance, impostor width and band they used.
+    setting: [u64; 4],
+}
+
+/// One eye's kept impostors (see the module's notes). Empty until its first update.
+pub struct KeptImpostors {
+    /// How far the eye may move (m) before they are worked out again.
+    distance: f64,
+    anchor: Option<Anchor>,
+    /// The round groups placed exactly (near the eye, or too wide to be impostors), ascending.
+    near: Vec<u32>,
+    /// Exactly as long as it needs: a crowd keeps a thousand.
+    boxes: Box<[KeptBox]>,
+}
+
+impl KeptImpostors {
+    /// Kept while the eye stays within `distance` (m, above 0) of where they were worked out.
+    pub fn new(distance: f64) -> KeptImpostors {
+        KeptImpostors {
+            distance,
+            anchor: None,
+            near: Vec::new(),
+            boxes: Box::default(),
+        }
+    }
+
+    /// The distance the eye may move before they are worked out again (m).
+    pub fn distance(&self) -> f64 {
+        self.distance
+    }
+
+    /// Whether the boxes must be worked out again for an eye at `eye` in the scene of
+    /// `statics` with `setting`.
+    pub(super) fn stale(&self, statics: &Arc<[Upright]>, eye: DVec3, setting: [u64; 4]) -> bool {
+        let Some(anchor) = &self.anchor else {
+            return true;
+        };
+        let moved = DVec2::new(eye.x - anchor.eye.x, eye.z - anchor.eye.z);
+        // A NaN offset compares false: worked out again.
+        !(moved.length_squared() <= self.distance * self.distance
+            && eye.y == anchor.eye.y
+            && anchor.setting == setting
+            && Arc::ptr_eq(&anchor.statics, statics))
+    }
+
+    /// The round groups to place exactly.
+    pub(super) fn near(&self) -> &[u32] {
+        &self.near
+    }
+}
+
+/// What working the boxes out needs beside the scene: the look told all around the eye (its
+/// impostors settled), the band, and buffers.
+pub(super) struct Refresh<'b> {
+    pub(super) band: &'b Band,
+    pub(super) facing: &'b mut Vec<u32>,
+    pub(super) pieces: &'b mut Vec<EyeObject>,
+    pub(super) profile: &'b mut Vec<Shown>,
+    pub(super) scratch: &'b mut Scratch,
+}
+
+impl ColumnScene<'_> {
+    /// Works the boxes out anew from `look` (told all around the eye with
+    /// [`super::sweep::Rounds::TellAround`], its impostors settled): each visible impostor's
+    /// effect on the column through its centre, times its visible share, and the groups the
+    /// look placed exactly.
+    pub(super) fn keep_impostors(
+        &self,
+        frame: &ColumnFrame,
+        look: &Look,
+        setting: [u64; 4],
+        kept: &mut KeptImpostors,
+        buffers: Refresh,
+    ) {
+        let Refresh {
+            band,
+            facing,
+            pieces,
+            profile,
+            scratch,
+        } = buffers;
+        look.placed_rounds(&mut kept.near);
+        kept.near.shrink_to_fit();
+        let mut boxes = Vec::with_capacity(look.impostors.len());
+        for impostor in &look.impostors {
+            if !(impostor.visible > 0.0) {
+                continue;
+            }
+            let Some(group) = self.round_of(impostor.first_static) else {
+                continue;
+            };
+            // The column through its centre (its interval may pass ±π: the centre does not).
+            let centre = wrap(0.5 * (impostor.lo + impostor.hi));
+            let direction = look.direction(centre);
+            look.facing(centre, facing);
+            profile.clear();
+            self.profile(frame, look, direction, facing, band, scratch, profile);
+            let effect = self.any_impostor_effect(
+                frame,
+                look,
+                direction,
+                impostor,
+                (profile, pieces),
+                band,
+                scratch,
+            );
+            boxes.extend(KeptBox::new(group, effect * impostor.visible));
+        }
+        kept.boxes = boxes.into_boxed_slice();
+        kept.anchor = Some(Anchor {
+            statics: frame.statics.clone(),
+            eye: look.eye,
+            setting,
+        });
+    }
+
+    /// The round group whose pieces start at static object `first`.
+    fn round_of(&self, first: u32) -> Option<u32> {
+        let group = *self.round_at.get(first as usize)?;
+        group.checked_sub(1)
+    }
+
+    /// Adds each kept box where it lies now, seen from `look`'s eye and heading: its interval
+    /// from its centre's azimuth (the look's polynomial arctangent) and its half-width from
+    /// its radius over its distance, as a look tells an impostor; its height as kept.
+    pub(super) fn draw_kept(&self, look: &Look, kept: &KeptImpostors, strip: &Strip, out: &mut [f64]) {
+        let pixels = out.len();
+        if kept.boxes.is_empty() || pixels == 0 {
+            return;
+        }
+        let width = strip.width;
+        let extent_hi = strip.centers[0] + width / 2.0;
+        let extent_lo = strip.centers[pixels - 1] - width / 2.0;
+        let mut raster = Raster {
+            origin: extent_hi,
+            inverse_width: 1.0 / width,
+            width,
+            out,
+        };
+        let eye = DVec2::new(look.eye.x, look.eye.z);
+        let (cos_h, sin_h) = (look.cos_h, look.sin_h);
+        let turn = std::f64::consts::TAU;
+        // Past ±π a box is drawn again a turn away, where a strip reaches that far.
+        let shifts: &[f64] = if extent_lo <= -std::f64::consts::FRAC_PI_2 * 1.9
+            || extent_hi >= std::f64::consts::FRAC_PI_2 * 1.9
+        {
+            &[0.0, turn, -turn]
+        } else {
+            &[0.0]
+        };
+        // A box whose centre lies farther from the heading than the strip's reach and the
+        // widest box together meets no photodiode: passed over before its arctangent.
+        let reach = extent_lo.abs().max(extent_hi.abs()) + 0.11;
+        let reach_cos = if reach < std::f64::consts::PI {
+            libm::cos(reach)
+        } else {
+            f64::NEG_INFINITY
+        };
+        for kept_box in kept.boxes.iter() {
+            let Some(round) = self.rounds.get(kept_box.group as usize) else {
+                continue;
+            };
+            let offset = round.center - eye;
+            let distance = offset.length();
+            // Azimuth is anticlockwise from +x towards −z: the offset turned by −heading.
+            let (u, v) = (offset.x, -offset.y);
+            let along = u * cos_h + v * sin_h;
+            if along < distance * reach_cos {
+                continue;
+            }
+            let ratio = round.radius / distance;
+            // Beyond the crowd distance a box is narrow (ratio ≲ 0.06); past 0.1 (an eye
+            // that came within a few radii) the series would not hold.
+            if !(ratio <= 0.1) {
+                continue;
+            }
+            let r2 = ratio * ratio;
+            let half = ratio * (1.0 + r2 * (1.0 / 6.0 + r2 * (3.0 / 40.0 + r2 * (5.0 / 112.0))));
+            let middle = impostor::atan2(v * cos_h - u * sin_h, along);
+            let amount = kept_box.amount();
+            for &shift in shifts {
+                let (lo, hi) = (middle - half + shift, middle + half + shift);
+                if hi > extent_lo && lo < extent_hi {
+                    raster.add(lo, hi, amount, 0.0);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_box_is_four_bytes_and_keeps_its_height_within_a_quarter_percent() {
+        assert_eq!(std::mem::size_of::<KeptBox>(), 4);
+        let mut unit = crate::test_random::unit_stream(5);
+        for _ in 0..10_000 {
+            let amount = (unit() - 0.5) * 10f64.powf(unit() * 8.0 - 6.0);
+            let kept = KeptBox::new(7, amount).expect("a finite height");
+            let error = (kept.amount() - amount).abs() / amount.abs();
+            assert!(error <= 1.0 / 256.0 + 1e-9, "{amount}: {}", kept.amount());
+            assert_eq!(kept.group, 7);
+        }
+        assert_eq!(KeptBox::new(70_000, 1.0), None);
+        assert_eq!(KeptBox::new(1, 0.0), None);
+        assert_eq!(KeptBox::new(1, f64::NAN), None);
+        assert_eq!(KeptBox::new(1, f64::INFINITY), None);
+    }
+}
