@@ -22,12 +22,14 @@ python3 "$swarm" 1000 | sed 's/PanoramicTurret { lambda 5 }/PanoramicTurret { la
   > "$work/crowd1000.wbt"
 python3 "$swarm" 1000 | sed 's/PanoramicTurret { lambda 5 }/PanoramicTurret { lambda 5 crowdDistance 0.5 crowdFarDistance 5 }/' \
   > "$work/far1000.wbt"
+python3 "$swarm" 1000 | sed 's/PanoramicTurret { lambda 5 }/PanoramicTurret { lambda 5 crowdDistance 0.5 crowdFarDistance 5 crowdKeepDistance 0.05 }/' \
+  > "$work/kept1000.wbt"
 python3 "$swarm" 1000 --ir-only > "$work/ir1000.wbt"
 python3 "$swarm" 1 | sed 's/PanoramicTurret { lambda 5 }/PanoramicTurret { lambda 5 crowdDistance 0.5 }/' \
   > "$work/crowd1.wbt"
 
-# The workloads: the crowd benchmarks' worlds (with and without a far distance), and the
-# paper's regatta with a log.
+# The workloads: the crowd benchmarks' worlds (with and without a far distance, with kept
+# impostors), and the paper's regatta with a log.
 trace() {
   local name=$1; shift
   valgrind --tool=callgrind --dump-instr=yes --compress-strings=no --compress-pos=no \
@@ -35,6 +37,7 @@ trace() {
 }
 trace crowd1000 run "$work/crowd1000.wbt" --steps 10 --threads 1
 trace far1000 run "$work/far1000.wbt" --steps 200 --threads 1
+trace kept1000 run "$work/kept1000.wbt" --steps 200 --threads 1
 trace ir1000 run "$work/ir1000.wbt" --steps 100 --threads 1
 trace crowd1 run "$work/crowd1.wbt" --steps 1000 --threads 1
 trace regatta run "$root/worlds/regatta.wbt" --steps 500 --threads 1 --log "$work/regatta.mcap"

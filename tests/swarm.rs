@@ -493,7 +493,16 @@ fn kept_impostors_are_worked_out_again_once_the_eye_moves_past_their_distance() 
     let heading = rig.start.heading;
     let image = |kept: &mut KeptImpostors, at: DVec3, heading: f64| {
         let mut analog = vec![0.0; PIXELS];
-        scene.integrate_kept(&frame, Some(0), at, heading, &strip, detail, kept, &mut analog);
+        scene.integrate_kept(
+            &frame,
+            Some(0),
+            at,
+            heading,
+            &strip,
+            detail,
+            kept,
+            &mut analog,
+        );
         analog
     };
     let mut kept = KeptImpostors::new(0.05);
@@ -513,7 +522,11 @@ fn kept_impostors_are_worked_out_again_once_the_eye_moves_past_their_distance() 
     assert_ne!(held, fresh, "the kept boxes were worked out again");
     let difference: f64 = held.iter().zip(&fresh).map(|(a, b)| (a - b).abs()).sum();
     let total: f64 = fresh.iter().map(|b| b.abs()).sum();
-    assert!(difference / total < 0.03, "kept boxes off by {}", difference / total);
+    assert!(
+        difference / total < 0.03,
+        "kept boxes off by {}",
+        difference / total
+    );
     // Raised or lowered at all: worked out again.
     let raised = near_by + DVec3::new(0.0, 0.001, 0.0);
     assert_eq!(
@@ -535,7 +548,9 @@ fn kept_impostors_run_the_same_on_any_number_of_threads() {
     let with = |setting: &str| {
         compile_text(&text.replace(
             "PanoramicTurret { lambda 5 }",
-            &format!("PanoramicTurret {{ lambda 5 crowdDistance 0.4 crowdFarDistance 3 {setting} }}"),
+            &format!(
+                "PanoramicTurret {{ lambda 5 crowdDistance 0.4 crowdFarDistance 3 {setting} }}"
+            ),
         ))
     };
     let kept = with("crowdKeepDistance 0.05");

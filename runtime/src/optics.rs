@@ -365,20 +365,17 @@ impl Panoramic {
                     far_distance: self.rig.far_distance,
                 };
                 match (&mut self.kept, renderer, view) {
-                    (
-                        Some(kept),
-                        Renderer::Columns(scene),
-                        ViewOf::Columns(frame, viewer),
-                    ) => scene.integrate_kept(
-                        frame,
-                        viewer,
-                        eye,
-                        pose.heading,
-                        &self.strip,
-                        detail,
-                        kept,
-                        luminance,
-                    ),
+                    (Some(kept), Renderer::Columns(scene), ViewOf::Columns(frame, viewer)) => scene
+                        .integrate_kept(
+                            frame,
+                            viewer,
+                            eye,
+                            pose.heading,
+                            &self.strip,
+                            detail,
+                            kept,
+                            luminance,
+                        ),
                     _ => renderer.integrate_of(
                         view,
                         eye,

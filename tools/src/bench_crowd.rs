@@ -487,10 +487,7 @@ fn chart(rows: &[Row]) -> regatta_figures::Chart {
     let mut series: Vec<(usize, (Option<u64>, Option<u64>), Lod)> = Vec::new();
     for row in rows {
         let Some(lod) = row.distance else { continue };
-        if !series
-            .iter()
-            .any(|s| s.0 == row.robots && s.1 == key(row))
-        {
+        if !series.iter().any(|s| s.0 == row.robots && s.1 == key(row)) {
             series.push((row.robots, key(row), lod));
         }
     }

@@ -336,6 +336,13 @@ fn robot_description(robot: &regatta_runtime::compile::rig::RobotRig) -> String 
                             format!(", left out beyond {}", mm(p.far_distance))
                         } else {
                             String::new()
+                        } + &if p.keep_distance > 0.0 {
+                            format!(
+                                ", kept from update to update while the retina moves less than {}",
+                                mm(p.keep_distance)
+                            )
+                        } else {
+                            String::new()
                         }
                     ),
                 },

@@ -509,6 +509,42 @@ mod tests {
         assert!((half - 0.5).abs() < 0.1, "{half}");
     }
 
+    /// Told all around the eye, an impostor may pass ±π: hidden and hiding across it as on
+    /// either side.
+    #[test]
+    fn an_impostor_passing_half_a_turn_hides_and_is_hidden_across_it() {
+        use std::f64::consts::PI;
+        let mut impostors = [
+            // Nearest, across +π from 3.12 to 3.16 (−3.1232 wrapped).
+            impostor(PI - 0.02, PI + 0.02, 1.0),
+            // Behind it, across −π the other way: hidden.
+            impostor(-PI - 0.01, -PI + 0.01, 3.0),
+            // Behind it on the −π side only, half under it.
+            impostor(-PI + 0.01, -PI + 0.03, 4.0),
+        ];
+        let (mut occlusion, mut order) = (Occlusion::default(), Vec::new());
+        settle(&mut impostors, &[], &mut occlusion, &mut order);
+        assert!((impostors[0].visible - 1.0).abs() < 1e-9);
+        assert_eq!(impostors[1].visible, 0.0);
+        let half = impostors[2].visible;
+        assert!((half - 0.5).abs() < 0.1, "{half}");
+        // The same scene turned away from ±π: the same shares, to within a bin.
+        let mut turned = [
+            impostor(-0.02, 0.02, 1.0),
+            impostor(-0.01, 0.01, 3.0),
+            impostor(0.01, 0.03, 4.0),
+        ];
+        settle(&mut turned, &[], &mut occlusion, &mut order);
+        for (a, b) in impostors.iter().zip(&turned) {
+            assert!(
+                (a.visible - b.visible).abs() < 0.08,
+                "{} vs {}",
+                a.visible,
+                b.visible
+            );
+        }
+    }
+
     #[test]
     fn a_near_standing_object_hides_impostors_below_its_top_only() {
         let standing = [Standing {

@@ -188,7 +188,13 @@ impl ColumnScene<'_> {
     /// Adds each kept box where it lies now, seen from `look`'s eye and heading: its interval
     /// from its centre's azimuth (the look's polynomial arctangent) and its half-width from
     /// its radius over its distance, as a look tells an impostor; its height as kept.
-    pub(super) fn draw_kept(&self, look: &Look, kept: &KeptImpostors, strip: &Strip, out: &mut [f64]) {
+    pub(super) fn draw_kept(
+        &self,
+        look: &Look,
+        kept: &KeptImpostors,
+        strip: &Strip,
+        out: &mut [f64],
+    ) {
         let pixels = out.len();
         if kept.boxes.is_empty() || pixels == 0 {
             return;
