@@ -58,6 +58,11 @@ impl KeptBox {
     }
 }
 
+thread_local! {
+    /// The boxes being worked out, before they are kept.
+    static BOXES: std::cell::Cell<Vec<KeptBox>> = const { std::cell::Cell::new(Vec::new()) };
+}
+
 /// Where and for what the boxes were worked out.
 struct Anchor {
     /// The scene's static objects (the groups index them): kept alive, so compared by address.
@@ -146,7 +151,11 @@ impl ColumnScene<'_> {
         } = buffers;
         look.placed_rounds(&mut kept.near);
         kept.near.shrink_to_fit();
-        let mut boxes = Vec::with_capacity(look.impostors.len());
+        // Worked out in the thread's buffer, then kept in a block of exactly their size, the
+        // old one freed first (a crowd's thousand blocks then reuse one another's places).
+        let mut boxes = BOXES.with(std::cell::Cell::take);
+        boxes.clear();
+        kept.boxes = Box::default();
         for impostor in &look.impostors {
             if !(impostor.visible > 0.0) {
                 continue;
@@ -171,7 +180,8 @@ impl ColumnScene<'_> {
             );
             boxes.extend(KeptBox::new(group, effect * impostor.visible));
         }
-        kept.boxes = boxes.into_boxed_slice();
+        kept.boxes = Box::from(boxes.as_slice());
+        BOXES.with(|cell| cell.set(boxes));
         kept.anchor = Some(Anchor {
             statics: frame.statics.clone(),
             eye: look.eye,
