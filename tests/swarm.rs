@@ -177,7 +177,7 @@ fn kept_retinas(
             ..Detail::new(turret.samples, turret.stride)
         };
         let (radius, angle) = (0.999 * keep * unit().sqrt(), std::f64::consts::TAU * unit());
-        let then = eye + DVec3::new(radius * angle.cos(), 0.0, radius * angle.sin());
+        let then = eye + DVec3::new(radius * libm::cos(angle), 0.0, radius * libm::sin(angle));
         let heading_then = rig.start.heading + 2.0 * unit() - 1.0;
         let mut kept = KeptImpostors::new(keep);
         let mut analog = vec![0.0; PIXELS];

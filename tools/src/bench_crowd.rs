@@ -349,8 +349,8 @@ fn moved_within(pose: Pose2, keep: f64, unit: &mut Unit) -> Pose2 {
     let radius = 0.999 * keep * unit.next().sqrt();
     let angle = std::f64::consts::TAU * unit.next();
     Pose2 {
-        x: pose.x + radius * angle.cos(),
-        z: pose.z + radius * angle.sin(),
+        x: pose.x + radius * libm::cos(angle),
+        z: pose.z + radius * libm::sin(angle),
         heading: pose.heading + 2.0 * unit.next() - 1.0,
     }
 }
@@ -484,7 +484,9 @@ fn chart(rows: &[Row]) -> regatta_figures::Chart {
             .map(|lod| (bits(lod.far), bits(lod.keep)))
             .unwrap_or((None, None))
     };
-    let mut series: Vec<(usize, (Option<u64>, Option<u64>), Lod)> = Vec::new();
+    // (robots, the far and keep distances' bits, the setting naming the series)
+    type SeriesKey = (Option<u64>, Option<u64>);
+    let mut series: Vec<(usize, SeriesKey, Lod)> = Vec::new();
     for row in rows {
         let Some(lod) = row.distance else { continue };
         if !series.iter().any(|s| s.0 == row.robots && s.1 == key(row)) {

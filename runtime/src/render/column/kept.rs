@@ -157,7 +157,8 @@ impl ColumnScene<'_> {
         boxes.clear();
         kept.boxes = Box::default();
         for impostor in &look.impostors {
-            if !(impostor.visible > 0.0) {
+            // Hidden (or a share that is not a number): nothing to keep.
+            if impostor.visible.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
                 continue;
             }
             let Some(group) = self.round_of(impostor.first_static) else {
@@ -252,7 +253,10 @@ impl ColumnScene<'_> {
             let ratio = round.radius / distance;
             // Beyond the crowd distance a box is narrow (ratio ≲ 0.06); past 0.1 (an eye
             // that came within a few radii) the series would not hold.
-            if !(ratio <= 0.1) {
+            if ratio
+                .partial_cmp(&0.1)
+                .is_none_or(|o| o == std::cmp::Ordering::Greater)
+            {
                 continue;
             }
             let r2 = ratio * ratio;
@@ -278,7 +282,7 @@ mod tests {
         assert_eq!(std::mem::size_of::<KeptBox>(), 4);
         let mut unit = crate::test_random::unit_stream(5);
         for _ in 0..10_000 {
-            let amount = (unit() - 0.5) * 10f64.powf(unit() * 8.0 - 6.0);
+            let amount = (unit() - 0.5) * libm::pow(10.0, unit() * 8.0 - 6.0);
             let kept = KeptBox::new(7, amount).expect("a finite height");
             let error = (kept.amount() - amount).abs() / amount.abs();
             assert!(error <= 1.0 / 256.0 + 1e-9, "{amount}: {}", kept.amount());
