@@ -8,7 +8,7 @@ use glam::{DVec2, DVec3};
 use proptest::prelude::*;
 use regatta_runtime::compile::rig::TurretRig;
 use regatta_runtime::optics::{Panoramic, Renderer, RetinaOutput};
-use regatta_runtime::render::column::{KeptImpostors, Strip};
+use regatta_runtime::render::column::{ColumnFrame, ColumnScene, KeptImpostors, Strip};
 use regatta_runtime::render::Detail;
 use regatta_runtime::retina::{pixel_azimuth, HALF_BAND, PIXELS, PIXEL_WIDTH};
 use regatta_runtime::sim::{Simulation, PENETRATION_TOLERANCE};
@@ -110,9 +110,11 @@ proptest! {
     }
 }
 
-/// Every retina of a crowd at its start, through the shared frame, with `detail`: each
-/// robot's photocurrents and 6-bit outputs.
-fn crowd_retinas(text: &str, detail: impl Fn(Detail) -> Detail) -> Vec<(Vec<f64>, RetinaOutput)> {
+/// `text` compiled and its scene's frame at the robots' start poses, handed to `f`.
+fn with_start_frame<R>(
+    text: &str,
+    f: impl FnOnce(&regatta_runtime::Compiled, &ColumnScene, &ColumnFrame) -> R,
+) -> R {
     let compiled = compile_text(text);
     let renderer = Renderer::new(&compiled.graph, &compiled.plan, false);
     let Renderer::Columns(scene) = &renderer else {
@@ -122,29 +124,37 @@ fn crowd_retinas(text: &str, detail: impl Fn(Detail) -> Detail) -> Vec<(Vec<f64>
     let mut shared = None;
     renderer.prepare_shared(&compiled.plan, &poses, &mut shared);
     let frame = shared.expect("the column renderer shares its frame");
-    let strip = strip();
-    let mut out = Vec::new();
-    for (index, rig) in compiled.rig.robots.iter().enumerate() {
-        let Some(TurretRig::Panoramic(turret)) = &rig.turret else {
-            continue;
-        };
-        let eye = DVec3::new(rig.start.x, rig.floor_y + turret.height, rig.start.z);
-        let mut analog = vec![0.0; PIXELS];
-        let base = Detail::new(turret.samples, turret.stride);
-        scene.integrate_for(
-            &frame,
-            Some(index),
-            eye,
-            rig.start.heading,
-            &strip,
-            detail(base),
-            &mut analog,
-        );
-        let mut output = RetinaOutput::default();
-        Panoramic::new(turret).accept(&analog, &mut output);
-        out.push((analog, output));
-    }
-    out
+    f(&compiled, scene, &frame)
+}
+
+/// Every retina of a crowd at its start, through the shared frame, with `detail`: each
+/// robot's photocurrents and 6-bit outputs.
+fn crowd_retinas(text: &str, detail: impl Fn(Detail) -> Detail) -> Vec<(Vec<f64>, RetinaOutput)> {
+    with_start_frame(text, |compiled, scene, frame| {
+        let strip = strip();
+        let mut out = Vec::new();
+        for (index, rig) in compiled.rig.robots.iter().enumerate() {
+            let Some(TurretRig::Panoramic(turret)) = &rig.turret else {
+                continue;
+            };
+            let eye = DVec3::new(rig.start.x, rig.floor_y + turret.height, rig.start.z);
+            let mut analog = vec![0.0; PIXELS];
+            let base = Detail::new(turret.samples, turret.stride);
+            scene.integrate_for(
+                frame,
+                Some(index),
+                eye,
+                rig.start.heading,
+                &strip,
+                detail(base),
+                &mut analog,
+            );
+            let mut output = RetinaOutput::default();
+            Panoramic::new(turret).accept(&analog, &mut output);
+            out.push((analog, output));
+        }
+        out
+    })
 }
 
 /// Each robot's retina with impostors kept (`crowdKeepDistance` `keep`, crowd distance 0.5 m,
@@ -155,49 +165,42 @@ fn kept_retinas(
     keep: f64,
     unit: &mut impl FnMut() -> f64,
 ) -> Vec<(Vec<f64>, RetinaOutput)> {
-    let compiled = compile_text(text);
-    let renderer = Renderer::new(&compiled.graph, &compiled.plan, false);
-    let Renderer::Columns(scene) = &renderer else {
-        panic!("an upright crowd renders by columns");
-    };
-    let poses = start_poses(&compiled);
-    let mut shared = None;
-    renderer.prepare_shared(&compiled.plan, &poses, &mut shared);
-    let frame = shared.expect("the column renderer shares its frame");
-    let strip = strip();
-    let mut out = Vec::new();
-    for (index, rig) in compiled.rig.robots.iter().enumerate() {
-        let Some(TurretRig::Panoramic(turret)) = &rig.turret else {
-            continue;
-        };
-        let eye = DVec3::new(rig.start.x, rig.floor_y + turret.height, rig.start.z);
-        let detail = Detail {
-            crowd_distance: 0.5,
-            far_distance: 5.0,
-            ..Detail::new(turret.samples, turret.stride)
-        };
-        let (radius, angle) = (0.999 * keep * unit().sqrt(), std::f64::consts::TAU * unit());
-        let then = eye + DVec3::new(radius * libm::cos(angle), 0.0, radius * libm::sin(angle));
-        let heading_then = rig.start.heading + 2.0 * unit() - 1.0;
-        let mut kept = KeptImpostors::new(keep);
-        let mut analog = vec![0.0; PIXELS];
-        for (at, heading) in [(then, heading_then), (eye, rig.start.heading)] {
-            scene.integrate_kept(
-                &frame,
-                Some(index),
-                at,
-                heading,
-                &strip,
-                detail,
-                &mut kept,
-                &mut analog,
-            );
+    with_start_frame(text, |compiled, scene, frame| {
+        let strip = strip();
+        let mut out = Vec::new();
+        for (index, rig) in compiled.rig.robots.iter().enumerate() {
+            let Some(TurretRig::Panoramic(turret)) = &rig.turret else {
+                continue;
+            };
+            let eye = DVec3::new(rig.start.x, rig.floor_y + turret.height, rig.start.z);
+            let detail = Detail {
+                crowd_distance: 0.5,
+                far_distance: 5.0,
+                ..Detail::new(turret.samples, turret.stride)
+            };
+            let (radius, angle) = (0.999 * keep * unit().sqrt(), std::f64::consts::TAU * unit());
+            let then = eye + DVec3::new(radius * libm::cos(angle), 0.0, radius * libm::sin(angle));
+            let heading_then = rig.start.heading + 2.0 * unit() - 1.0;
+            let mut kept = KeptImpostors::new(keep);
+            let mut analog = vec![0.0; PIXELS];
+            for (at, heading) in [(then, heading_then), (eye, rig.start.heading)] {
+                scene.integrate_kept(
+                    frame,
+                    Some(index),
+                    at,
+                    heading,
+                    &strip,
+                    detail,
+                    &mut kept,
+                    &mut analog,
+                );
+            }
+            let mut output = RetinaOutput::default();
+            Panoramic::new(turret).accept(&analog, &mut output);
+            out.push((analog, output));
         }
-        let mut output = RetinaOutput::default();
-        Panoramic::new(turret).accept(&analog, &mut output);
-        out.push((analog, output));
-    }
-    out
+        out
+    })
 }
 
 /// How far `crowd`'s 6-bit outputs are from `exact`'s: the mean over every output (LSB), the
@@ -473,66 +476,60 @@ fn kept_impostors_are_worked_out_again_once_the_eye_moves_past_their_distance() 
     let mut unit = uniform(7);
     let robots = robots_near(&mut unit, (0.5, 0.5), 10.0);
     let field: Vec<(f64, f64)> = (0..200).map(|_| (unit(), unit())).collect();
-    let compiled = compile_text(&crowd_world(10.0, &robots, &field, &[], 16, 1));
-    let renderer = Renderer::new(&compiled.graph, &compiled.plan, false);
-    let Renderer::Columns(scene) = &renderer else {
-        panic!("an upright crowd renders by columns");
-    };
-    let poses = start_poses(&compiled);
-    let mut shared = None;
-    renderer.prepare_shared(&compiled.plan, &poses, &mut shared);
-    let frame = shared.expect("the column renderer shares its frame");
-    let strip = strip();
-    let detail = Detail {
-        crowd_distance: 0.5,
-        far_distance: 5.0,
-        ..Detail::new(1, 16)
-    };
-    let rig = &compiled.rig.robots[0];
-    let eye = DVec3::new(rig.start.x, rig.floor_y + 0.05, rig.start.z);
-    let heading = rig.start.heading;
-    let image = |kept: &mut KeptImpostors, at: DVec3, heading: f64| {
-        let mut analog = vec![0.0; PIXELS];
-        scene.integrate_kept(
-            &frame,
-            Some(0),
-            at,
-            heading,
-            &strip,
-            detail,
-            kept,
-            &mut analog,
+    let text = crowd_world(10.0, &robots, &field, &[], 16, 1);
+    with_start_frame(&text, |compiled, scene, frame| {
+        let strip = strip();
+        let detail = Detail {
+            crowd_distance: 0.5,
+            far_distance: 5.0,
+            ..Detail::new(1, 16)
+        };
+        let rig = &compiled.rig.robots[0];
+        let eye = DVec3::new(rig.start.x, rig.floor_y + 0.05, rig.start.z);
+        let heading = rig.start.heading;
+        let image = |kept: &mut KeptImpostors, at: DVec3, heading: f64| {
+            let mut analog = vec![0.0; PIXELS];
+            scene.integrate_kept(
+                &frame,
+                Some(0),
+                at,
+                heading,
+                &strip,
+                detail,
+                kept,
+                &mut analog,
+            );
+            analog
+        };
+        let mut kept = KeptImpostors::new(0.05);
+        image(&mut kept, eye, heading + 0.7);
+        // Past the distance: worked out again, as a fresh eye's.
+        let far_off = eye + DVec3::new(0.06, 0.0, 0.0);
+        assert_eq!(
+            image(&mut kept, far_off, heading),
+            image(&mut KeptImpostors::new(0.05), far_off, heading)
         );
-        analog
-    };
-    let mut kept = KeptImpostors::new(0.05);
-    image(&mut kept, eye, heading + 0.7);
-    // Past the distance: worked out again, as a fresh eye's.
-    let far_off = eye + DVec3::new(0.06, 0.0, 0.0);
-    assert_eq!(
-        image(&mut kept, far_off, heading),
-        image(&mut KeptImpostors::new(0.05), far_off, heading)
-    );
-    // Within it: kept, so not a fresh eye's, yet close to it.
-    let near_by = far_off + DVec3::new(0.0, 0.0, 0.04);
-    let (held, fresh) = (
-        image(&mut kept, near_by, heading - 0.4),
-        image(&mut KeptImpostors::new(0.05), near_by, heading - 0.4),
-    );
-    assert_ne!(held, fresh, "the kept boxes were worked out again");
-    let difference: f64 = held.iter().zip(&fresh).map(|(a, b)| (a - b).abs()).sum();
-    let total: f64 = fresh.iter().map(|b| b.abs()).sum();
-    assert!(
-        difference / total < 0.03,
-        "kept boxes off by {}",
-        difference / total
-    );
-    // Raised or lowered at all: worked out again.
-    let raised = near_by + DVec3::new(0.0, 0.001, 0.0);
-    assert_eq!(
-        image(&mut kept, raised, heading),
-        image(&mut KeptImpostors::new(0.05), raised, heading)
-    );
+        // Within it: kept, so not a fresh eye's, yet close to it.
+        let near_by = far_off + DVec3::new(0.0, 0.0, 0.04);
+        let (held, fresh) = (
+            image(&mut kept, near_by, heading - 0.4),
+            image(&mut KeptImpostors::new(0.05), near_by, heading - 0.4),
+        );
+        assert_ne!(held, fresh, "the kept boxes were worked out again");
+        let difference: f64 = held.iter().zip(&fresh).map(|(a, b)| (a - b).abs()).sum();
+        let total: f64 = fresh.iter().map(|b| b.abs()).sum();
+        assert!(
+            difference / total < 0.03,
+            "kept boxes off by {}",
+            difference / total
+        );
+        // Raised or lowered at all: worked out again.
+        let raised = near_by + DVec3::new(0.0, 0.001, 0.0);
+        assert_eq!(
+            image(&mut kept, raised, heading),
+            image(&mut KeptImpostors::new(0.05), raised, heading)
+        );
+    });
 }
 
 /// Kept impostors run the same on any number of threads (each eye keeps its own, changed

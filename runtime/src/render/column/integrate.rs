@@ -218,8 +218,8 @@ impl ColumnScene<'_> {
         let ground = luminance(self.background(-1.0));
         // Kept impostors, on a strip sampled by regions with impostors: told all around the
         // eye and worked out when stale, else the groups placed last time placed again.
-        let kept = kept.filter(|_| impostors && stride > 1 && !exhaustive);
-        if let Some(kept) = kept {
+        let mut kept = kept.filter(|_| impostors && stride > 1 && !exhaustive);
+        if let Some(kept) = &mut kept {
             let setting = [
                 detail.crowd_distance.to_bits(),
                 detail.far_distance.to_bits(),
@@ -258,25 +258,9 @@ impl ColumnScene<'_> {
                 // The regions draw none: the kept boxes stand in for them all.
                 look.impostor_order.clear();
             }
-            let look = &*look;
-            sweep.start(look, exhaustive);
-            self.integrate_regions(
-                look,
-                sweep,
-                frame,
-                strip,
-                stride,
-                band,
-                sky,
-                ground,
-                buffers,
-                scratch,
-                &mut out[..pixels],
-            );
-            self.draw_kept(look, kept, strip, &mut out[..pixels]);
-            return;
+        } else {
+            self.look_into(frame, viewer, eye, heading, reach, look);
         }
-        self.look_into(frame, viewer, eye, heading, reach, look);
         let look = &*look;
         sweep.start(look, exhaustive);
         if stride > 1 && strip.contiguous {
@@ -293,6 +277,9 @@ impl ColumnScene<'_> {
                 scratch,
                 &mut out[..pixels],
             );
+            if let Some(kept) = &kept {
+                self.draw_kept(look, kept, strip, &mut out[..pixels]);
+            }
             return;
         }
         let facing = &mut buffers.facing;
