@@ -490,7 +490,7 @@ fn kept_impostors_are_worked_out_again_once_the_eye_moves_past_their_distance() 
         let image = |kept: &mut KeptImpostors, at: DVec3, heading: f64| {
             let mut analog = vec![0.0; PIXELS];
             scene.integrate_kept(
-                &frame,
+                frame,
                 Some(0),
                 at,
                 heading,
