@@ -425,9 +425,13 @@ fn bench_crowd_measures_error_against_every_robot_drawn() {
     let csv = std::fs::read_to_string(dir.join("crowd.csv")).unwrap();
     let rows = csv_rows(&csv);
     assert_eq!(rows.len(), 3, "{csv}");
-    // Columns: robots, distance, far distance, µs, outputs, LSB mean, share > 1, LSB max,
-    // analog mean, max.
-    let analog = |row: &[&str]| row[8].parse::<f64>().unwrap();
+    // Found by its header, so that a column added to the file cannot shift it.
+    let analog_column = csv
+        .lines()
+        .next()
+        .and_then(|header| header.split(',').position(|c| c == "analog_rel_error_mean"))
+        .unwrap_or_else(|| panic!("no analog_rel_error_mean column: {csv}"));
+    let analog = |row: &[&str]| row[analog_column].parse::<f64>().unwrap();
     assert_eq!((rows[0][1], analog(&rows[0])), ("exact", 0.0), "{csv}");
     assert!(
         analog(&rows[1]) > 0.0,
