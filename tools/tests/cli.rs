@@ -357,28 +357,35 @@ fn csv_rows(csv: &str) -> Vec<Vec<&str>> {
         .collect()
 }
 
-/// `bench crowd --far-distances` adds a row per far distance to each crowd distance, and
-/// says which far distances it refuses.
+/// `bench crowd --far-distances --keep-distances` adds a row per far and keep distance to
+/// each crowd distance, and says which far distances it refuses.
 #[test]
 fn bench_crowd_measures_each_far_distance() {
     let dir = temp_dir("bench-crowd-far");
     let output = regatta()
         .args(["bench", "crowd", "--robots", "10", "--distances", "0.5"])
-        .args(["--far-distances", "5", "--viewers", "2", "--frames", "1"])
-        .args(["--repeats", "1", "--out"])
+        .args(["--far-distances", "5", "--keep-distances", "0.05"])
+        .args(["--viewers", "2", "--frames", "1", "--repeats", "1", "--out"])
         .arg(&dir)
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&output.stdout);
     assert_eq!(output.status.code(), Some(0), "{text}");
-    assert!(text.contains("0.5 m, far 5 m"), "{text}");
+    assert!(text.contains("0.5 m, far 5 m, keep 0.05 m"), "{text}");
     let csv = std::fs::read_to_string(dir.join("crowd.csv")).unwrap();
     let rows = csv_rows(&csv);
-    // Exact, 0.5 m, 0.5 m with far 5 m: the crowd and far distance columns.
-    let settings: Vec<(&str, &str)> = rows.iter().map(|r| (r[1], r[2])).collect();
+    // Exact, then 0.5 m without and with far 5 m, each without and with keep 5 cm: the
+    // crowd, far and keep distance columns.
+    let settings: Vec<(&str, &str, &str)> = rows.iter().map(|r| (r[1], r[2], r[3])).collect();
     assert_eq!(
         settings,
-        [("exact", ""), ("0.5", ""), ("0.5", "5")],
+        [
+            ("exact", "", ""),
+            ("0.5", "", ""),
+            ("0.5", "", "0.05"),
+            ("0.5", "5", ""),
+            ("0.5", "5", "0.05"),
+        ],
         "{csv}"
     );
     std::fs::remove_dir_all(dir).ok();
