@@ -266,7 +266,7 @@ impl ColumnScene<'_> {
             for &shift in shifts {
                 let (lo, hi) = (middle - half + shift, middle + half + shift);
                 if hi > extent_lo && lo < extent_hi {
-                    raster.add(lo, hi, amount, 0.0);
+                    raster.add_flat(lo, hi, amount);
                 }
             }
         }
