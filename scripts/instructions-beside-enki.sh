@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Marginal instructions per step (valgrind --tool=callgrind, two run lengths, subtracted) of
 # regatta and Enki on ../shared/peers/enki/swarm_world.py's worlds, one thread each: Enki with
-# its camera and IR only, regatta with the crowd setting (crowdDistance 0.5 added to the
-# turrets) and IR only; then what one retina may cost if regatta is to run at TARGET times
+# its camera and IR only, regatta with the crowd setting (REGATTA_CROWD added to the turrets,
+# by default compare-enki-crowd.sh's `crowdDistance 0.5 crowdFarDistance 5 crowdKeepDistance
+# 0.05`) and IR only; then what one retina may cost if regatta is to run at TARGET times
 # Enki's rate (docs/crowd.md, "What a step may cost beside Enki"). Instruction counts do not
 # depend on the machine's load, unlike the wall-clock figures of compare-enki-crowd.sh.
 # Usage: scripts/instructions-beside-enki.sh ENKI_SWARM REGATTA OUTDIR [N:TARGET ...]
@@ -10,6 +11,7 @@
 set -euo pipefail
 enki=$1; regatta=$2; out=$3; shift 3
 sizes=("$@"); [ ${#sizes[@]} -gt 0 ] || sizes=(1:1 10:2 100:3)
+crowd=${REGATTA_CROWD:-crowdDistance 0.5 crowdFarDistance 5 crowdKeepDistance 0.05}
 world=$(cd "$(dirname "$0")/.." && pwd)/../shared/peers/enki/swarm_world.py
 mkdir -p "$out"
 collected() { grep -o 'Collected : [0-9]*' "$1" | awk '{print $3}'; }
@@ -47,7 +49,7 @@ printf 'robots\tenki_camera\tenki_ir\tenki_per_camera\tregatta_ir\tregatta_per_r
   | tee "$out/instructions.tsv"
 for size in "${sizes[@]}"; do
   n=${size%%:*}; target=${size##*:}
-  python3 "$world" "$n" | sed 's/PanoramicTurret { lambda 5 }/PanoramicTurret { lambda 5 crowdDistance 0.5 }/' \
+  python3 "$world" "$n" | sed "s/PanoramicTurret { lambda 5 }/PanoramicTurret { lambda 5 $crowd }/" \
     > "$out/sw_${n}_crowd.wbt"
   python3 "$world" "$n" --ir-only > "$out/sw_${n}_ir.wbt"
   # Enough steps that the difference dwarfs start-up, few enough for callgrind.
