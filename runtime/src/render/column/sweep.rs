@@ -108,14 +108,18 @@ impl Look {
         );
     }
 
-    /// The objects whose azimuth interval meets the open interval `(a, b)`, in object order:
-    /// every object tested (the sweep's answer, and cheaper for a few objects).
+    /// The objects whose azimuth interval meets the open interval `(a, b)`, last placed first:
+    /// every object tested (the sweep's answer, and cheaper for a few objects). The robots,
+    /// placed after the scene's static objects, then come before the floor and the walls,
+    /// which lie behind them: a column's segments mostly come front to back, and sorting them
+    /// moves little (what a column shows does not depend on the order).
     pub(super) fn facing_over(&self, a: f64, b: f64, out: &mut Vec<u32>) {
         out.clear();
         out.extend(
             self.objects
                 .iter()
                 .enumerate()
+                .rev()
                 .filter(|(_, o)| o.meets(a, b))
                 .map(|(index, _)| index as u32),
         );
