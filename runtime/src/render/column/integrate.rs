@@ -60,7 +60,7 @@ fn with_workspace<R>(f: impl FnOnce(&mut Workspace) -> R) -> R {
             scratch: Scratch {
                 segments: Segments::new(),
                 lit: LitSegments::new(),
-                free: Free::new(0.0, 0.0),
+                free: Free::new(),
             },
         })
     });

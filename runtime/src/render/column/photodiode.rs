@@ -483,7 +483,10 @@ impl Band {
         out: &mut Vec<Shown>,
     ) -> f64 {
         let start = out.len();
-        free.reset(-self.tan_half, self.tan_half);
+        free.reset(
+            (-self.tan_half, self.tan_half),
+            (-0.5 * self.band, 0.5 * self.band),
+        );
         let mut sum = 0.0;
         for segment in segments {
             if free.is_empty() {
@@ -496,20 +499,24 @@ impl Band {
             }
             let first = out.len();
             let (mut covered, mut middle) = (0.0, 0.0);
-            free.take(a, b, |x0, x1| {
-                let a0 = self.angle(x0);
-                let weight = self.angle(x1) - a0;
-                middle += 0.5 * (x0 + x1) * weight;
-                covered += weight;
-                out.push(Shown {
-                    t0: x0,
-                    t1: x1,
-                    a0,
-                    sum0: 0.0,
-                    depth: segment.depth(),
-                    luminance: 0.0,
-                });
-            });
+            free.take(
+                a,
+                b,
+                |x| self.angle(x),
+                |Span { x0, x1, a0, a1 }| {
+                    let weight = a1 - a0;
+                    middle += 0.5 * (x0 + x1) * weight;
+                    covered += weight;
+                    out.push(Shown {
+                        t0: x0,
+                        t1: x1,
+                        a0,
+                        sum0: 0.0,
+                        depth: segment.depth(),
+                        luminance: 0.0,
+                    });
+                },
+            );
             if covered > 0.0 {
                 let value = luminance(segment, middle, covered);
                 sum += value * covered;
@@ -520,8 +527,7 @@ impl Band {
                 out.truncate(first);
             }
         }
-        for &(x0, x1) in free.as_slice() {
-            let (a0, a1) = (self.angle(x0), self.angle(x1));
+        for &Span { x0, x1, a0, a1 } in free.as_slice() {
             let mut background = |(t0, a0): (f64, f64), t1: f64, luminance: f64| {
                 out.push(Shown {
                     t0,
@@ -575,7 +581,9 @@ impl Band {
         free: &mut Free,
         mut luminance: impl FnMut(&S, f64, f64) -> f64,
     ) -> f64 {
-        free.reset(-self.tan_half, self.tan_half);
+        // Its parts' angles are those of the profile's pieces they meet: the free parts' are
+        // not read (left 0).
+        free.reset((-self.tan_half, self.tan_half), (0.0, 0.0));
         let mut sum = 0.0;
         for segment in segments {
             let (t0, t1) = segment.extent();
@@ -588,12 +596,17 @@ impl Band {
             // something nearer (kept) or farther (replaced).
             let mut parts = [(0.0, 0.0); PARTS];
             let mut count = 0;
-            free.take(a, b, |x0, x1| {
-                if count < PARTS {
-                    parts[count] = (x0, x1);
-                    count += 1;
-                }
-            });
+            free.take(
+                a,
+                b,
+                |_| 0.0,
+                |part| {
+                    if count < PARTS {
+                        parts[count] = (part.x0, part.x1);
+                        count += 1;
+                    }
+                },
+            );
             let (mut covered, mut middle) = (0.0, 0.0);
             let mut replaced = 0.0;
             for &(x0, x1) in &parts[..count] {
@@ -637,10 +650,10 @@ impl Band {
             sky,
             ground,
         } = *self;
-        free.reset(-tan_half, tan_half);
         // The band's edges and the horizon are where most pieces start or end: their angles
         // are known (band_atan is odd, band = 2·band_atan(T)).
         let half_band = 0.5 * band;
+        free.reset((-tan_half, tan_half), (-half_band, half_band));
         let angle = |x: f64| {
             if x == tan_half {
                 half_band
@@ -664,9 +677,9 @@ impl Band {
             }
             let mut covered = 0.0;
             let mut middle = 0.0;
-            free.take(a, b, |x0, x1| {
-                let weight = angle(x1) - angle(x0);
-                middle += 0.5 * (x0 + x1) * weight;
+            free.take(a, b, angle, |part| {
+                let weight = part.a1 - part.a0;
+                middle += 0.5 * (part.x0 + part.x1) * weight;
                 covered += weight;
             });
             if covered > 0.0 {
@@ -674,9 +687,8 @@ impl Band {
                 sum += luminance(segment, middle, covered) * covered;
             }
         }
-        for &(x0, x1) in free.as_slice() {
+        for &Span { x0, x1, a0, a1 } in free.as_slice() {
             // Sky above the horizon, ground (if any) below.
-            let (a0, a1) = (angle(x0), angle(x1));
             if x0 >= 0.0 {
                 sum += sky * (a1 - a0);
             } else if x1 <= 0.0 {
@@ -689,22 +701,40 @@ impl Band {
     }
 }
 
+/// One free part of a band: its tan-elevation ends and their angles ([`Band::angle`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Span {
+    pub(super) x0: f64,
+    pub(super) x1: f64,
+    pub(super) a0: f64,
+    pub(super) a1: f64,
+}
+
 /// Free (uncovered) tan-intervals of a band, sorted and disjoint, on the stack. Each segment
-/// splits at most one interval, so MAX_SEGMENTS + 1 always suffices.
+/// splits at most one interval, so MAX_SEGMENTS + 1 always suffices. Each end keeps its
+/// angle: an end a nearer face cut is worked out once, not again by the face, sky or ground
+/// that later fills what it left (the arctangent is most of a column's arithmetic).
 pub(super) struct Free {
-    pub(super) items: [(f64, f64); MAX_SEGMENTS + 1],
+    pub(super) items: [Span; MAX_SEGMENTS + 1],
     pub(super) len: usize,
 }
 
 impl Free {
-    pub(super) fn new(lo: f64, hi: f64) -> Free {
-        let mut items = [(0.0, 0.0); MAX_SEGMENTS + 1];
-        items[0] = (lo, hi);
-        Free { items, len: 1 }
+    pub(super) fn new() -> Free {
+        Free {
+            items: [Span::default(); MAX_SEGMENTS + 1],
+            len: 0,
+        }
     }
 
-    pub(super) fn reset(&mut self, lo: f64, hi: f64) {
-        self.items[0] = (lo, hi);
+    /// The whole band `[lo, hi]` free, its ends' angles `(a_lo, a_hi)`.
+    pub(super) fn reset(&mut self, (lo, hi): (f64, f64), (a_lo, a_hi): (f64, f64)) {
+        self.items[0] = Span {
+            x0: lo,
+            x1: hi,
+            a0: a_lo,
+            a1: a_hi,
+        };
         self.len = 1;
     }
 
@@ -712,32 +742,56 @@ impl Free {
         self.len == 0
     }
 
-    pub(super) fn as_slice(&self) -> &[(f64, f64)] {
+    pub(super) fn as_slice(&self) -> &[Span] {
         &self.items[..self.len]
     }
 
-    /// Removes `[a, b]`, calling `visit` on each free part it covered.
+    /// Removes `[a, b]`, calling `visit` on each free part it covered; `angle` gives the angle
+    /// of an end where `[a, b]` cuts a free part (a caller that reads no angle may give any).
     #[inline]
-    pub(super) fn take(&mut self, a: f64, b: f64, mut visit: impl FnMut(f64, f64)) {
+    pub(super) fn take(
+        &mut self,
+        a: f64,
+        b: f64,
+        angle: impl Fn(f64) -> f64,
+        mut visit: impl FnMut(Span),
+    ) {
         // The intervals wholly below `a` are skipped by halving (a crowd's column leaves a
         // long list: each robot further away peeks over the nearer ones).
         let mut i = if self.len > 8 {
-            self.items[..self.len].partition_point(|&(_, x1)| x1 <= a)
+            self.items[..self.len].partition_point(|span| span.x1 <= a)
         } else {
             0
         };
         while i < self.len {
-            let (x0, x1) = self.items[i];
-            if x1 <= a {
+            let span = self.items[i];
+            if span.x1 <= a {
                 i += 1;
                 continue;
             }
-            if x0 >= b {
+            if span.x0 >= b {
                 break;
             }
-            let (c0, c1) = (larger(x0, a), smaller(x1, b));
-            visit(c0, c1);
-            match (x0 < c0, c1 < x1) {
+            let (c0, c1) = (larger(span.x0, a), smaller(span.x1, b));
+            let (cut_below, cut_above) = (span.x0 < c0, c1 < span.x1);
+            let covered = Span {
+                x0: c0,
+                x1: c1,
+                a0: if cut_below { angle(c0) } else { span.a0 },
+                a1: if cut_above { angle(c1) } else { span.a1 },
+            };
+            visit(covered);
+            let below = Span {
+                x1: c0,
+                a1: covered.a0,
+                ..span
+            };
+            let above = Span {
+                x0: c1,
+                a0: covered.a1,
+                ..span
+            };
+            match (cut_below, cut_above) {
                 (true, true) => {
                     // Split in two; the few intervals after it shift one by one (no memmove).
                     if self.len < self.items.len() {
@@ -746,20 +800,20 @@ impl Free {
                             self.items[j] = self.items[j - 1];
                             j -= 1;
                         }
-                        self.items[i] = (x0, c0);
-                        self.items[i + 1] = (c1, x1);
+                        self.items[i] = below;
+                        self.items[i + 1] = above;
                         self.len += 1;
                     } else {
-                        self.items[i] = (x0, c0);
+                        self.items[i] = below;
                     }
                     return;
                 }
                 (true, false) => {
-                    self.items[i] = (x0, c0);
+                    self.items[i] = below;
                     i += 1;
                 }
                 (false, true) => {
-                    self.items[i] = (c1, x1);
+                    self.items[i] = above;
                     return;
                 }
                 (false, false) => {
