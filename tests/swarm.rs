@@ -76,35 +76,19 @@ proptest! {
         stride in prop::sample::select(vec![1u32, 4, 16]),
         samples in 1u32..3,
     ) {
-        let compiled = compile_text(&crowd_world(side, &robots, &buoys, &boxes, stride, samples));
-        let renderer = Renderer::new(&compiled.graph, &compiled.plan, false);
-        let Renderer::Columns(scene) = &renderer else {
-            panic!("an upright crowd renders by columns");
-        };
-        let poses = start_poses(&compiled);
-        let mut shared = None;
-        renderer.prepare_shared(&compiled.plan, &poses, &mut shared);
-        let frame = shared.expect("the column renderer shares its frame");
-        let strip = strip();
-        for (index, rig) in compiled.rig.robots.iter().enumerate() {
-            let Some(TurretRig::Panoramic(turret)) = &rig.turret else {
-                continue;
-            };
-            let eye = DVec3::new(rig.start.x, rig.floor_y + turret.height, rig.start.z);
-            let (mut fast, mut reference) = (vec![0.0; PIXELS], vec![0.0; PIXELS]);
-            let detail = Detail::new(turret.samples, turret.stride);
-            scene.integrate_for(&frame, Some(index), eye, rig.start.heading, &strip,
-                detail, &mut fast);
-            scene.integrate_exhaustive(&frame, Some(index), eye, rig.start.heading, &strip,
-                detail, &mut reference);
-            for (pixel, (a, b)) in fast.iter().zip(&reference).enumerate() {
-                prop_assert_eq!(a.to_bits(), b.to_bits(), "robot {} pixel {}: {} vs {}",
-                    index, pixel, a, b);
+        let text = crowd_world(side, &robots, &buoys, &boxes, stride, samples);
+        let fast = crowd_retinas(&text, |d| d);
+        let reference = start_retinas(&text, |scene, frame, strip, start, analog| {
+            scene.integrate_exhaustive(frame, Some(start.index), start.eye, start.heading,
+                strip, start.detail, analog);
+        });
+        for (robot, ((fast, out_fast), (reference, out_reference))) in
+            fast.iter().zip(&reference).enumerate()
+        {
+            for (pixel, (a, b)) in fast.iter().zip(reference).enumerate() {
+                prop_assert_eq!(a.to_bits(), b.to_bits(), "retina {} pixel {}: {} vs {}",
+                    robot, pixel, a, b);
             }
-            let mut model = Panoramic::new(turret);
-            let (mut out_fast, mut out_reference) = (RetinaOutput::default(), RetinaOutput::default());
-            model.accept(&fast, &mut out_fast);
-            model.accept(&reference, &mut out_reference);
             prop_assert_eq!(&out_fast.digital, &out_reference.digital);
         }
     }
@@ -127,9 +111,20 @@ fn with_start_frame<R>(
     f(&compiled, scene, &frame)
 }
 
-/// Every retina of a crowd at its start, through the shared frame, with `detail`: each
-/// robot's photocurrents and 6-bit outputs.
-fn crowd_retinas(text: &str, detail: impl Fn(Detail) -> Detail) -> Vec<(Vec<f64>, RetinaOutput)> {
+/// One retina at its robot's start: the robot, its eye and heading, and its turret's detail.
+struct StartEye {
+    index: usize,
+    eye: DVec3,
+    heading: f64,
+    detail: Detail,
+}
+
+/// Every retina of `text`'s crowd at its start, through the shared frame, its photocurrents
+/// drawn by `render` over the test strip: each robot's photocurrents and 6-bit outputs.
+fn start_retinas(
+    text: &str,
+    mut render: impl FnMut(&ColumnScene, &ColumnFrame, &Strip, StartEye, &mut [f64]),
+) -> Vec<(Vec<f64>, RetinaOutput)> {
     with_start_frame(text, |compiled, scene, frame| {
         let strip = strip();
         let mut out = Vec::new();
@@ -137,23 +132,41 @@ fn crowd_retinas(text: &str, detail: impl Fn(Detail) -> Detail) -> Vec<(Vec<f64>
             let Some(TurretRig::Panoramic(turret)) = &rig.turret else {
                 continue;
             };
-            let eye = DVec3::new(rig.start.x, rig.floor_y + turret.height, rig.start.z);
+            let start = StartEye {
+                index,
+                eye: DVec3::new(rig.start.x, rig.floor_y + turret.height, rig.start.z),
+                heading: rig.start.heading,
+                detail: Detail::new(turret.samples, turret.stride),
+            };
             let mut analog = vec![0.0; PIXELS];
-            let base = Detail::new(turret.samples, turret.stride);
-            scene.integrate_for(
-                frame,
-                Some(index),
-                eye,
-                rig.start.heading,
-                &strip,
-                detail(base),
-                &mut analog,
-            );
+            render(scene, frame, &strip, start, &mut analog);
             let mut output = RetinaOutput::default();
             Panoramic::new(turret).accept(&analog, &mut output);
             out.push((analog, output));
         }
         out
+    })
+}
+
+/// Every retina of a crowd at its start, with `detail`: each robot's photocurrents and 6-bit
+/// outputs.
+fn crowd_retinas(text: &str, detail: impl Fn(Detail) -> Detail) -> Vec<(Vec<f64>, RetinaOutput)> {
+    start_retinas(text, |scene, frame, strip, start, analog| {
+        let StartEye {
+            index,
+            eye,
+            heading,
+            detail: base,
+        } = start;
+        scene.integrate_for(
+            frame,
+            Some(index),
+            eye,
+            heading,
+            strip,
+            detail(base),
+            analog,
+        );
     })
 }
 
@@ -165,41 +178,34 @@ fn kept_retinas(
     keep: f64,
     unit: &mut impl FnMut() -> f64,
 ) -> Vec<(Vec<f64>, RetinaOutput)> {
-    with_start_frame(text, |compiled, scene, frame| {
-        let strip = strip();
-        let mut out = Vec::new();
-        for (index, rig) in compiled.rig.robots.iter().enumerate() {
-            let Some(TurretRig::Panoramic(turret)) = &rig.turret else {
-                continue;
-            };
-            let eye = DVec3::new(rig.start.x, rig.floor_y + turret.height, rig.start.z);
-            let detail = Detail {
-                crowd_distance: 0.5,
-                far_distance: 5.0,
-                ..Detail::new(turret.samples, turret.stride)
-            };
-            let (radius, angle) = (0.999 * keep * unit().sqrt(), std::f64::consts::TAU * unit());
-            let then = eye + DVec3::new(radius * libm::cos(angle), 0.0, radius * libm::sin(angle));
-            let heading_then = rig.start.heading + 2.0 * unit() - 1.0;
-            let mut kept = KeptImpostors::new(keep);
-            let mut analog = vec![0.0; PIXELS];
-            for (at, heading) in [(then, heading_then), (eye, rig.start.heading)] {
-                scene.integrate_kept(
-                    frame,
-                    Some(index),
-                    at,
-                    heading,
-                    &strip,
-                    detail,
-                    &mut kept,
-                    &mut analog,
-                );
-            }
-            let mut output = RetinaOutput::default();
-            Panoramic::new(turret).accept(&analog, &mut output);
-            out.push((analog, output));
+    start_retinas(text, |scene, frame, strip, start, analog| {
+        let StartEye {
+            index,
+            eye,
+            heading,
+            detail,
+        } = start;
+        let detail = Detail {
+            crowd_distance: 0.5,
+            far_distance: 5.0,
+            ..detail
+        };
+        let (radius, angle) = (0.999 * keep * unit().sqrt(), std::f64::consts::TAU * unit());
+        let then = eye + DVec3::new(radius * libm::cos(angle), 0.0, radius * libm::sin(angle));
+        let heading_then = heading + 2.0 * unit() - 1.0;
+        let mut kept = KeptImpostors::new(keep);
+        for (at, heading) in [(then, heading_then), (eye, heading)] {
+            scene.integrate_kept(
+                frame,
+                Some(index),
+                at,
+                heading,
+                strip,
+                detail,
+                &mut kept,
+                analog,
+            );
         }
-        out
     })
 }
 

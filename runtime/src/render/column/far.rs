@@ -40,21 +40,13 @@ impl ColumnScene<'_> {
         if look.impostor_order.is_empty() || pixels == 0 {
             return;
         }
-        let width = strip.width;
-        let extent_hi = strip.centers[0] + width / 2.0;
-        let extent_lo = strip.centers[pixels - 1] - width / 2.0;
-        let inverse_width = 1.0 / width;
+        let (mut raster, (extent_lo, extent_hi)) = Raster::over(strip, out);
+        let inverse_width = raster.inverse_width;
         let column_band = Band {
             tan_half: strip.tan_half_band,
             band,
             sky,
             ground,
-        };
-        let mut raster = Raster {
-            origin: extent_hi,
-            inverse_width,
-            width,
-            out,
         };
         for &index in &look.impostor_order {
             let impostor = &look.impostors[index as usize];

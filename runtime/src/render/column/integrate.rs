@@ -364,8 +364,9 @@ impl ColumnScene<'_> {
             return;
         }
         let width = strip.width;
-        let extent_hi = strip.centers[0] + width / 2.0;
-        let extent_lo = strip.centers[pixels - 1] - width / 2.0;
+        out.fill(0.0);
+        let (mut raster, (extent_lo, extent_hi)) = Raster::over(strip, out);
+        let inverse_width = raster.inverse_width;
         let RegionBuffers {
             bounds,
             positions,
@@ -395,14 +396,6 @@ impl ColumnScene<'_> {
         );
         bounds.push(extent_hi);
         let step = width * stride as f64;
-        let inverse_width = 1.0 / width;
-        out.fill(0.0);
-        let mut raster = Raster {
-            origin: extent_hi,
-            inverse_width,
-            width,
-            out,
-        };
         let regions = bounds.len() - 1;
         for (region, pair) in bounds.windows(2).enumerate() {
             let (r0, r1) = (pair[0], pair[1]);

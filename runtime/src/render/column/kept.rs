@@ -210,15 +210,7 @@ impl ColumnScene<'_> {
         if kept.boxes.is_empty() || pixels == 0 {
             return;
         }
-        let width = strip.width;
-        let extent_hi = strip.centers[0] + width / 2.0;
-        let extent_lo = strip.centers[pixels - 1] - width / 2.0;
-        let mut raster = Raster {
-            origin: extent_hi,
-            inverse_width: 1.0 / width,
-            width,
-            out,
-        };
+        let (mut raster, (extent_lo, extent_hi)) = Raster::over(strip, out);
         let eye = DVec2::new(look.eye.x, look.eye.z);
         let (cos_h, sin_h) = (look.cos_h, look.sin_h);
         let turn = std::f64::consts::TAU;

@@ -6,6 +6,7 @@
 use glam::{DVec2, DVec3};
 
 use super::shading::Shades;
+use super::strip::Strip;
 
 /// The part of a column an object covers.
 #[derive(Clone, Copy, Debug)]
@@ -35,6 +36,23 @@ pub(super) struct Raster<'a> {
     pub(super) inverse_width: f64,
     pub(super) width: f64,
     pub(super) out: &'a mut [f64],
+}
+
+impl<'a> Raster<'a> {
+    /// A raster over the first `out.len()` windows (at least one) of the contiguous `strip`,
+    /// and the relative azimuths those windows cover, lowest and highest.
+    pub(super) fn over(strip: &Strip, out: &'a mut [f64]) -> (Raster<'a>, (f64, f64)) {
+        let width = strip.width;
+        let extent_hi = strip.centers[0] + width / 2.0;
+        let extent_lo = strip.centers[out.len() - 1] - width / 2.0;
+        let raster = Raster {
+            origin: extent_hi,
+            inverse_width: 1.0 / width,
+            width,
+            out,
+        };
+        (raster, (extent_lo, extent_hi))
+    }
 }
 
 impl Raster<'_> {

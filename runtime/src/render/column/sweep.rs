@@ -365,8 +365,8 @@ impl Sweep {
         self.last = f64::NEG_INFINITY;
     }
 
-    /// The objects whose azimuth interval meets `(a, b)`, nearest first (object order where
-    /// there are few), into `out`.
+    /// The objects whose azimuth interval meets `(a, b)`, nearest first (last placed first
+    /// where there are few), into `out`.
     #[inline]
     pub(super) fn facing_over(&mut self, look: &Look, a: f64, b: f64, out: &mut Vec<u32>) {
         if self.brute {
