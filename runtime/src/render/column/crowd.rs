@@ -7,6 +7,7 @@
 //! for any thread count. The scene bins its round static groups (buoys) in the same kind of
 //! grid once, for the far distance (`scene.rs`'s `RoundIndex`).
 
+use super::compact::extend_kept;
 use glam::DVec2;
 
 /// Robots binned by position.
@@ -125,11 +126,14 @@ impl CrowdGrid {
                 self.starts[*cells.start()] as usize,
                 self.starts[*cells.end() + 1] as usize,
             );
-            out.extend(
-                self.robots[start..end]
-                    .iter()
-                    .copied()
-                    .filter(|&robot| positions[robot as usize].distance_squared(eye) <= limit),
+            extend_kept(
+                out,
+                self.robots[start..end].iter().map(|&robot| {
+                    let within = positions
+                        .get(robot as usize)
+                        .is_some_and(|at| at.distance_squared(eye) <= limit);
+                    (robot, within)
+                }),
             );
         }
     }

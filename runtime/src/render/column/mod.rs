@@ -17,11 +17,13 @@
 //! `scene.rs` holds the scene and a step's frame, `sweep.rs` what one eye sees of it,
 //! `integrate.rs` the strip integrated region by region, `photodiode.rs` a column's segments
 //! and the band over each photodiode window, `footprint.rs` the placed upright objects,
-//! `shading.rs` the fast shading, `crowd.rs` which other robots an eye draws, `impostor.rs`
+//! `shading.rs` the fast shading, `crowd.rs` which other robots an eye draws (`compact.rs` builds
+//! such lists without a branch per candidate), `impostor.rs`
 //! which far small static objects stand in as impostors, `far.rs` how they are drawn and
 //! `kept.rs` how an eye keeps them from one update to the next,
 //! `strip.rs` the pixels to integrate.
 
+mod compact;
 mod crowd;
 mod far;
 mod footprint;

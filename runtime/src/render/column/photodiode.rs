@@ -133,13 +133,14 @@ impl Raster<'_> {
             // and a piece reaching past `split` keeps `first + 1` in it too.
             let first = u0 as usize;
             let split = (first + 1) as f64;
-            if u1 <= split {
-                if let Some(out) = self.out.get_mut(first) {
-                    *out += (u1 - u0) * value;
-                }
-            } else if let Some([left, right, ..]) = self.out.get_mut(first..) {
-                *left += (split - u0) * value;
-                *right += (u1 - split) * value;
+            // Both pixels, without a branch on whether the piece reaches the second (half of
+            // them do, at random): a piece within the first adds (split − split)·value, a zero,
+            // to the second, and a pixel, summed from +0, is never −0, so that changes no bit.
+            if let Some(left) = self.out.get_mut(first) {
+                *left += (smaller(u1, split) - u0) * value;
+            }
+            if let Some(right) = self.out.get_mut(first + 1) {
+                *right += (larger(u1, split) - split) * value;
             }
             return;
         }

@@ -5,6 +5,7 @@
 
 use glam::{DVec2, DVec3};
 
+use super::compact::extend_kept;
 use super::crowd::CrowdGrid;
 use super::footprint::Relative;
 use super::footprint::{azimuth_interval, corner_of, wrap, Interval, PendingEdge, Upright};
@@ -99,12 +100,12 @@ impl Look {
     /// The objects whose azimuth interval holds relative azimuth `alpha`, in object order.
     pub fn facing(&self, alpha: f64, out: &mut Vec<u32>) {
         out.clear();
-        out.extend(
+        extend_kept(
+            out,
             self.objects
                 .iter()
                 .enumerate()
-                .filter(|(_, o)| o.holds(alpha))
-                .map(|(index, _)| index as u32),
+                .map(|(index, o)| (index as u32, o.holds(alpha))),
         );
     }
 
@@ -115,13 +116,13 @@ impl Look {
     /// moves little (what a column shows does not depend on the order).
     pub(super) fn facing_over(&self, a: f64, b: f64, out: &mut Vec<u32>) {
         out.clear();
-        out.extend(
+        extend_kept(
+            out,
             self.objects
                 .iter()
                 .enumerate()
                 .rev()
-                .filter(|(_, o)| o.meets(a, b))
-                .map(|(index, _)| index as u32),
+                .map(|(index, o)| (index as u32, o.meets(a, b))),
         );
     }
 
