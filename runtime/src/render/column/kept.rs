@@ -235,10 +235,11 @@ impl ColumnScene<'_> {
         // more than 0.009 rad outside the strip, where the extent test passes it over.)
         let reach_cos_squared = reach_cos * reach_cos;
         let behind = |along: f64, squared: f64| {
+            // Both compares made, one branch taken on them.
             if reach_cos < 0.0 {
-                along < 0.0 && along * along > squared * reach_cos_squared
+                (along < 0.0) & (along * along > squared * reach_cos_squared)
             } else {
-                along < 0.0 || along * along < squared * reach_cos_squared
+                (along < 0.0) | (along * along < squared * reach_cos_squared)
             }
         };
         for kept_box in kept.boxes.iter() {
