@@ -39,22 +39,17 @@ impl EyeObject {
     #[inline]
     pub(super) fn holds(&self, alpha: f64) -> bool {
         let (after_lo, before_hi) = (alpha >= self.lo, alpha <= self.hi);
-        if self.wraps {
-            after_lo | before_hi
-        } else {
-            after_lo & before_hi
-        }
+        // As in `meets`: bit operations, not a branch on `wraps`.
+        (after_lo & before_hi) | (self.wraps & (after_lo | before_hi))
     }
 
     /// Whether its azimuth interval meets the open interval `(a, b)` (within (−π, π]).
     #[inline]
     pub(super) fn meets(&self, a: f64, b: f64) -> bool {
         let (after_lo, before_hi) = (self.lo < b, self.hi > a);
-        if self.wraps {
-            after_lo | before_hi
-        } else {
-            after_lo & before_hi
-        }
+        // Bit operations, not a branch on `wraps`: lists of objects are built from this test
+        // without a branch per object (`compact.rs`).
+        (after_lo & before_hi) | (self.wraps & (after_lo | before_hi))
     }
 }
 
