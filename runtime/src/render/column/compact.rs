@@ -22,9 +22,47 @@ pub(super) fn extend_kept(
     out.truncate(end);
 }
 
+/// Writes the values `candidate(k)` gives for k = 0…count − 1 whose flag is set to the start of
+/// `out`, in order, and returns them. `out` only grows (to `count`): what lies past the part
+/// returned is left over from earlier lists, so that a list costs no clearing or filling.
+#[inline(always)]
+pub(super) fn kept_prefix(
+    out: &mut Vec<u32>,
+    count: usize,
+    candidate: impl Fn(usize) -> (u32, bool),
+) -> &[u32] {
+    if out.len() < count {
+        out.resize(count, 0);
+    }
+    let mut end = 0;
+    for k in 0..count {
+        let (value, keep) = candidate(k);
+        // `end` never passes `k`: the test always holds.
+        if let Some(slot) = out.get_mut(end) {
+            *slot = value;
+        }
+        end += usize::from(keep);
+    }
+    &out[..end]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_prefix_holds_the_flagged_values_whatever_was_left_over() {
+        let mut out = vec![9; 7];
+        let kept = kept_prefix(&mut out, 3, |k| ([1, 2, 3][k], k != 1));
+        assert_eq!(kept, [1, 3]);
+        let mut out = Vec::new();
+        let kept = kept_prefix(&mut out, 40, |k| (k as u32, k % 4 == 0));
+        assert_eq!(kept, (0..40).step_by(4).collect::<Vec<u32>>());
+        assert_eq!(
+            kept_prefix(&mut out, 0, |k| (k as u32, true)),
+            [] as [u32; 0]
+        );
+    }
 
     #[test]
     fn keeps_the_flagged_values_in_order_after_what_was_there() {

@@ -58,7 +58,7 @@ impl ColumnScene<'_> {
             let centre = 0.5 * (impostor.lo + impostor.hi);
             let alpha = centre.clamp(extent_lo, extent_hi);
             let pixel = nearest_index((strip.centers[0] - alpha) * inverse_width, pixels - 1);
-            look.facing_over(impostor.lo, impostor.hi, facing);
+            let facing = look.facing_over(impostor.lo, impostor.hi, facing);
             profile.clear();
             self.profile(
                 frame,

@@ -301,7 +301,7 @@ impl ColumnScene<'_> {
                 };
                 let width = p1 - p0;
                 if width > 0.0 {
-                    sweep.facing_over(look, p0, p1, facing);
+                    let facing = sweep.facing_over(look, p0, p1, facing);
                     for s in 0..samples {
                         let alpha = p0 + (s as f64 + 0.5) / samples as f64 * width;
                         let direction = look.turn(strip, pixel, alpha);
@@ -408,7 +408,7 @@ impl ColumnScene<'_> {
             };
             // Between two edges the same objects face the eye (those whose hidden edge fell
             // inside face part of it, hidden there: they are tried throughout).
-            sweep.facing_over(look, r0, r1, facing);
+            let facing = sweep.facing_over(look, r0, r1, facing);
             positions.clear();
             values.clear();
             let piece = span / count as f64;
@@ -510,8 +510,7 @@ impl ColumnScene<'_> {
     ) {
         let mut segments = Segments::new();
         with_workspace(|workspace| {
-            let facing = &mut workspace.buffers.facing;
-            look.facing(alpha, facing);
+            let facing = look.facing(alpha, &mut workspace.buffers.facing);
             self.collect_segments(look, direction, facing, &mut segments);
         });
         for (t, rgb) in tans.iter().zip(out.iter_mut()) {

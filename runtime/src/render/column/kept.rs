@@ -167,7 +167,7 @@ impl ColumnScene<'_> {
             // The column through its centre (its interval may pass ±π: the centre does not).
             let centre = wrap(0.5 * (impostor.lo + impostor.hi));
             let direction = look.direction(centre);
-            look.facing(centre, facing);
+            let facing = look.facing(centre, facing);
             profile.clear();
             self.profile(frame, look, direction, facing, band, scratch, profile);
             let effect = self.any_impostor_effect(

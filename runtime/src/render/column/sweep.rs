@@ -5,7 +5,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::compact::extend_kept;
+use super::compact::kept_prefix;
 use super::crowd::CrowdGrid;
 use super::footprint::Relative;
 use super::footprint::{azimuth_interval, corner_of, wrap, Interval, PendingEdge, Upright};
@@ -39,7 +39,8 @@ impl EyeObject {
     #[inline]
     pub(super) fn holds(&self, alpha: f64) -> bool {
         let (after_lo, before_hi) = (alpha >= self.lo, alpha <= self.hi);
-        // As in `meets`: bit operations, not a branch on `wraps`.
+        // Bit operations, not a branch on `wraps`: lists are built from this test without a
+        // branch per object (`compact.rs`).
         (after_lo & before_hi) | (self.wraps & (after_lo | before_hi))
     }
 
@@ -47,8 +48,18 @@ impl EyeObject {
     #[inline]
     pub(super) fn meets(&self, a: f64, b: f64) -> bool {
         let (after_lo, before_hi) = (self.lo < b, self.hi > a);
-        // Bit operations, not a branch on `wraps`: lists of objects are built from this test
-        // without a branch per object (`compact.rs`).
+        if self.wraps {
+            after_lo | before_hi
+        } else {
+            after_lo & before_hi
+        }
+    }
+
+    /// [`EyeObject::meets`] by bit operations, without a branch on `wraps`: for lists built
+    /// without a branch per object (`compact.rs`).
+    #[inline]
+    pub(super) fn meets_unbranched(&self, a: f64, b: f64) -> bool {
+        let (after_lo, before_hi) = (self.lo < b, self.hi > a);
         (after_lo & before_hi) | (self.wraps & (after_lo | before_hi))
     }
 }
@@ -57,6 +68,10 @@ impl EyeObject {
 #[derive(Default)]
 pub struct Look {
     pub(super) eye: DVec3,
+    /// Whether the look's frame holds a crowd (more than [`FEW`] robots): which objects face a
+    /// region then follows no pattern a branch predictor learns, and its lists are built
+    /// without a branch per object.
+    crowd: bool,
     pub(super) cos_h: f64,
     pub(super) sin_h: f64,
     pub(super) objects: Vec<EyeObject>,
@@ -93,15 +108,11 @@ pub struct Look {
 
 impl Look {
     /// The objects whose azimuth interval holds relative azimuth `alpha`, in object order.
-    pub fn facing(&self, alpha: f64, out: &mut Vec<u32>) {
-        out.clear();
-        extend_kept(
-            out,
-            self.objects
-                .iter()
-                .enumerate()
-                .map(|(index, o)| (index as u32, o.holds(alpha))),
-        );
+    pub fn facing<'o>(&self, alpha: f64, out: &'o mut Vec<u32>) -> &'o [u32] {
+        let objects = &self.objects;
+        kept_prefix(out, objects.len(), |k| {
+            (k as u32, objects.get(k).is_some_and(|o| o.holds(alpha)))
+        })
     }
 
     /// The objects whose azimuth interval meets the open interval `(a, b)`, last placed first:
@@ -109,16 +120,28 @@ impl Look {
     /// placed after the scene's static objects, then come before the floor and the walls,
     /// which lie behind them: a column's segments mostly come front to back, and sorting them
     /// moves little (what a column shows does not depend on the order).
-    pub(super) fn facing_over(&self, a: f64, b: f64, out: &mut Vec<u32>) {
+    #[inline]
+    pub(super) fn facing_over<'o>(&self, a: f64, b: f64, out: &'o mut Vec<u32>) -> &'o [u32] {
+        let objects = &self.objects;
+        if self.crowd {
+            let last = objects.len().wrapping_sub(1);
+            return kept_prefix(out, objects.len(), |k| {
+                let index = last - k;
+                let meets = objects.get(index).is_some_and(|o| o.meets_unbranched(a, b));
+                (index as u32, meets)
+            });
+        }
+        // A few robots: the branches are learnt, and the filter costs fewer instructions.
         out.clear();
-        extend_kept(
-            out,
-            self.objects
+        out.extend(
+            objects
                 .iter()
                 .enumerate()
                 .rev()
-                .map(|(index, o)| (index as u32, o.meets(a, b))),
+                .filter(|(_, o)| o.meets(a, b))
+                .map(|(index, _)| index as u32),
         );
+        out
     }
 
     /// The world direction (x, z) of relative azimuth `alpha`, near `strip`'s pixel `pixel`:
@@ -364,7 +387,13 @@ impl Sweep {
     /// The objects whose azimuth interval meets `(a, b)`, nearest first (last placed first
     /// where there are few), into `out`.
     #[inline]
-    pub(super) fn facing_over(&mut self, look: &Look, a: f64, b: f64, out: &mut Vec<u32>) {
+    pub(super) fn facing_over<'o>(
+        &mut self,
+        look: &Look,
+        a: f64,
+        b: f64,
+        out: &'o mut Vec<u32>,
+    ) -> &'o [u32] {
         if self.brute {
             return look.facing_over(a, b, out);
         }
@@ -397,6 +426,7 @@ impl Sweep {
                 .filter(|&&(_, index)| objects[index as usize].meets(a, b))
                 .map(|&(_, index)| index),
         );
+        out
     }
 }
 
@@ -934,6 +964,7 @@ impl ColumnScene<'_> {
         // Objects may share an edge: one is enough.
         breaks.dedup();
         look.eye = eye;
+        look.crowd = frame.robot_at.len() > FEW;
         look.cos_h = cos_h;
         look.sin_h = sin_h;
     }
