@@ -227,13 +227,13 @@ pub struct Panoramic {
     /// The enabled filters, built for the retina's length, in the order of `i_bda`.
     filters: Vec<Filter>,
     /// With `crowdKeepDistance`, the impostors kept from one update to the next.
-    kept: Option<Box<KeptImpostors>>,
+    kept: Option<KeptImpostors>,
 }
 
 /// A turret's kept impostors: with a crowd distance and `crowdKeepDistance`, else none.
-fn kept_for(rig: &PanoramicRig) -> Option<Box<KeptImpostors>> {
+fn kept_for(rig: &PanoramicRig) -> Option<KeptImpostors> {
     (rig.crowd_distance.is_finite() && rig.keep_distance > 0.0 && rig.keep_distance.is_finite())
-        .then(|| Box::new(KeptImpostors::new(rig.keep_distance)))
+        .then(|| KeptImpostors::new(rig.keep_distance))
 }
 
 impl Panoramic {
