@@ -120,21 +120,15 @@ impl Look {
     /// placed after the scene's static objects, then come before the floor and the walls,
     /// which lie behind them: a column's segments mostly come front to back, and sorting them
     /// moves little (what a column shows does not depend on the order).
-    #[inline]
+    #[inline(always)]
     pub(super) fn facing_over<'o>(&self, a: f64, b: f64, out: &'o mut Vec<u32>) -> &'o [u32] {
-        let objects = &self.objects;
         if self.crowd {
-            let last = objects.len().wrapping_sub(1);
-            return kept_prefix(out, objects.len(), |k| {
-                let index = last - k;
-                let meets = objects.get(index).is_some_and(|o| o.meets_unbranched(a, b));
-                (index as u32, meets)
-            });
+            return self.facing_over_unbranched(a, b, out);
         }
         // A few robots: the branches are learnt, and the filter costs fewer instructions.
         out.clear();
         out.extend(
-            objects
+            self.objects
                 .iter()
                 .enumerate()
                 .rev()
@@ -142,6 +136,18 @@ impl Look {
                 .map(|(index, _)| index as u32),
         );
         out
+    }
+
+    /// [`Look::facing_over`] in a crowd: without a branch per object.
+    #[inline(never)]
+    fn facing_over_unbranched<'o>(&self, a: f64, b: f64, out: &'o mut Vec<u32>) -> &'o [u32] {
+        let objects = &self.objects;
+        let last = objects.len().wrapping_sub(1);
+        kept_prefix(out, objects.len(), |k| {
+            let index = last - k;
+            let meets = objects.get(index).is_some_and(|o| o.meets_unbranched(a, b));
+            (index as u32, meets)
+        })
     }
 
     /// The world direction (x, z) of relative azimuth `alpha`, near `strip`'s pixel `pixel`:
