@@ -283,7 +283,6 @@ impl SenseShared<'_, '_> {
             nearby_robots,
             self.placements,
             index,
-            &self.compiled.rig.robots,
             sensor,
             stream,
         );

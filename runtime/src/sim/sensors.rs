@@ -23,7 +23,7 @@ use super::noise::Stream;
 use super::world2d::{Footprint, Slab};
 use crate::broad::Grid;
 use crate::compile::graph::LightKind;
-use crate::compile::rig::{DistanceSensorRig, LightSensorRig, Placement, RobotRig};
+use crate::compile::rig::{DistanceSensorRig, LightSensorRig, Placement};
 use crate::render::{light_at_with, WorldLight};
 use crate::retina::luminance;
 
@@ -92,12 +92,11 @@ pub fn proximity(
     robots: &[u32],
     placements: &[Placement],
     robot: usize,
-    rigs: &[RobotRig],
     sensor: &DistanceSensorRig,
     stream: &mut Stream,
 ) -> u16 {
     to_reading(proximity_value(
-        slab, nearby, robots, placements, robot, rigs, sensor, stream,
+        slab, nearby, robots, placements, robot, sensor, stream,
     ))
 }
 
@@ -111,7 +110,6 @@ pub fn proximity_value(
     robots: &[u32],
     placements: &[Placement],
     robot: usize,
-    rigs: &[RobotRig],
     sensor: &DistanceSensorRig,
     stream: &mut Stream,
 ) -> f64 {
@@ -143,8 +141,8 @@ pub fn proximity_value(
     let robot_near = |other: usize, place: &Placement| {
         other != robot
             && height >= place.floor_y
-            && height <= place.floor_y + rigs[other].body_height
-            && DVec2::new(place.x, place.z).distance(origin2) <= reach + rigs[other].body_radius
+            && height <= place.floor_y + slab.robot_bodies[other].0
+            && DVec2::new(place.x, place.z).distance(origin2) <= reach + slab.robot_bodies[other].1
     };
     let candidates_near = || {
         robots
@@ -181,7 +179,7 @@ pub fn proximity_value(
         for (other, place) in candidates_near() {
             let body = Footprint::Circle {
                 center: DVec2::new(place.x, place.z),
-                radius: rigs[other].body_radius,
+                radius: slab.robot_bodies[other].1,
             };
             if let Some(t) = body.ray(origin2, ray) {
                 if t < nearest {
@@ -418,7 +416,6 @@ mod tests {
                     &[],
                     &placements,
                     0,
-                    &[],
                     &sensor,
                     &mut traced,
                 );

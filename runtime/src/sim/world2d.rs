@@ -30,6 +30,9 @@ pub struct Slab {
     pub obstacles: Vec<Obstacle>,
     /// Per robot: its body's IR reflectance (from its largest attached cylinder).
     pub robot_reflectance: Vec<f64>,
+    /// Per robot: its body's height and radius (its rig's), side by side: every proximity
+    /// sensor tests the robots near it against them, and a crowd's rigs are large and cold.
+    pub robot_bodies: Vec<(f64, f64)>,
 }
 
 impl Slab {
@@ -105,6 +108,11 @@ impl Slab {
         Slab {
             obstacles,
             robot_reflectance,
+            robot_bodies: rig
+                .robots
+                .iter()
+                .map(|r| (r.body_height, r.body_radius))
+                .collect(),
         }
     }
 }
