@@ -165,7 +165,16 @@ pub(super) struct Interval {
 }
 
 /// An object's azimuth interval relative to `heading`, or `None` when it surrounds the eye.
-pub(super) fn azimuth_interval(object: &Upright, eye: DVec2, heading: f64) -> Option<Interval> {
+///
+/// `crowd`: a round silhouette's angles by the polynomial arctangent impostors use (within
+/// 2e-8 rad, a millionth of a photodiode; no branch on the octant) instead of the C library's
+/// `atan2` and `asin`, whose branches a crowd's look mispredicts. Exact rendering keeps them.
+pub(super) fn azimuth_interval(
+    object: &Upright,
+    eye: DVec2,
+    heading: f64,
+    crowd: bool,
+) -> Option<Interval> {
     match object.footprint {
         Footprint::Circle { center, radius } => {
             let offset = center - eye;
@@ -173,8 +182,19 @@ pub(super) fn azimuth_interval(object: &Upright, eye: DVec2, heading: f64) -> Op
             if distance <= radius {
                 return None;
             }
-            let middle = wrap(libm::atan2(-offset.y, offset.x) - heading);
-            let half = libm::asin((radius / distance).min(1.0));
+            let (middle, half) = if crowd {
+                let sine = (radius / distance).min(1.0);
+                (
+                    super::impostor::atan2(-offset.y, offset.x),
+                    super::impostor::atan2(sine, (1.0 - sine * sine).sqrt()),
+                )
+            } else {
+                (
+                    libm::atan2(-offset.y, offset.x),
+                    libm::asin((radius / distance).min(1.0)),
+                )
+            };
+            let middle = wrap(middle - heading);
             Some(Interval {
                 lo: middle - half,
                 hi: middle + half,

@@ -659,6 +659,7 @@ impl ColumnScene<'_> {
         standing.clear();
         let statics = frame.statics.len();
         let impostor_width = reach.impostor_width;
+        let crowd_look = reach.crowd_distance.is_finite();
         // Where objects may be left out, each static object's place among `objects`.
         let keep_slots = keep_slots_for(reach);
         // Far small round static objects first, with their pieces: each an impostor, or left
@@ -778,7 +779,7 @@ impl ColumnScene<'_> {
                             return 1;
                         }
                     }
-                    (azimuth_interval(object, eye2, heading), false)
+                    (azimuth_interval(object, eye2, heading, crowd_look), false)
                 }
             };
             previous = Some((object, interval, Fate::Placed));
