@@ -6,6 +6,7 @@
 use glam::{DVec2, DVec3};
 
 use super::super::shade;
+use super::angular::Sweep;
 use super::impostor::Impostor;
 use super::impostor::IMPOSTOR_PIXELS;
 use super::kept::{KeptImpostors, Refresh};
@@ -15,7 +16,7 @@ use super::photodiode::{
 };
 use super::scene::{ColumnFrame, ColumnScene};
 use super::strip::Strip;
-use super::sweep::{self, eye_object, EyeObject, Look, Reach, Rounds, Sector, Sweep};
+use super::sweep::{self, eye_object, EyeObject, Look, Reach, Rounds, Sector};
 use crate::compile::graph::LightKind;
 use crate::render::Detail;
 use crate::retina::luminance;

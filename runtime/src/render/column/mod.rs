@@ -11,10 +11,13 @@
 //!
 //! Numerical notes: angles within the band use an odd polynomial for atan (|t| ≤ tan 5.5°
 //! ≈ 0.096 gives an error below 1e-10), sub-column directions use angle addition from
-//! precomputed directions, and everything goes through `libm` where a transcendental is
-//! needed: results do not depend on the platform's math library.
+//! precomputed directions, the crowd level of detail places impostors, kept boxes and round
+//! silhouettes by a polynomial `atan2` (within 2e-8 rad), and everything else goes through
+//! `libm` where a transcendental is needed: results do not depend on the platform's math
+//! library.
 //!
-//! `scene.rs` holds the scene and a step's frame, `sweep.rs` what one eye sees of it,
+//! `scene.rs` holds the scene and a step's frame, `sweep.rs` what one eye sees of it
+//! (`angular.rs` the sweep that hands each region its facing objects),
 //! `integrate.rs` the strip integrated region by region, `photodiode.rs` a column's segments
 //! and the band over each photodiode window, `footprint.rs` the placed upright objects,
 //! `shading.rs` the fast shading, `crowd.rs` which other robots an eye draws (`compact.rs` builds
@@ -23,6 +26,7 @@
 //! `kept.rs` how an eye keeps them from one update to the next,
 //! `strip.rs` the pixels to integrate.
 
+mod angular;
 mod compact;
 mod crowd;
 mod far;
