@@ -141,8 +141,9 @@ pub fn proximity_value(
     let robot_near = |other: usize, place: &Placement| {
         other != robot
             && height >= place.floor_y
-            && height <= place.floor_y + slab.robot_bodies[other].0
-            && DVec2::new(place.x, place.z).distance(origin2) <= reach + slab.robot_bodies[other].1
+            && height <= place.floor_y + slab.robot_bodies[other].height
+            && DVec2::new(place.x, place.z).distance(origin2)
+                <= reach + slab.robot_bodies[other].radius
     };
     let candidates_near = || {
         robots
@@ -179,7 +180,7 @@ pub fn proximity_value(
         for (other, place) in candidates_near() {
             let body = Footprint::Circle {
                 center: DVec2::new(place.x, place.z),
-                radius: slab.robot_bodies[other].1,
+                radius: slab.robot_bodies[other].radius,
             };
             if let Some(t) = body.ray(origin2, ray) {
                 if t < nearest {

@@ -32,7 +32,14 @@ pub struct Slab {
     pub robot_reflectance: Vec<f64>,
     /// Per robot: its body's height and radius (its rig's), side by side: every proximity
     /// sensor tests the robots near it against them, and a crowd's rigs are large and cold.
-    pub robot_bodies: Vec<(f64, f64)>,
+    pub robot_bodies: Vec<RobotBody>,
+}
+
+/// A robot's body as proximity sensors see it: an upright cylinder on its floor.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RobotBody {
+    pub height: f64,
+    pub radius: f64,
 }
 
 impl Slab {
@@ -111,7 +118,10 @@ impl Slab {
             robot_bodies: rig
                 .robots
                 .iter()
-                .map(|r| (r.body_height, r.body_radius))
+                .map(|r| RobotBody {
+                    height: r.body_height,
+                    radius: r.body_radius,
+                })
                 .collect(),
         }
     }

@@ -11,15 +11,8 @@ pub(super) fn extend_kept(
 ) {
     let start = out.len();
     out.resize(start + candidates.len(), 0);
-    let mut end = start;
-    for (value, keep) in candidates {
-        // `end` never passes the candidate's own slot: the test always holds.
-        if let Some(slot) = out.get_mut(end) {
-            *slot = value;
-        }
-        end += usize::from(keep);
-    }
-    out.truncate(end);
+    let kept = write_kept(&mut out[start..], candidates);
+    out.truncate(start + kept);
 }
 
 /// Writes the values `candidate(k)` gives for k = 0…count − 1 whose flag is set to the start of
@@ -34,16 +27,24 @@ pub(super) fn kept_prefix(
     if out.len() < count {
         out.resize(count, 0);
     }
+    let kept = write_kept(out, (0..count).map(candidate));
+    &out[..kept]
+}
+
+/// Writes the flagged values of `candidates` to the start of `slots` (at least as many as the
+/// candidates), every one written and the end moved on only past those kept; returns how many
+/// were kept.
+#[inline(always)]
+fn write_kept(slots: &mut [u32], candidates: impl Iterator<Item = (u32, bool)>) -> usize {
     let mut end = 0;
-    for k in 0..count {
-        let (value, keep) = candidate(k);
-        // `end` never passes `k`: the test always holds.
-        if let Some(slot) = out.get_mut(end) {
+    for (value, keep) in candidates {
+        // `end` never passes the candidate's own slot: the test always holds.
+        if let Some(slot) = slots.get_mut(end) {
             *slot = value;
         }
         end += usize::from(keep);
     }
-    &out[..end]
+    end
 }
 
 #[cfg(test)]

@@ -895,6 +895,49 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_crowds_lists_are_the_filters_lists() {
+        let mut unit = crate::test_random::unit_stream(11);
+        let mut angle = || (unit() * 2.0 - 1.0) * std::f64::consts::PI;
+        for trial in 0..200 {
+            let mut look = Look::default();
+            for _ in 0..(trial % 40) {
+                let (lo, hi) = (angle(), angle());
+                look.objects.push(EyeObject {
+                    lo,
+                    hi,
+                    wraps: lo > hi,
+                    relative: Relative::Circle {
+                        oc: DVec2::ONE,
+                        c: 1.0,
+                        radius: 0.1,
+                    },
+                    y0: -0.05,
+                    y1: 0.0,
+                    side: true,
+                    top: true,
+                    bottom: false,
+                    primitive: 0,
+                });
+            }
+            let (a, b) = (angle(), angle());
+            let (a, b) = (a.min(b), a.max(b));
+            let (mut filtered, mut unbranched) = (Vec::new(), vec![7; 3]);
+            look.crowd = false;
+            let few = look.facing_over(a, b, &mut filtered).to_vec();
+            look.crowd = true;
+            assert_eq!(
+                look.facing_over(a, b, &mut unbranched),
+                few,
+                "trial {trial}"
+            );
+            let holding: Vec<u32> = (0..look.objects.len() as u32)
+                .filter(|&k| look.objects[k as usize].holds(a))
+                .collect();
+            assert_eq!(look.facing(a, &mut unbranched), holding, "trial {trial}");
+        }
+    }
+
+    #[test]
     fn ascending_once_sorts_and_drops_repeats_by_bitmap_or_by_sorting() {
         let mut unit = crate::test_random::unit_stream(47);
         let mut bits = Vec::new();
