@@ -129,6 +129,10 @@ fn run_here(mut args: Args, color: bool) -> anyhow::Result<Outcome> {
         regatta_evolve::experiment::sense_for_fitness(&mut simulation);
         regatta_evolve::Observer::new(&simulation, &args.fitness)
     });
+    #[cfg(target_env = "gnu")]
+    unsafe {
+        libc::malloc_trim(0);
+    }
     let progress = progress_bar(steps);
     let started = Instant::now();
     let mut failure = None;

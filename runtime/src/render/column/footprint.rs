@@ -166,9 +166,10 @@ pub(super) struct Interval {
 
 /// An object's azimuth interval relative to `heading`, or `None` when it surrounds the eye.
 ///
-/// `crowd`: a round silhouette's angles by the polynomial arctangent impostors use (within
-/// 2e-8 rad, a millionth of a photodiode; no branch on the octant) instead of the C library's
-/// `atan2` and `asin`, whose branches a crowd's look mispredicts. Exact rendering keeps them.
+/// `crowd`: a silhouette's angles (round or rectangular) by the polynomial arctangent
+/// impostors use (within 2e-8 rad, a millionth of a photodiode; no branch on the octant)
+/// instead of the C library's `atan2`, `atan` and `asin`, whose branches a crowd's look
+/// mispredicts. Exact rendering keeps them.
 pub(super) fn azimuth_interval(
     object: &Upright,
     eye: DVec2,
@@ -213,19 +214,25 @@ pub(super) fn azimuth_interval(
             if pu.abs() <= half_u && pv.abs() <= half_v {
                 return None;
             }
-            let middle = libm::atan2(-offset.y, offset.x);
+            let middle = if crowd {
+                super::impostor::atan2(-offset.y, offset.x)
+            } else {
+                libm::atan2(-offset.y, offset.x)
+            };
             // Corners as (x, −z) so that angles grow counter-clockwise; relative to the middle
             // direction m an angle is atan(cross/dot) while every corner is in front of it,
             // so only the two extreme corners need a transcendental.
             let m = DVec2::new(offset.x, -offset.y);
             let mut ratios = [0.0; 4];
+            let mut crosses = [(0.0, 0.0); 4];
             let mut in_front = true;
-            for (k, ratio) in ratios.iter_mut().enumerate() {
+            for ((k, ratio), cross) in ratios.iter_mut().enumerate().zip(&mut crosses) {
                 let corner = rect_corner(center, u, v, half_u, half_v, k) - eye;
                 let c = DVec2::new(corner.x, -corner.y);
                 let dot = m.dot(c);
                 in_front &= dot > 0.0;
-                *ratio = m.perp_dot(c) / dot;
+                *cross = (m.perp_dot(c), dot);
+                *ratio = cross.0 / dot;
             }
             let mut angles = [0.0; 4];
             let extreme = if in_front {
@@ -233,7 +240,12 @@ pub(super) fn azimuth_interval(
             } else {
                 for (k, angle) in angles.iter_mut().enumerate() {
                     let corner = rect_corner(center, u, v, half_u, half_v, k) - eye;
-                    *angle = wrap(libm::atan2(-corner.y, corner.x) - middle);
+                    let angle_of = if crowd {
+                        super::impostor::atan2(-corner.y, corner.x)
+                    } else {
+                        libm::atan2(-corner.y, corner.x)
+                    };
+                    *angle = wrap(angle_of - middle);
                 }
                 angles
             };
@@ -247,7 +259,11 @@ pub(super) fn azimuth_interval(
                     hi_k = k;
                 }
             }
-            let (lo, hi) = if in_front {
+            let (lo, hi) = if in_front && crowd {
+                // atan(cross/dot) with dot > 0: the polynomial takes both, no division first.
+                let angle = |(cross, dot): (f64, f64)| super::impostor::atan2(cross, dot);
+                (angle(crosses[lo_k]), angle(crosses[hi_k]))
+            } else if in_front {
                 (libm::atan(ratios[lo_k]), libm::atan(ratios[hi_k]))
             } else {
                 (angles[lo_k], angles[hi_k])
