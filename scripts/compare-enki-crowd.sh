@@ -2,12 +2,13 @@
 # Enki (camera + IR, built from source by ../shared/peers/enki/build.sh) beside
 # regatta on ../shared/peers/enki/swarm_world.py's worlds, one thread each, interleaved as
 # compare.sh does; regatta with its crowd setting (REGATTA_CROWD added to the turrets, by
-# default `crowdDistance 0.5 crowdFarDistance 5 crowdKeepDistance 0.05`: the far distance
-# changes nothing below 1000 robots, whose arenas are smaller) and exact. Usage: scripts/compare-enki-crowd.sh ENKI_SWARM
+# default `crowdDistance 0.5 crowdFarDistance 4 crowdKeepDistance 0.05`, 0.095 LSB at 1000
+# robots in `regatta bench crowd`, within the 0.1 budget: the far distance changes nothing
+# below 1000 robots, whose arenas are smaller) and exact. Usage: scripts/compare-enki-crowd.sh ENKI_SWARM
 # REGATTA OUTDIR (build Enki with ../shared/peers/enki/build.sh). One line per run in
 # OUTDIR/runs.tsv.
 enki=$1; regatta=$2; out=$3; mkdir -p "$out"
-crowd=${REGATTA_CROWD:-crowdDistance 0.5 crowdFarDistance 5 crowdKeepDistance 0.05}
+crowd=${REGATTA_CROWD:-crowdDistance 0.5 crowdFarDistance 4 crowdKeepDistance 0.05}
 world=$(cd "$(dirname "$0")/.." && pwd)/../shared/peers/enki/swarm_world.py
 declare -A K=([1]=600000 [10]=20000 [100]=1500 [1000]=100)
 declare -A KX=([1]=600000 [10]=15000 [100]=200 [1000]=5)
