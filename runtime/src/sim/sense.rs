@@ -5,6 +5,7 @@
 use glam::DVec2;
 
 use super::broad_phase::{self, BroadPhase};
+use super::noise::{kind, Stream};
 use super::sensors;
 use super::state::RobotState;
 use super::world2d::Slab;
@@ -32,6 +33,8 @@ pub(super) struct SenseShared<'s, 'c> {
     pub(super) camera_raster: Option<&'s crate::render::raster::Rasterizer<'c>>,
     pub(super) batched: bool,
     pub(super) t: f64,
+    /// The seed of the run's noise streams, for those made on first use.
+    pub(super) streams_seed: u64,
 }
 
 impl SenseShared<'_, '_> {
@@ -53,6 +56,12 @@ impl SenseShared<'_, '_> {
             (true, false) => 8,
             (true, true) => usize::MAX,
         };
+        if ambient_sensors > 0 && robot.ambient_due.len() < rig.light_sensors.len() {
+            robot.ambient_due = vec![0.0; rig.light_sensors.len()];
+            robot.ambient_streams = (0..rig.light_sensors.len())
+                .map(|s| Stream::new(self.streams_seed, index, kind::AMBIENT, s))
+                .collect();
+        }
         for (s, sensor) in rig.light_sensors.iter().enumerate().take(ambient_sensors) {
             if due(&mut robot.ambient_due[s], t, sensor.period) {
                 robot.updated.ambient = true;

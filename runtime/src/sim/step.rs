@@ -71,6 +71,9 @@ pub struct Simulation<'c> {
     pub steps: u64,
     pub time_step: f64,
     pub seed: u64,
+    /// The seed the noise streams were made from (`seed` as it was at the start): streams made
+    /// on first use (ambient sensors) come from it.
+    streams_seed: u64,
     /// Sensors refreshed whether or not a controller reads them (what a log records).
     pub always_sensed: Senses,
     /// Buffers a step fills and the next reuses: stepping allocates nothing once warm.
@@ -139,7 +142,9 @@ impl<'c> Simulation<'c> {
                 proximity: [0; 8],
                 ambient: [0; 8],
                 ir_due,
-                ambient_due: vec![0.0; rig.light_sensors.len()],
+                // Made when first read (most robots' controllers never do): the same due
+                // times and streams as if made here, since none is drawn before that.
+                ambient_due: Vec::new(),
                 ir_nothing: match &last_nothing {
                     Some((sensors, nothing)) if Arc::ptr_eq(sensors, &rig.distance_sensors) => {
                         nothing.clone()
@@ -161,9 +166,7 @@ impl<'c> Simulation<'c> {
                         .all(|s| s.period.to_bits() == p.to_bits())
                 }),
                 ir_streams,
-                ambient_streams: (0..rig.light_sensors.len())
-                    .map(|s| Stream::new(seed, index, kind::AMBIENT, s))
-                    .collect(),
+                ambient_streams: Vec::new(),
                 wheel_stream: Stream::new(seed, index, kind::WHEELS, 0),
                 wheel_noise: (1.0, 1.0),
                 panoramic: match &rig.turret {
@@ -254,6 +257,7 @@ impl<'c> Simulation<'c> {
             steps: 0,
             time_step,
             seed,
+            streams_seed: seed,
             always_sensed: Senses::NONE,
             scratch: StepScratch::default(),
             profile: None,
@@ -484,7 +488,8 @@ impl<'c> Simulation<'c> {
             && self
                 .robots
                 .iter()
-                .any(|r| r.senses.ambient && !r.ambient_due.is_empty())
+                .zip(&compiled.rig.robots)
+                .any(|(r, rig)| r.senses.ambient && !rig.light_sensors.is_empty())
         {
             *lights = crate::render::world_lights(&compiled.graph, &compiled.plan, poses);
         }
@@ -516,6 +521,7 @@ impl<'c> Simulation<'c> {
             camera_raster: self.camera_raster.as_ref(),
             batched: self.vision.is_some(),
             t,
+            streams_seed: self.streams_seed,
         };
         // Each robot reads only what is shared and writes only itself: side by side when
         // there is enough work, and the same results either way.

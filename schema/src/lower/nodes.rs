@@ -4,6 +4,7 @@
 
 use std::collections::HashMap;
 use std::path::PathBuf;
+use std::rc::Rc;
 
 use regatta_parser::syntax::{self, Atom, BodyItem, Item, Items, NodeKind};
 use regatta_parser::{Diagnostic, Span};
@@ -25,7 +26,21 @@ impl<'c> Lowerer<'c> {
             ..Scope::new(file)
         };
         self.decide_axes(header.as_ref(), &parsed);
-        let roots = self.lower_items(&parsed.items, &mut scope, true);
+        // The world's tree is read once, item by item (its PROTOs were copied above), and a
+        // crowd's world is much of what a check holds at its peak: each item is dropped once
+        // lowered, so that the nodes it becomes reuse its place.
+        self.parsed.remove(&file.0);
+        self.released_trees.insert(file.0);
+        let roots = match Rc::try_unwrap(parsed) {
+            Ok(owned) => {
+                let mut roots = Vec::new();
+                for item in owned.items {
+                    self.lower_item(&item, &mut scope, true, &mut roots);
+                }
+                roots
+            }
+            Err(shared) => self.lower_items(&shared.items, &mut scope, true),
+        };
         self.roots = roots;
     }
 
@@ -37,30 +52,41 @@ impl<'c> Lowerer<'c> {
     ) -> Vec<NodeId> {
         let mut roots = Vec::new();
         for item in items {
-            match item {
-                Item::Node(node) => {
-                    if let Some(id) = self.lower_node(
-                        node,
-                        scope,
-                        &["child".to_owned(), "robot".to_owned()],
-                        "the world",
-                    ) {
-                        roots.push(id);
-                    }
-                }
-                Item::Template(template) if top_level => self.strict_or_warn(
-                    scope.file,
-                    Diagnostic::error(
-                        template.span,
-                        "template code outside a PROTO is not evaluated",
-                    )
-                    .with_code("template"),
-                ),
-                Item::Route(route) => self.route(route, scope),
-                _ => {}
-            }
+            self.lower_item(item, scope, top_level, &mut roots);
         }
         roots
+    }
+
+    /// Lowers one of a file's or body's items; a node's id goes to `roots`.
+    fn lower_item(
+        &mut self,
+        item: &Item,
+        scope: &mut Scope,
+        top_level: bool,
+        roots: &mut Vec<NodeId>,
+    ) {
+        match item {
+            Item::Node(node) => {
+                if let Some(id) = self.lower_node(
+                    node,
+                    scope,
+                    &["child".to_owned(), "robot".to_owned()],
+                    "the world",
+                ) {
+                    roots.push(id);
+                }
+            }
+            Item::Template(template) if top_level => self.strict_or_warn(
+                scope.file,
+                Diagnostic::error(
+                    template.span,
+                    "template code outside a PROTO is not evaluated",
+                )
+                .with_code("template"),
+            ),
+            Item::Route(route) => self.route(route, scope),
+            _ => {}
+        }
     }
 
     pub(super) fn alloc(&mut self, node: SceneNode, file: FileId, span: Span) -> Option<NodeId> {

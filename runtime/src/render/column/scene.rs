@@ -25,6 +25,8 @@ pub struct ColumnScene<'g> {
     /// Whether each primitive is in the plan's visible set, and in its robot's own.
     pub(super) visible: Vec<bool>,
     pub(super) own_visible: Vec<bool>,
+    /// Whether any robot part is seen by its own robot's devices (else frames keep no `own`).
+    any_own_visible: bool,
     /// Whether every static object has fast shading (lights that do not move).
     pub(super) statics_fast: bool,
     /// Primitives attached to robots, in graph order, with their robot.
@@ -68,7 +70,8 @@ pub struct ColumnFrame {
     pub(super) statics: Arc<[Upright]>,
     /// Per entry of the scene's `robot_parts`: the part placed, if other robots see it.
     pub(super) others: Vec<Option<Upright>>,
-    /// Per entry of the scene's `robot_parts`: the part placed, if its own turret sees it.
+    /// Per entry of the scene's `robot_parts`: the part placed, if its own turret sees it;
+    /// empty when no robot sees a part of its own (a crowd's 300 kB of `None`s saved).
     pub(super) own: Vec<Option<Upright>>,
     /// The robot of each entry.
     pub(super) part_robot: Vec<usize>,
@@ -147,6 +150,7 @@ impl<'g> ColumnScene<'g> {
             rounds,
             round_at,
             graph,
+            any_own_visible: own_visible.iter().any(|&own| own),
             own_visible,
             statics_fast,
             cullable,
@@ -201,7 +205,9 @@ impl<'g> ColumnScene<'g> {
         frame.own.clear();
         // One entry per robot part, every step: no room to spare (a crowd has thousands).
         frame.others.reserve_exact(self.robot_parts.len());
-        frame.own.reserve_exact(self.robot_parts.len());
+        if self.any_own_visible {
+            frame.own.reserve_exact(self.robot_parts.len());
+        }
         frame.robot_at.clear();
         frame
             .robot_at
@@ -237,7 +243,9 @@ impl<'g> ColumnScene<'g> {
                 }
             }
             frame.others.push(other);
-            frame.own.push(own);
+            if self.any_own_visible {
+                frame.own.push(own);
+            }
         }
         match &self.cached {
             Some((lights, shades)) => {

@@ -760,7 +760,7 @@ impl ColumnScene<'_> {
         }
         let part = |entry: usize| {
             if Some(frame.part_robot[entry]) == viewer {
-                frame.own[entry].as_ref()
+                frame.own.get(entry).and_then(Option::as_ref)
             } else {
                 frame.others[entry].as_ref()
             }
