@@ -186,7 +186,6 @@ impl ColumnScene<'_> {
         let samples = samples.max(1);
         let stride = stride.max(1);
         let pixels = strip.centers.len().min(out.len());
-        let half = strip.width / 2.0;
         // Parts wholly behind the strip face no photodiode: left out where there are many.
         let sector = (frame.statics.len() + frame.others.len() > sweep::FEW && !exhaustive)
             .then(|| {
@@ -283,6 +282,36 @@ impl ColumnScene<'_> {
             }
             return;
         }
+        self.integrate_pixels(
+            look,
+            sweep,
+            frame,
+            strip,
+            (samples, band, sky, ground),
+            buffers,
+            scratch,
+            &mut out[..pixels],
+        );
+    }
+
+    /// A strip sampled pixel by pixel (`stride 1`, or windows that are not contiguous): each
+    /// window cut at silhouette edges, `samples` columns a piece, then the impostors. Out of
+    /// line: the crowd setting samples by regions, and its hot path stays small.
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn integrate_pixels(
+        &self,
+        look: &Look,
+        sweep: &mut Sweep,
+        frame: &ColumnFrame,
+        strip: &Strip,
+        (samples, band, sky, ground): (usize, f64, f64, f64),
+        buffers: &mut RegionBuffers,
+        scratch: &mut Scratch,
+        out: &mut [f64],
+    ) {
+        let pixels = out.len();
+        let half = strip.width / 2.0;
         let facing = &mut buffers.facing;
         // Pixels from the right (azimuth rising), so that the sweep moves one way.
         for pixel in (0..pixels).rev() {
@@ -336,7 +365,7 @@ impl ColumnScene<'_> {
             ground,
             (facing, &mut buffers.pieces, &mut buffers.profile),
             scratch,
-            &mut out[..pixels],
+            out,
         );
     }
 
@@ -605,20 +634,39 @@ impl ColumnScene<'_> {
             sky,
             ground,
         };
-        if frame.all_fast {
-            // Every face's luminance is known when its segment is made: no faces kept.
-            lit.len = 0;
-            self.collect_segments(
-                look,
-                direction,
-                facing,
-                &mut LitSink {
-                    lit,
-                    shades: &frame.shades,
-                },
-            );
-            return band.composite(lit.as_slice(), free, |segment, _, _| segment.luminance);
+        if !frame.all_fast {
+            return self.column_shaded(frame, look, direction, facing, &band, segments, free);
         }
+        // Every face's luminance is known when its segment is made: no faces kept.
+        lit.len = 0;
+        self.collect_segments(
+            look,
+            direction,
+            facing,
+            &mut LitSink {
+                lit,
+                shades: &frame.shades,
+            },
+        );
+        band.composite(lit.as_slice(), free, |segment, _, _| segment.luminance)
+    }
+
+    /// [`ColumnScene::column`] where some face is shaded per point (lights that move, or
+    /// materials without fast shading): kept out of line, so that the fast path a crowd runs
+    /// a thousand times a step stays small in the instruction cache.
+    #[cold]
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn column_shaded(
+        &self,
+        frame: &ColumnFrame,
+        look: &Look,
+        direction: DVec2,
+        facing: &[u32],
+        band: &Band,
+        segments: &mut Segments,
+        free: &mut Free,
+    ) -> f64 {
         segments.len = 0;
         self.collect_segments(look, direction, facing, segments);
         band.composite(segments.iter(), free, |segment, middle, covered| {
@@ -644,15 +692,41 @@ impl ColumnScene<'_> {
             lit,
             free,
         } = scratch;
-        if frame.all_fast {
-            lit.len = 0;
-            let mut sink = LitSink {
-                lit,
-                shades: &frame.shades,
-            };
-            self.collect_segments(look, direction, facing, &mut sink);
-            return band.profile(sink.lit.as_slice(), free, |s, _, _| s.luminance, out);
+        if !frame.all_fast {
+            return self.profile_shaded(
+                frame,
+                look,
+                direction,
+                facing,
+                band,
+                (segments, free),
+                out,
+            );
         }
+        lit.len = 0;
+        let mut sink = LitSink {
+            lit,
+            shades: &frame.shades,
+        };
+        self.collect_segments(look, direction, facing, &mut sink);
+        band.profile(sink.lit.as_slice(), free, |s, _, _| s.luminance, out)
+    }
+
+    /// [`ColumnScene::profile`] where some face is shaded per point, out of line (see
+    /// [`ColumnScene::column_shaded`]).
+    #[cold]
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn profile_shaded(
+        &self,
+        frame: &ColumnFrame,
+        look: &Look,
+        direction: DVec2,
+        facing: &[u32],
+        band: &Band,
+        (segments, free): (&mut Segments, &mut Free),
+        out: &mut Vec<Shown>,
+    ) -> f64 {
         segments.len = 0;
         self.collect_segments(look, direction, facing, segments);
         band.profile(
@@ -685,15 +759,38 @@ impl ColumnScene<'_> {
             lit,
             free,
         } = scratch;
-        if frame.all_fast {
-            lit.len = 0;
-            let mut sink = LitSink {
-                lit,
-                shades: &frame.shades,
-            };
-            self.collect_pieces(look, direction, (pieces, id), &mut sink);
-            return band.effect(profile, sink.lit.as_slice(), free, |s, _, _| s.luminance);
+        if !frame.all_fast {
+            return self.impostor_effect_shaded(
+                frame,
+                look,
+                direction,
+                (profile, pieces, id),
+                band,
+                (segments, free),
+            );
         }
+        lit.len = 0;
+        let mut sink = LitSink {
+            lit,
+            shades: &frame.shades,
+        };
+        self.collect_pieces(look, direction, (pieces, id), &mut sink);
+        band.effect(profile, sink.lit.as_slice(), free, |s, _, _| s.luminance)
+    }
+
+    /// [`ColumnScene::impostor_effect`] where some face is shaded per point, out of line (see
+    /// [`ColumnScene::column_shaded`]).
+    #[cold]
+    #[inline(never)]
+    fn impostor_effect_shaded(
+        &self,
+        frame: &ColumnFrame,
+        look: &Look,
+        direction: DVec2,
+        (profile, pieces, id): (&[Shown], &[EyeObject], u32),
+        band: &Band,
+        (segments, free): (&mut Segments, &mut Free),
+    ) -> f64 {
         segments.len = 0;
         self.collect_pieces(look, direction, (pieces, id), segments);
         band.effect(

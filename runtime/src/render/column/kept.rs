@@ -133,7 +133,8 @@ impl ColumnScene<'_> {
     /// Works the boxes out anew from `look` (told all around the eye with
     /// [`super::sweep::Rounds::TellAround`], its impostors settled): each visible impostor's
     /// effect on the column through its centre, times its visible share, and the groups the
-    /// look placed exactly.
+    /// look placed exactly. Out of line: an eye works them out once in some twenty updates.
+    #[inline(never)]
     pub(super) fn keep_impostors(
         &self,
         frame: &ColumnFrame,
