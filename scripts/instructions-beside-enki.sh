@@ -2,7 +2,7 @@
 # Marginal instructions per step (valgrind --tool=callgrind, two run lengths, subtracted) of
 # regatta and Enki on ../shared/peers/enki/swarm_world.py's worlds, one thread each: Enki with
 # its camera and IR only, regatta with the crowd setting (REGATTA_CROWD added to the turrets,
-# by default compare-enki-crowd.sh's `crowdDistance 0.5 crowdFarDistance 5 crowdKeepDistance
+# by default compare-enki-crowd.sh's `crowdDistance 0.5 crowdFarDistance 4 crowdKeepDistance
 # 0.05`) and IR only; then what one retina may cost if regatta is to run at TARGET times
 # Enki's rate (docs/crowd.md, "What a step may cost beside Enki"). Instruction counts do not
 # depend on the machine's load, unlike the wall-clock figures of compare-enki-crowd.sh.
@@ -11,7 +11,7 @@
 set -euo pipefail
 enki=$1; regatta=$2; out=$3; shift 3
 sizes=("$@"); [ ${#sizes[@]} -gt 0 ] || sizes=(1:1 10:2 100:3)
-crowd=${REGATTA_CROWD:-crowdDistance 0.5 crowdFarDistance 5 crowdKeepDistance 0.05}
+crowd=${REGATTA_CROWD:-crowdDistance 0.5 crowdFarDistance 4 crowdKeepDistance 0.05}
 world=$(cd "$(dirname "$0")/.." && pwd)/../shared/peers/enki/swarm_world.py
 mkdir -p "$out"
 collected() { grep -o 'Collected : [0-9]*' "$1" | awk '{print $3}'; }
