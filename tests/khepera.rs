@@ -153,6 +153,37 @@ DifferentialWheels {{ controller \"none\" children [
     assert!(far > lamp && far < 500, "far {far}, near {lamp}");
 }
 
+/// Ambient sensors' noise streams are made when first read, from the seed the run started
+/// with: setting `Simulation::seed` afterwards changes them no more than it changes the streams
+/// made at the start, while another seed given at the start does.
+#[test]
+fn ambient_noise_comes_from_the_seed_the_run_started_with() {
+    let compiled = compile_text(
+        "#VRML_SIM R2023b utf8
+WorldInfo { coordinateSystem \"NUE\" }
+PointLight { location 0.3 0.0145 0 intensity 1 attenuation 0 0 50 }
+DifferentialWheels { controller \"none\" children [
+  LightSensor { translation 0.0245 0.0145 0 lookupTable [ 0 500 0.2  1 50 0.2  10 10 0.2 ] }
+] }
+",
+    );
+    let readings = |start: Option<u64>, later: Option<u64>| {
+        let mut simulation = Simulation::new(&compiled, start).unwrap();
+        if let Some(seed) = later {
+            simulation.seed = seed;
+        }
+        (0..20)
+            .map(|_| {
+                simulation.step();
+                simulation.robots[0].ambient[0]
+            })
+            .collect::<Vec<u16>>()
+    };
+    let plain = readings(None, None);
+    assert_eq!(readings(None, Some(12_345)), plain);
+    assert_ne!(readings(Some(12_345), None), plain, "the sensor has noise");
+}
+
 /// Drives at full speed (127 pulses/10 ms ≈ 1 m/s) into a 2 mm wall.
 struct Ram;
 

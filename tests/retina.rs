@@ -416,3 +416,47 @@ fn column_renderer_equals_the_ray_caster_in_paper_optics() {
         }
     }
 }
+
+/// A part of a robot that its own turret sees (a bright pole on its front, up through the
+/// band) is drawn in its own retina, in the exact setting and the crowd's: frames keep their
+/// own-view list only when some robot sees a part of its own, and this one does.
+#[test]
+fn a_robots_own_pole_shows_in_its_own_retina() {
+    for turret in [
+        "PanoramicTurret { filters [ \"raw\" ] }",
+        "PanoramicTurret { filters [ \"raw\" ] crowdDistance 0.5 }",
+    ] {
+        let world = |pole: &str| {
+            format!(
+                "#VRML_SIM R2023b utf8
+WorldInfo {{ coordinateSystem \"NUE\" }}
+Background {{ skyColor [ 0.05 0.05 0.05 ] }}
+DirectionalLight {{ direction 0 -1 0 intensity 0.5 }}
+DifferentialWheels {{ controller \"none\" turret {turret} children [ {pole} ] }}
+"
+            )
+        };
+        let pole = "Transform { translation 0.04 0.06 0 children [ Shape { appearance \
+                    Appearance { material Material { emissiveColor 1 1 1 } } geometry \
+                    Cylinder { radius 0.004 height 0.12 } } ] }";
+        let with_pole = compile_text(&world(pole));
+        assert!(
+            !with_pole.plan.own_visible[0].is_empty(),
+            "{turret}: the pole is in the robot's own view"
+        );
+        let bare = panoramic_at_start(&compile_text(&world("")), false);
+        let seen = panoramic_at_start(&with_pole, false);
+        let brightest = |out: &regatta_runtime::optics::RetinaOutput| {
+            out.luminance
+                .iter()
+                .copied()
+                .fold(f64::NEG_INFINITY, f64::max)
+        };
+        assert!(
+            brightest(&seen) > 2.0 * brightest(&bare),
+            "{turret}: {} with the pole, {} without",
+            brightest(&seen),
+            brightest(&bare)
+        );
+    }
+}

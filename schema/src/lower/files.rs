@@ -50,8 +50,7 @@ impl<'c> Lowerer<'c> {
         }
         let text = self.sources[file.0 as usize].text.clone();
         let parse = regatta_parser::parse_with(&text, self.options.limits.nesting);
-        let reported = self.released_trees.contains(&file.0);
-        for diagnostic in parse.diagnostics.into_iter().filter(|_| !reported) {
+        for diagnostic in parse.diagnostics {
             self.parse_diagnostics
                 .push(FileDiagnostic { file, diagnostic });
         }

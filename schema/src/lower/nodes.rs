@@ -26,11 +26,11 @@ impl<'c> Lowerer<'c> {
             ..Scope::new(file)
         };
         self.decide_axes(header.as_ref(), &parsed);
-        // The world's tree is read once, item by item (its PROTOs were copied above), and a
-        // crowd's world is much of what a check holds at its peak: each item is dropped once
-        // lowered, so that the nodes it becomes reuse its place.
+        // The world's tree is read once, item by item, and a crowd's world is much of what a
+        // check holds at its peak: each item is dropped once lowered, so that the nodes it
+        // becomes reuse its place. Nothing parses the world again: its PROTOs were copied and
+        // its EXTERNPROTOs read above, and a file that includes the world is refused.
         self.parsed.remove(&file.0);
-        self.released_trees.insert(file.0);
         let roots = match Rc::try_unwrap(parsed) {
             Ok(owned) => {
                 let mut roots = Vec::new();

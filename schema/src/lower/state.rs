@@ -179,9 +179,6 @@ pub(super) struct Lowerer<'c> {
     pub(super) loaded: HashMap<PathBuf, FileId>,
     /// Each file's syntax tree, parsed once.
     pub(super) parsed: HashMap<u32, Rc<syntax::SourceFile>>,
-    /// Files whose tree was dropped once read (the world's): parsed again if asked for, their
-    /// diagnostics not reported twice.
-    pub(super) released_trees: BTreeSet<u32>,
     /// The PROTO table of each file, by file id.
     pub(super) file_scopes: HashMap<u32, ProtoTable>,
     /// The PROTO each instance's root node was made by (the outermost one), for ROUTEs.
@@ -251,7 +248,6 @@ impl<'c> Lowerer<'c> {
             estimates: HashMap::new(),
             loaded: HashMap::new(),
             parsed: HashMap::new(),
-            released_trees: BTreeSet::new(),
             file_scopes: HashMap::new(),
             instance_of: HashMap::new(),
             limits_reported: BTreeSet::new(),

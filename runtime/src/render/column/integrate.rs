@@ -11,8 +11,8 @@ use super::impostor::Impostor;
 use super::impostor::IMPOSTOR_PIXELS;
 use super::kept::{KeptImpostors, Refresh};
 use super::photodiode::{
-    band_atan, index_below, nearest_index, Band, Face, Free, LitSegments, LitSink, Raster, Scratch,
-    Segment, SegmentSink, Segments, Shown,
+    band_atan, index_below, nearest_index, Band, Face, Free, Lit, LitSegments, LitSink, Raster,
+    Scratch, Segment, SegmentSink, Segments, Shown,
 };
 use super::scene::{ColumnFrame, ColumnScene};
 use super::strip::Strip;
@@ -637,18 +637,28 @@ impl ColumnScene<'_> {
         if !frame.all_fast {
             return self.column_shaded(frame, look, direction, facing, &band, segments, free);
         }
-        // Every face's luminance is known when its segment is made: no faces kept.
+        let lit = self.collect_lit(frame, look, direction, facing, lit);
+        band.composite(lit, free, |segment, _, _| segment.luminance)
+    }
+
+    /// The column's segments with their luminance, where every face is fast shaded: known
+    /// when a segment is made, so no faces are kept.
+    #[inline]
+    fn collect_lit<'l>(
+        &self,
+        frame: &ColumnFrame,
+        look: &Look,
+        direction: DVec2,
+        facing: &[u32],
+        lit: &'l mut LitSegments,
+    ) -> &'l [Lit] {
         lit.len = 0;
-        self.collect_segments(
-            look,
-            direction,
-            facing,
-            &mut LitSink {
-                lit,
-                shades: &frame.shades,
-            },
-        );
-        band.composite(lit.as_slice(), free, |segment, _, _| segment.luminance)
+        let mut sink = LitSink {
+            lit: &mut *lit,
+            shades: &frame.shades,
+        };
+        self.collect_segments(look, direction, facing, &mut sink);
+        lit.as_slice()
     }
 
     /// [`ColumnScene::column`] where some face is shaded per point (lights that move, or
@@ -703,13 +713,8 @@ impl ColumnScene<'_> {
                 out,
             );
         }
-        lit.len = 0;
-        let mut sink = LitSink {
-            lit,
-            shades: &frame.shades,
-        };
-        self.collect_segments(look, direction, facing, &mut sink);
-        band.profile(sink.lit.as_slice(), free, |s, _, _| s.luminance, out)
+        let lit = self.collect_lit(frame, look, direction, facing, lit);
+        band.profile(lit, free, |s, _, _| s.luminance, out)
     }
 
     /// [`ColumnScene::profile`] where some face is shaded per point, out of line (see
