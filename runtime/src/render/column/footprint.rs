@@ -155,6 +155,23 @@ pub(super) fn corner_of(footprint: &Footprint, k: usize) -> Option<DVec2> {
     }
 }
 
+/// Whether `point` lies strictly inside `footprint`.
+pub(super) fn surrounds(footprint: &Footprint, point: DVec2) -> bool {
+    match *footprint {
+        Footprint::Rect {
+            center,
+            u,
+            v,
+            half_u,
+            half_v,
+        } => {
+            let offset = point - center;
+            offset.dot(u).abs() < half_u && offset.dot(v).abs() < half_v
+        }
+        Footprint::Circle { center, radius } => center.distance_squared(point) < radius * radius,
+    }
+}
+
 /// An object's azimuth interval relative to the viewer's heading.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Interval {

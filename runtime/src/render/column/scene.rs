@@ -10,7 +10,7 @@ use glam::DVec2;
 
 use super::super::{world_lights, Poses, WorldLight};
 use super::crowd::CrowdGrid;
-use super::footprint::{corner_hiders, upright_of, Hider, Upright};
+use super::footprint::{corner_hiders, corner_of, upright_of, Hider, Upright};
 use super::shading::{FastShade, Shades};
 use crate::compile::graph::{Owner, RenderGraph};
 use crate::compile::plan::Plan;
@@ -57,6 +57,63 @@ pub struct ColumnScene<'g> {
     /// [`TUCK`] of the body's round footprint and no higher than it (a Khepera's wheels). The
     /// crowd level of detail leaves such parts of other robots out.
     pub(super) tucked: Vec<bool>,
+    /// A floor that walls stand on, for the crowd level of detail ([`Floor`]).
+    pub(super) floor: Option<Floor>,
+}
+
+/// A static box seen from above (a floor) and the boxes standing on it (walls): their
+/// footprints within its own, their bottoms at or below its top. Where an eye above the floor
+/// has walls as tall as it is all across its strip, every sight line meets a wall before the
+/// floor's edge, and the wall hides the floor from there on: what shows of the floor is then
+/// what is left below the horizon once every other object is drawn, the ground a column
+/// fills last, and the crowd level of detail draws it so (`sweep.rs`) instead of crossing it
+/// in every column.
+pub(super) struct Floor {
+    /// The floor's place among the static objects.
+    pub(super) order: usize,
+    /// Per static object, whether it is one of the floor's walls.
+    pub(super) walls: Vec<bool>,
+}
+
+impl Floor {
+    /// The first static box with a top that has walls standing on it.
+    fn find(statics: &[Upright]) -> Option<Floor> {
+        statics.iter().enumerate().find_map(|(order, floor)| {
+            let Footprint::Rect {
+                center,
+                u,
+                v,
+                half_u,
+                half_v,
+            } = floor.footprint
+            else {
+                return None;
+            };
+            if !floor.top {
+                return None;
+            }
+            // Within the floor's footprint, to rounding: a wall's outer face may be the floor's
+            // edge (an arena's), and a sight line meets its inner face first.
+            let within = |p: DVec2| {
+                let offset = p - center;
+                offset.dot(u).abs() <= half_u * (1.0 + 1e-9)
+                    && offset.dot(v).abs() <= half_v * (1.0 + 1e-9)
+            };
+            let walls: Vec<bool> = statics
+                .iter()
+                .enumerate()
+                .map(|(k, wall)| {
+                    k != order
+                        && wall.side
+                        && wall.y0 <= floor.y1
+                        && matches!(wall.footprint, Footprint::Rect { .. })
+                        && (0..4)
+                            .all(|corner| corner_of(&wall.footprint, corner).is_some_and(within))
+                })
+                .collect();
+            walls.contains(&true).then_some(Floor { order, walls })
+        })
+    }
 }
 
 /// How far (m) a tucked part may reach beyond its robot's body: a Khepera's wheel corners
@@ -145,7 +202,9 @@ impl<'g> ColumnScene<'g> {
         }
         let (rounds, round_at) = round_groups(&statics, &same_footprint, &cullable);
         let round_index = RoundIndex::new(&rounds, statics.len());
+        let floor = Floor::find(&statics);
         ColumnScene {
+            floor,
             round_index,
             rounds,
             round_at,

@@ -104,6 +104,12 @@ pub struct Look {
     impostor_keys: Vec<u64>,
     centre_keys: Vec<u128>,
     pub(super) impostor_order: Vec<u32>,
+    /// The azimuth intervals of the scene floor's walls as tall as the eye (see
+    /// [`super::scene::Floor`]), wrapped into (−π, π].
+    wall_cover: Vec<(f64, f64)>,
+    /// The floor's primitive when this look draws it as the ground below the horizon (its
+    /// object then faces no region).
+    pub(super) ground_floor: Option<u32>,
 }
 
 impl Look {
@@ -291,6 +297,33 @@ fn ascending_once(values: &mut Vec<u32>, bound: usize, bits: &mut Vec<u64>) {
 }
 
 /// Sorts a few numbers ascending (insertion sort).
+/// Whether `intervals` (relative azimuths wrapped into (−π, π], `lo > hi` passing ±π) cover
+/// `extent` (clamped to [−π, π]), each joint overlapping by a margin over the polynomial
+/// arctangent's error (2e-8 rad); `intervals` is reordered.
+fn covers(intervals: &mut Vec<(f64, f64)>, (first, last): (f64, f64)) -> bool {
+    use std::f64::consts::PI;
+    const MARGIN: f64 = 1e-7;
+    for k in 0..intervals.len() {
+        let (lo, hi) = intervals[k];
+        if lo > hi {
+            intervals[k] = (lo, PI);
+            intervals.push((-PI, hi));
+        }
+    }
+    intervals.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    let (mut reached, goal) = (first.max(-PI), last.min(PI));
+    for &(lo, hi) in intervals.iter() {
+        // Ends at ±π join the wrapped interval's other piece: no margin there.
+        let lo = if lo <= -PI { lo } else { lo + MARGIN };
+        if lo > reached {
+            break;
+        }
+        let hi = if hi >= PI { hi } else { hi - MARGIN };
+        reached = reached.max(hi);
+    }
+    reached >= goal
+}
+
 fn sort_small(values: &mut [f64]) {
     for i in 1..values.len() {
         let value = values[i];
@@ -525,6 +558,7 @@ impl ColumnScene<'_> {
             round_bits,
             rounds_listed,
             reach_cos,
+            wall_cover,
             ..
         } = look;
         objects.clear();
@@ -620,6 +654,17 @@ impl ColumnScene<'_> {
         // Each call places the object of order `order` (static objects first, robot parts
         // from `statics` on) and says how many static objects it took: a far buoy and its
         // lamp become one impostor at once.
+        // The crowd level of detail draws a floor its walls enclose as the ground; whether they
+        // do is known once every wall is placed.
+        let floor = self.floor.as_ref().filter(|floor| {
+            let under = &frame.statics[floor.order];
+            crowd_look
+                && frame.all_fast
+                && eye.y > under.y1
+                && super::footprint::surrounds(&under.footprint, eye2)
+        });
+        wall_cover.clear();
+        let mut floor_slot = None;
         let mut place = typed(frame, |order: usize, object, fresh: bool| -> usize {
             if fresh {
                 previous = None;
@@ -695,6 +740,13 @@ impl ColumnScene<'_> {
                 (wrap(i.lo), wrap(i.hi))
             });
             let placed = eye_object(object, eye, lo, hi);
+            if let Some(floor) = floor.filter(|_| order < statics) {
+                if order == floor.order {
+                    floor_slot = Some(index);
+                } else if floor.walls[order] && interval.is_some() && object.y1 >= eye.y {
+                    wall_cover.push((lo, hi));
+                }
+            }
             if impostor_width > 0.0 {
                 // Round objects drawn exactly may hide impostors: stacked pieces of one
                 // footprint (a near buoy and its lamp) as one.
@@ -826,6 +878,15 @@ impl ColumnScene<'_> {
         for edge in edges.iter() {
             if !self.edge_hidden(objects, static_slots, edge) {
                 breaks.push(edge.angle);
+            }
+        }
+        look.ground_floor = None;
+        if let Some(slot) = floor_slot {
+            if covers(wall_cover, reach.extent) {
+                // Facing no region: its interval is empty.
+                let floor = &mut objects[slot];
+                (floor.lo, floor.hi, floor.wraps) = (f64::INFINITY, f64::NEG_INFINITY, false);
+                look.ground_floor = Some(floor.primitive);
             }
         }
         impostor::settle(
