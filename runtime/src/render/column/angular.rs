@@ -81,6 +81,12 @@ impl Sweep {
         self.last = f64::NEG_INFINITY;
     }
 
+    /// Whether each query tests every object (few objects, or exhaustive): its answers are then
+    /// [`Look::facing_over`]'s, last placed first.
+    pub(super) fn tests_every_object(&self) -> bool {
+        self.brute
+    }
+
     /// The objects whose azimuth interval meets `(a, b)`, nearest first (last placed first
     /// where there are few), into `out`.
     #[inline]

@@ -36,6 +36,8 @@ struct RegionBuffers {
     profile_starts: Vec<usize>,
     /// One impostor's pieces.
     pieces: Vec<EyeObject>,
+    /// Per region, the objects facing it as bits ([`facing_masks`]).
+    masks: Vec<u64>,
 }
 
 /// One thread's working buffers: an update's look, sweep, regions and column scratch. Kept
@@ -412,6 +414,7 @@ impl ColumnScene<'_> {
             profile,
             profile_starts,
             pieces,
+            masks,
         } = buffers;
         let column_band = Band {
             tan_half: strip.tan_half_band,
@@ -434,6 +437,12 @@ impl ColumnScene<'_> {
         bounds.push(extent_hi);
         let step = width * stride as f64;
         let regions = bounds.len() - 1;
+        // Where the sweep would test every object in every region, each object's run of
+        // regions is found once instead: the same lists, in the same order.
+        let by_masks = sweep.tests_every_object() && look.objects.len() <= 64;
+        if by_masks {
+            facing_masks(&look.objects, bounds, masks);
+        }
         for (region, pair) in bounds.windows(2).enumerate() {
             let (r0, r1) = (pair[0], pair[1]);
             let span = r1 - r0;
@@ -445,7 +454,19 @@ impl ColumnScene<'_> {
             };
             // Between two edges the same objects face the eye (those whose hidden edge fell
             // inside face part of it, hidden there: they are tried throughout).
-            let facing = sweep.facing_over(look, r0, r1, facing);
+            let facing = if by_masks {
+                facing.clear();
+                // Last placed first, as the sweep lists them.
+                let mut mask = masks[region];
+                while mask != 0 {
+                    let index = 63 - mask.leading_zeros();
+                    facing.push(index);
+                    mask ^= 1 << index;
+                }
+                &facing[..]
+            } else {
+                sweep.facing_over(look, r0, r1, facing)
+            };
             positions.clear();
             values.clear();
             let piece = span / count as f64;
@@ -885,6 +906,37 @@ impl ColumnScene<'_> {
 }
 
 /// An impostor's pieces as its eye sees them, into `pieces`.
+/// For each region between consecutive `bounds` (ascending), the objects (at most 64) whose
+/// interval meets it, [`EyeObject::meets`]'s answer, as bits: an interval meets the regions
+/// whose upper bound lies above its start and whose lower bound lies below its end, two runs
+/// found by binary search.
+fn facing_masks(objects: &[EyeObject], bounds: &[f64], masks: &mut Vec<u64>) {
+    let regions = bounds.len() - 1;
+    masks.clear();
+    masks.resize(regions, 0);
+    let (uppers, lowers) = (&bounds[1..], &bounds[..regions]);
+    for (k, object) in objects.iter().enumerate() {
+        let bit = 1u64 << k;
+        if object.lo.is_nan() || object.hi.is_nan() {
+            // No order to search by: each region asked.
+            for (region, mask) in masks.iter_mut().enumerate() {
+                if object.meets(bounds[region], bounds[region + 1]) {
+                    *mask |= bit;
+                }
+            }
+            continue;
+        }
+        let first = uppers.partition_point(|&b| b <= object.lo);
+        let end = lowers.partition_point(|&b| b < object.hi);
+        if object.wraps {
+            masks[first..].iter_mut().for_each(|mask| *mask |= bit);
+            masks[..end].iter_mut().for_each(|mask| *mask |= bit);
+        } else if first < end {
+            masks[first..end].iter_mut().for_each(|mask| *mask |= bit);
+        }
+    }
+}
+
 fn impostor_pieces(
     frame: &ColumnFrame,
     look: &Look,
