@@ -296,7 +296,6 @@ fn ascending_once(values: &mut Vec<u32>, bound: usize, bits: &mut Vec<u64>) {
     }
 }
 
-/// Sorts a few numbers ascending (insertion sort).
 /// Whether `intervals` (relative azimuths wrapped into (−π, π], `lo > hi` passing ±π) cover
 /// `extent` (clamped to [−π, π]), each joint overlapping by a margin over the polynomial
 /// arctangent's error (2e-8 rad); `intervals` is reordered.
@@ -310,7 +309,16 @@ fn covers(intervals: &mut Vec<(f64, f64)>, (first, last): (f64, f64)) -> bool {
             intervals.push((-PI, hi));
         }
     }
-    intervals.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    // A handful (an arena's four walls): insertion.
+    for i in 1..intervals.len() {
+        let interval = intervals[i];
+        let mut j = i;
+        while j > 0 && intervals[j - 1].0 > interval.0 {
+            intervals[j] = intervals[j - 1];
+            j -= 1;
+        }
+        intervals[j] = interval;
+    }
     let (mut reached, goal) = (first.max(-PI), last.min(PI));
     for &(lo, hi) in intervals.iter() {
         // Ends at ±π join the wrapped interval's other piece: no margin there.
@@ -324,6 +332,7 @@ fn covers(intervals: &mut Vec<(f64, f64)>, (first, last): (f64, f64)) -> bool {
     reached >= goal
 }
 
+/// Sorts a few numbers ascending (insertion sort).
 fn sort_small(values: &mut [f64]) {
     for i in 1..values.len() {
         let value = values[i];
