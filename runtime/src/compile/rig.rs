@@ -36,7 +36,11 @@ impl Pose2 {
     /// The robot's frame in the world: upright on the floor at height `floor_y`, turned by its
     /// heading about +y.
     pub fn frame(&self, floor_y: f64) -> crate::geometry::Frame {
-        let (s, c) = (libm::sin(self.heading), libm::cos(self.heading));
+        self.frame_turned(floor_y, (libm::sin(self.heading), libm::cos(self.heading)))
+    }
+
+    /// [`Pose2::frame`] from the heading's sine and cosine, worked out by the caller.
+    pub fn frame_turned(&self, floor_y: f64, (s, c): (f64, f64)) -> crate::geometry::Frame {
         crate::geometry::Frame {
             linear: glam::DMat3::from_cols(DVec3::new(c, 0.0, -s), DVec3::Y, DVec3::new(s, 0.0, c)),
             translation: DVec3::new(self.x, floor_y, self.z),

@@ -189,12 +189,9 @@ impl ColumnScene<'_> {
         let stride = stride.max(1);
         let pixels = strip.centers.len().min(out.len());
         // Parts wholly behind the strip face no photodiode: left out where there are many.
+        let turn = frame.turn(viewer, heading);
         let sector = (frame.statics.len() + frame.others.len() > sweep::FEW && !exhaustive)
-            .then(|| {
-                strip
-                    .extent()
-                    .and_then(|(lo, hi)| Sector::new(heading, lo, hi))
-            })
+            .then(|| Sector::new(turn, strip))
             .flatten();
         // Far small static objects become impostors, drawn as boxes over contiguous windows.
         let impostors = detail.crowd_distance.is_finite() && strip.contiguous;
@@ -214,6 +211,7 @@ impl ColumnScene<'_> {
                 f64::INFINITY
             },
             rounds: Rounds::Tell,
+            turn: Some(turn),
         };
         let band = 2.0 * band_atan(strip.tan_half_band);
         let sky = luminance(self.background(1.0));

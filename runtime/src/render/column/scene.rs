@@ -134,6 +134,8 @@ pub struct ColumnFrame {
     pub(super) part_robot: Vec<usize>,
     /// Where each robot stands (x, z).
     pub(super) robot_at: Vec<DVec2>,
+    /// Each robot's heading with its cosine and sine, worked out once for every viewer.
+    pub(super) turns: Vec<(f64, f64, f64)>,
     /// The robots binned for the crowd level of detail, by the first look that needs it.
     pub(super) crowd: OnceLock<Box<CrowdGrid>>,
     pub(super) lights: Arc<[WorldLight]>,
@@ -145,6 +147,15 @@ pub struct ColumnFrame {
 }
 
 impl ColumnFrame {
+    /// The cosine and sine of `heading`, from the frame where it is `viewer`'s.
+    #[inline]
+    pub(super) fn turn(&self, viewer: Option<usize>, heading: f64) -> (f64, f64) {
+        match viewer.and_then(|v| self.turns.get(v)) {
+            Some(&(known, cos, sin)) if known.to_bits() == heading.to_bits() => (cos, sin),
+            _ => (libm::cos(heading), libm::sin(heading)),
+        }
+    }
+
     /// The fast shading of a primitive, if it has one.
     #[inline]
     pub(super) fn fast_shade(&self, primitive: u32) -> Option<&FastShade> {
@@ -240,6 +251,7 @@ impl<'g> ColumnScene<'g> {
             own: Vec::new(),
             part_robot: Vec::new(),
             robot_at: Vec::new(),
+            turns: Vec::new(),
             crowd: OnceLock::new(),
             lights: self
                 .cached
@@ -271,6 +283,13 @@ impl<'g> ColumnScene<'g> {
         frame
             .robot_at
             .extend(poses.poses.iter().map(|p| DVec2::new(p.x, p.z)));
+        frame.turns.clear();
+        frame.turns.extend(
+            poses
+                .poses
+                .iter()
+                .map(|p| (p.heading, libm::cos(p.heading), libm::sin(p.heading))),
+        );
         frame.crowd = OnceLock::new();
         if frame.part_robot.len() != self.robot_parts.len() {
             frame.part_robot.clear();
@@ -290,7 +309,9 @@ impl<'g> ColumnScene<'g> {
                     let pose = match robot_frame {
                         Some((of, pose)) if of == robot => pose,
                         _ => {
-                            let pose = poses.frame(robot);
+                            let (_, cos, sin) = frame.turns[robot];
+                            let pose =
+                                poses.poses[robot].frame_turned(poses.floor_y[robot], (sin, cos));
                             robot_frame = Some((robot, pose));
                             pose
                         }

@@ -14,7 +14,13 @@ pub struct Strip {
     pub(super) contiguous: bool,
     /// The lowest and highest relative azimuths the windows cover.
     pub(super) extent: (f64, f64),
+    /// cos and sin of the extent's ends widened by [`SECTOR_MARGIN`]: where a look's sector
+    /// of what faces a photodiode starts and ends, turned by the heading.
+    pub(super) sector_ends: [(f64, f64); 2],
 }
+
+/// How far (rad) a look's sector reaches beyond the strip's extent.
+pub(super) const SECTOR_MARGIN: f64 = 1e-6;
 
 impl Strip {
     pub fn new(centers: Vec<f64>, width: f64, half_band: f64) -> Strip {
@@ -27,8 +33,11 @@ impl Strip {
             .all(|pair| ((pair[0] - pair[1]) - width).abs() <= 1e-9 * width);
         let lo = centers.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = centers.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let extent = (lo - width / 2.0, hi + width / 2.0);
+        let end = |angle: f64| (libm::cos(angle), libm::sin(angle));
         Strip {
-            extent: (lo - width / 2.0, hi + width / 2.0),
+            sector_ends: [end(extent.0 - SECTOR_MARGIN), end(extent.1 + SECTOR_MARGIN)],
+            extent,
             centers,
             width,
             tan_half_band: libm::tan(half_band),

@@ -12,7 +12,7 @@ use super::footprint::{azimuth_interval, corner_of, wrap, Interval, PendingEdge,
 use super::impostor::{self, Impostor, Occlusion, Standing};
 use super::photodiode::{from_total_key, rotate_small, total_key};
 use super::scene::{ColumnFrame, ColumnScene};
-use super::strip::Strip;
+use super::strip::{Strip, SECTOR_MARGIN};
 use crate::geometry::Footprint;
 
 /// An object as seen from one eye.
@@ -378,6 +378,8 @@ pub(super) struct Reach {
     pub(super) out_of_band: f64,
     /// How the scene's round groups are told (with impostors).
     pub(super) rounds: Rounds,
+    /// The heading's cosine and sine, where the caller has them.
+    pub(super) turn: Option<(f64, f64)>,
 }
 
 /// How a look tells the scene's round groups (buoys with their lamps) apart, with impostors.
@@ -403,6 +405,7 @@ impl Reach {
         extent: (f64::NEG_INFINITY, f64::INFINITY),
         out_of_band: f64::INFINITY,
         rounds: Rounds::Tell,
+        turn: None,
     };
 }
 
@@ -429,18 +432,24 @@ pub(super) struct Sector {
 }
 
 impl Sector {
-    /// The sector `[lo, hi]` of relative azimuths seen from `heading`, widened a little.
-    pub(super) fn new(heading: f64, lo: f64, hi: f64) -> Option<Sector> {
-        let margin = 1e-6;
-        let (lo, hi) = (lo - margin, hi + margin);
+    /// The sector of `strip`'s relative azimuths, widened by [`SECTOR_MARGIN`], seen from a
+    /// heading of cosine and sine `turn`: the strip's ends turned by it, no transcendental
+    /// (the sector only leaves out what lies wholly outside it, with a margin far above
+    /// rounding).
+    pub(super) fn new(turn: (f64, f64), strip: &Strip) -> Option<Sector> {
+        let (lo, hi) = strip.extent()?;
+        let (lo, hi) = (lo - SECTOR_MARGIN, hi + SECTOR_MARGIN);
         // A full turn (or NaN) leaves nothing behind.
         if (hi - lo).partial_cmp(&std::f64::consts::TAU) != Some(std::cmp::Ordering::Less) {
             return None;
         }
-        let at = |angle: f64| DVec2::new(libm::cos(heading + angle), libm::sin(heading + angle));
+        let (cos_h, sin_h) = turn;
+        let at = |(cos_a, sin_a): (f64, f64)| {
+            DVec2::new(cos_h * cos_a - sin_h * sin_a, sin_h * cos_a + cos_h * sin_a)
+        };
         Some(Sector {
-            lo: at(lo),
-            hi: at(hi),
+            lo: at(strip.sector_ends[0]),
+            hi: at(strip.sector_ends[1]),
             narrow_back: hi - lo > std::f64::consts::PI,
         })
     }
@@ -553,7 +562,9 @@ impl ColumnScene<'_> {
     ) {
         let sector = reach.sector;
         let eye2 = DVec2::new(eye.x, eye.z);
-        let (cos_h, sin_h) = (libm::cos(heading), libm::sin(heading));
+        let (cos_h, sin_h) = reach
+            .turn
+            .unwrap_or_else(|| (libm::cos(heading), libm::sin(heading)));
         let Look {
             objects,
             breaks,
