@@ -80,11 +80,18 @@ impl Raster<'_> {
         }
         // Windows the piece covers whole take the line's value at their centre; the one or
         // two it covers in part, the mean over the part times its share.
+        // A level piece (most: a region sampled once) leaves the line's slope terms out: they
+        // add a zero to each value, and pixels summed from +0 take the same bits.
+        let level = slope_u == 0.0;
         let partial = |i: usize| {
             let i = i as f64;
             let (a, b) = (larger(u0, i), smaller(u1, i + 1.0));
             if b > a {
-                (b - a) * (value + slope_u * (u1 - 0.5 * (a + b)))
+                if level {
+                    (b - a) * value
+                } else {
+                    (b - a) * (value + slope_u * (u1 - 0.5 * (a + b)))
+                }
             } else {
                 0.0
             }
@@ -100,6 +107,10 @@ impl Raster<'_> {
         // conversion exists on every x86-64, i64 → f64 does not; strips are far shorter than
         // 2³¹ pixels).
         let whole = &mut self.out[first + 1..last - 1];
+        if level {
+            whole.iter_mut().for_each(|out| *out += value);
+            return;
+        }
         match PIXEL_MIDDLES.get(first + 1..last - 1) {
             Some(middles) => {
                 for (out, &center) in whole.iter_mut().zip(middles) {
@@ -913,6 +924,57 @@ mod tests {
             raster(&mut flat).add_flat(x0, x1, value);
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&flat), bits(&general), "{x0} {x1} {value}");
+        }
+    }
+
+    /// A level piece (slope 0, or −0) adds the bits the line's formula gives with its slope
+    /// terms kept: every piece, values of both signs and ±0, pixels from +0 or not.
+    #[test]
+    fn a_level_piece_adds_what_the_sloped_formula_gives() {
+        let mut unit = crate::test_random::unit_stream(12);
+        let (width, pixels) = (0.0279, 12);
+        let origin = 0.5 * width * pixels as f64;
+        for case in 0..20_000 {
+            let centre = (unit() - 0.5) * width * (pixels as f64 + 4.0);
+            let half = unit() * width * if case % 3 == 0 { 8.0 } else { 2.0 };
+            let (x0, x1) = (centre - half, centre + half);
+            let value = match case % 5 {
+                0 => 0.0,
+                1 => -0.0,
+                _ => unit() - 0.3,
+            };
+            let slope = if case % 2 == 0 { 0.0 } else { -0.0 };
+            let start = if case % 4 == 0 { 0.0 } else { 0.25 };
+            let mut level = vec![start; pixels];
+            Raster {
+                origin,
+                inverse_width: 1.0 / width,
+                width,
+                out: &mut level,
+            }
+            .add(x0, x1, value, slope);
+            // The formula, pixel by pixel.
+            let mut formula = vec![start; pixels];
+            let inverse_width = 1.0 / width;
+            let (u0, u1) = ((origin - x1) * inverse_width, (origin - x0) * inverse_width);
+            let slope_u = slope * width;
+            let first = index_below(u0, pixels);
+            let whole = index_below(u1, pixels);
+            let last = (whole + (u1 > whole as f64) as usize).min(pixels);
+            for i in first..last {
+                let (a, b) = (larger(u0, i as f64), smaller(u1, i as f64 + 1.0));
+                formula[i] += if i == first || i + 1 == last {
+                    if b > a {
+                        (b - a) * (value + slope_u * (u1 - 0.5 * (a + b)))
+                    } else {
+                        0.0
+                    }
+                } else {
+                    value + slope_u * (u1 - (i as f64 + 0.5))
+                };
+            }
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&level), bits(&formula), "{x0} {x1} {value}");
         }
     }
 
