@@ -664,6 +664,11 @@ impl ColumnScene<'_> {
             return self.column_shaded(frame, look, direction, facing, &band, segments, free);
         }
         let lit = self.collect_lit(frame, look, direction, facing, lit);
+        if let [one] = lit {
+            if let Some(value) = band.composite_one((one.t0, one.t1), one.luminance) {
+                return value;
+            }
+        }
         band.composite(lit, free, |segment, _, _| segment.luminance)
     }
 

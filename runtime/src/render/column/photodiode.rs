@@ -664,6 +664,66 @@ impl Band {
         sum / self.band
     }
 
+    /// [`Band::composite`] of a column with one segment (most columns of an arena: a wall),
+    /// `extent` and `luminance` its: the band's one free span cut where the segment meets it,
+    /// the same sums in the same order to the last bit, without the free list. `None` where
+    /// the clamped ends are NaN (a NaN band): the general way settles it.
+    #[inline]
+    pub(super) fn composite_one(&self, (t0, t1): (f64, f64), luminance: f64) -> Option<f64> {
+        let Band {
+            tan_half,
+            band,
+            sky,
+            ground,
+        } = *self;
+        let half_band = 0.5 * band;
+        let (a, b) = (larger(t0, -tan_half), smaller(t1, tan_half));
+        if a.is_nan() || b.is_nan() {
+            return None;
+        }
+        // What a free span adds, as `composite`'s last loop has it.
+        let free = |x0: f64, x1: f64, a0: f64, a1: f64| {
+            if x0 >= 0.0 {
+                sky * (a1 - a0)
+            } else if x1 <= 0.0 {
+                ground * (a1 - a0)
+            } else {
+                ground * -a0 + sky * a1
+            }
+        };
+        let mut sum = 0.0;
+        if a >= b {
+            sum += free(-tan_half, tan_half, -half_band, half_band);
+            return Some(sum / band);
+        }
+        let angle = |x: f64| {
+            if x == tan_half {
+                half_band
+            } else if x == -tan_half {
+                -half_band
+            } else if x == 0.0 {
+                0.0
+            } else {
+                band_atan(x)
+            }
+        };
+        // The free span (−T, T) taken over [a, b]: cut below and above where they lie inside.
+        let (cut_below, cut_above) = (-tan_half < a, b < tan_half);
+        let a0 = if cut_below { angle(a) } else { -half_band };
+        let a1 = if cut_above { angle(b) } else { half_band };
+        let covered = 0.0 + (a1 - a0);
+        if covered > 0.0 {
+            sum += luminance * covered;
+        }
+        if cut_below {
+            sum += free(-tan_half, a, -half_band, a0);
+        }
+        if cut_above {
+            sum += free(b, tan_half, a1, half_band);
+        }
+        Some(sum / band)
+    }
+
     /// Mean luminance over the band of segments sorted front to back, integrated exactly in
     /// angle; `luminance(segment, middle, covered)` gives a face's luminance from the visible
     /// parts' angle-weighted tan-elevation sum and their angle.
@@ -925,6 +985,65 @@ mod tests {
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&flat), bits(&general), "{x0} {x1} {value}");
         }
+    }
+
+    /// One segment composited alone gives the general composite's bits: segments within,
+    /// across, at and beyond the band's edges and the horizon, infinite, empty and NaN ends.
+    #[test]
+    fn one_segment_composites_as_the_general_way_does() {
+        let mut unit = crate::test_random::unit_stream(13);
+        let tan_half = 0.0963;
+        let band = Band {
+            tan_half,
+            band: 2.0 * band_atan(tan_half),
+            sky: 0.013,
+            ground: 0.41,
+        };
+        let special = [
+            0.0,
+            -0.0,
+            tan_half,
+            -tan_half,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            2.0 * tan_half,
+            -2.0 * tan_half,
+        ];
+        let mut pick = |unit: &mut dyn FnMut() -> f64| {
+            if unit() < 0.3 {
+                special[(unit() * special.len() as f64) as usize % special.len()]
+            } else {
+                (unit() * 2.0 - 1.0) * 1.5 * tan_half
+            }
+        };
+        let mut free = Free::new();
+        let (mut fast, mut nan) = (0, 0);
+        for _ in 0..50_000 {
+            let (t0, t1) = (pick(&mut unit), pick(&mut unit));
+            let luminance = unit();
+            let lit = Lit {
+                depth: 1.0,
+                t0,
+                t1,
+                luminance,
+                object: 0,
+            };
+            let general = band.composite([&lit], &mut free, |s, _, _| s.luminance);
+            match band.composite_one((t0, t1), luminance) {
+                Some(one) => {
+                    assert_eq!(one.to_bits(), general.to_bits(), "{t0} {t1}");
+                    fast += 1;
+                }
+                None => {
+                    assert!(t0.is_nan() || t1.is_nan(), "{t0} {t1}");
+                    nan += 1;
+                }
+            }
+        }
+        // A NaN end is clamped to the band's edge (`larger`, `smaller`), as the general way
+        // clamps it: every case goes the fast way.
+        assert_eq!((fast, nan), (50_000, 0));
     }
 
     /// A level piece (slope 0, or −0) adds the bits the line's formula gives with its slope
