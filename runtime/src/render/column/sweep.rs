@@ -75,7 +75,8 @@ pub struct Look {
     pub(super) cos_h: f64,
     pub(super) sin_h: f64,
     pub(super) objects: Vec<EyeObject>,
-    /// Silhouette edges (relative azimuths), sorted; hidden ones left out.
+    /// Silhouette edges within the reach's extent (relative azimuths), sorted; hidden ones
+    /// left out.
     pub(super) breaks: Vec<f64>,
     /// Each static object's index among `objects`.
     pub(super) static_slots: Vec<u32>,
@@ -674,6 +675,7 @@ impl ColumnScene<'_> {
         // Each call places the object of order `order` (static objects first, robot parts
         // from `statics` on) and says how many static objects it took: a far buoy and its
         // lamp become one impostor at once.
+        let (extent_lo, extent_hi) = reach.extent;
         // The crowd level of detail draws a floor its walls enclose as the ground; whether they
         // do is known once every wall is placed.
         let floor = self.floor.as_ref().filter(|floor| {
@@ -733,25 +735,31 @@ impl ColumnScene<'_> {
             if let Some(interval) = interval.filter(|_| !edges_in) {
                 // An interval may reach past ±π; its edges are where a column of (−π, π] meets
                 // them. An edge another object may hide waits until every object is placed.
+                // Only edges within the extent cut a region: the others are not kept (nor
+                // tested for hiding), as the regions would leave them out.
                 let hiders = self.hiders.get(order).map_or(&[][..], Vec::as_slice);
                 for (angle, corner) in [
                     (interval.lo, interval.corners.map(|c| c.0)),
                     (interval.hi, interval.corners.map(|c| c.1)),
                 ] {
+                    let angle = wrap(angle);
+                    if !(angle > extent_lo && angle < extent_hi) {
+                        continue;
+                    }
                     match corner {
                         Some(corner) if hiders.iter().any(|h| h.corner == corner) => {
                             match corner_of(&object.footprint, corner as usize) {
                                 Some(point) => edges.push(PendingEdge {
-                                    angle: wrap(angle),
+                                    angle,
                                     object: index as u32,
                                     order: order as u32,
                                     corner,
                                     to_corner: point - eye2,
                                 }),
-                                None => breaks.push(wrap(angle)),
+                                None => breaks.push(angle),
                             }
                         }
-                        _ => breaks.push(wrap(angle)),
+                        _ => breaks.push(angle),
                     }
                 }
             }
