@@ -433,7 +433,7 @@ impl ColumnScene<'_> {
                 .filter(|&b| b > extent_lo && b < extent_hi),
         );
         bounds.push(extent_hi);
-        let step = width * stride as f64;
+        let step = width * stride as i64 as f64;
         let regions = bounds.len() - 1;
         // Where the sweep would test every object in every region, each object's run of
         // regions is found once instead: the same lists, in the same order.
@@ -467,7 +467,7 @@ impl ColumnScene<'_> {
             };
             positions.clear();
             values.clear();
-            let piece = span / count as f64;
+            let piece = span / count as i64 as f64;
             let mut middle = 0.5;
             // A region with impostors keeps what each sample shows (the same mean).
             let last = region + 1 == regions;

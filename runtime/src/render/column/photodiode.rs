@@ -74,7 +74,7 @@ impl Raster<'_> {
         // ⌈u1⌉ without a libm call: u1 > 0 here (u1 > u0, and a piece left of the strip
         // ends at u1 ≤ 0 only when empty below).
         let whole = index_below(u1, pixels);
-        let last = (whole + (u1 > whole as f64) as usize).min(pixels);
+        let last = (whole + (u1 > whole as i64 as f64) as usize).min(pixels);
         if first >= last {
             return;
         }
@@ -84,7 +84,7 @@ impl Raster<'_> {
         // add a zero to each value, and pixels summed from +0 take the same bits.
         let level = slope_u == 0.0;
         let partial = |i: usize| {
-            let i = i as f64;
+            let i = i as i64 as f64;
             let (a, b) = (larger(u0, i), smaller(u1, i + 1.0));
             if b > a {
                 if level {
@@ -139,11 +139,11 @@ impl Raster<'_> {
             (self.origin - x0) * self.inverse_width,
         );
         // A NaN fails every test and goes the general way.
-        if u0 >= 0.0 && u1 > u0 && u1 - u0 <= 1.0 && u1 <= self.out.len() as f64 {
+        if u0 >= 0.0 && u1 > u0 && u1 - u0 <= 1.0 && u1 <= self.out.len() as i64 as f64 {
             // u0 ≥ 0: the conversion floors; u0 < u1 ≤ pixels keeps `first` in the strip,
             // and a piece reaching past `split` keeps `first + 1` in it too.
             let first = u0 as usize;
-            let split = (first + 1) as f64;
+            let split = (first + 1) as i64 as f64;
             // Both pixels, without a branch on whether the piece reaches the second (half of
             // them do, at random): a piece within the first adds (split − split)·value, a zero,
             // to the second, and a pixel, summed from +0, is never −0, so that changes no bit.
@@ -208,14 +208,16 @@ pub(super) fn rotate_small(cos_base: f64, sin_base: f64, delta: f64) -> (f64, f6
 #[inline]
 pub(super) fn nearest_index(x: f64, limit: usize) -> usize {
     let whole = index_below(x, limit);
-    (whole + (x - whole as f64 >= 0.5) as usize).min(limit)
+    (whole + (x - whole as i64 as f64 >= 0.5) as usize).min(limit)
 }
 
 /// `(x.max(0.0) as usize).min(limit)`, `x` truncated: clamped in floating point first, so one
 /// signed conversion does (an unsigned one costs a dozen instructions on x86-64). NaN gives 0.
+/// Indices go back to floating point through `i64` likewise (`as i64 as f64`: one instruction,
+/// where `usize as f64` takes five; the same value for any index).
 #[inline(always)]
 pub(super) fn index_below(x: f64, limit: usize) -> usize {
-    let top = limit as f64;
+    let top = limit as i64 as f64;
     let clamped = if x > 0.0 { smaller(x, top) } else { 0.0 };
     clamped as i64 as usize
 }
