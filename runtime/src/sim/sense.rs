@@ -286,13 +286,13 @@ impl SenseShared<'_, '_> {
         if nearby.is_empty() && nearby_robots.is_empty() {
             return sensors::proximity_of_nothing(nothing, stream);
         }
-        let value = sensors::proximity_value(
+        let value = sensors::proximity_value_far(
             self.slab,
-            nearby,
-            nearby_robots,
+            (nearby, nearby_robots),
             self.placements,
             index,
             sensor,
+            nothing.far,
             stream,
         );
         (sensors::to_reading(value), value)

@@ -113,6 +113,31 @@ pub fn proximity_value(
     sensor: &DistanceSensorRig,
     stream: &mut Stream,
 ) -> f64 {
+    let far = lookup(&sensor.lookup, f64::INFINITY);
+    proximity_value_far(
+        slab,
+        (nearby, robots),
+        placements,
+        robot,
+        sensor,
+        far,
+        stream,
+    )
+}
+
+/// [`proximity_value`] with what a ray that hits nothing reads (`far`, the table at
+/// infinity: [`NothingInRange::far`]) looked up by the caller, once per sensor rather than
+/// once per reading.
+#[inline]
+pub fn proximity_value_far(
+    slab: &Slab,
+    (nearby, robots): (&[u32], &[u32]),
+    placements: &[Placement],
+    robot: usize,
+    sensor: &DistanceSensorRig,
+    far: (f64, f64),
+    stream: &mut Stream,
+) -> f64 {
     let placement = &placements[robot];
     let origin = placement.to_world(sensor.position);
     let height = origin.y;
@@ -153,7 +178,7 @@ pub fn proximity_value(
     };
     if count == 0 && candidates_near().next().is_none() {
         // Every ray misses: the same sums with no ray traced.
-        return sample(sensor, stream, |_| None);
+        return sample(sensor, far, stream, |_| None);
     }
     let looking = placement.direction_to_world(sensor.direction);
     let direction = DVec2::new(looking.x, looking.z).normalize_or(DVec2::X);
@@ -161,7 +186,7 @@ pub fn proximity_value(
         .iter()
         .chain(&overflow)
         .map(|&i| &slab.obstacles[i as usize]);
-    sample(sensor, stream, |(cos, sin)| {
+    sample(sensor, far, stream, |(cos, sin)| {
         // Counter-clockwise seen from above, in (x, z): the same sense as headings.
         let ray = DVec2::new(
             cos * direction.x + sin * direction.y,
@@ -203,15 +228,20 @@ pub struct NothingInRange {
     /// The reading, rounded and clamped, when `spread` is 0: with no noise to add, a robot
     /// alone in open floor reads this without rounding each step.
     pub reading: u16,
+    /// What a ray that hits nothing reads from the table (value, relative noise): its row
+    /// at infinity, looked up once.
+    pub far: (f64, f64),
 }
 
 /// A proximity sensor's [`NothingInRange`]: what [`proximity`] reads with nothing in range.
 pub fn nothing_in_range(sensor: &DistanceSensorRig) -> NothingInRange {
-    let (mean, spread) = sums(sensor, |_| None);
+    let far = lookup(&sensor.lookup, f64::INFINITY);
+    let (mean, spread) = sums(sensor, far, |_| None);
     NothingInRange {
         mean,
         spread,
         reading: to_reading(mean),
+        far,
     }
 }
 
@@ -233,10 +263,11 @@ pub fn proximity_of_nothing(nothing: &NothingInRange, stream: &mut Stream) -> (u
 #[inline]
 fn sample(
     sensor: &DistanceSensorRig,
+    far: (f64, f64),
     stream: &mut Stream,
     hit: impl FnMut((f64, f64)) -> Option<(f64, f64)>,
 ) -> f64 {
-    let (mean, spread) = sums(sensor, hit);
+    let (mean, spread) = sums(sensor, far, hit);
     value(mean, spread, stream)
 }
 
@@ -246,9 +277,9 @@ fn sample(
 #[inline]
 fn sums(
     sensor: &DistanceSensorRig,
+    far: (f64, f64),
     mut hit: impl FnMut((f64, f64)) -> Option<(f64, f64)>,
 ) -> (f64, f64) {
-    let far = lookup(&sensor.lookup, f64::INFINITY);
     let (mut value_sum, mut noise_sum, mut weight_sum) = (0.0, 0.0, 0.0);
     for &(_, cos, sin) in sensor.ray_turns.iter() {
         let weight = cos;
