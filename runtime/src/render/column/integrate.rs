@@ -465,10 +465,6 @@ impl ColumnScene<'_> {
             } else {
                 sweep.facing_over(look, r0, r1, facing)
             };
-            positions.clear();
-            values.clear();
-            let piece = span / count as i64 as f64;
-            let mut middle = 0.5;
             // A region with impostors keeps what each sample shows (the same mean).
             let last = region + 1 == regions;
             let takes = |impostor: &Impostor| last || 0.5 * (impostor.lo + impostor.hi) < r1;
@@ -476,6 +472,30 @@ impl ColumnScene<'_> {
                 .impostor_order
                 .get(next_impostor)
                 .is_some_and(|&i| takes(&look.impostors[i as usize]));
+            if count == 1 && !impostors_here {
+                // One sample at the middle, level across the region (most regions): the
+                // general way's sums, without its lists.
+                let alpha = r0 + 0.5 * span;
+                let pixel = nearest_index((strip.centers[0] - alpha) * inverse_width, pixels - 1);
+                let direction = look.turn(strip, pixel, alpha);
+                let value = self.column(
+                    frame,
+                    look,
+                    direction,
+                    facing,
+                    strip.tan_half_band,
+                    band,
+                    sky,
+                    ground,
+                    scratch,
+                );
+                raster.add(r0, r1, value, 0.0);
+                continue;
+            }
+            positions.clear();
+            values.clear();
+            let piece = span / count as i64 as f64;
+            let mut middle = 0.5;
             profile.clear();
             profile_starts.clear();
             for _ in 0..count {
@@ -927,6 +947,10 @@ fn facing_masks(objects: &[EyeObject], bounds: &[f64], masks: &mut Vec<u64>) {
                     *mask |= bit;
                 }
             }
+            continue;
+        }
+        if !object.wraps && (object.hi <= bounds[0] || object.lo >= bounds[regions]) {
+            // Wholly outside the strip (an arena's wall behind the eye): no region.
             continue;
         }
         let first = uppers.partition_point(|&b| b <= object.lo);
