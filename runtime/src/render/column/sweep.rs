@@ -847,30 +847,9 @@ impl ColumnScene<'_> {
         };
         match &self.parts_of {
             Some(parts_of) if reach.crowd_distance.is_finite() => {
-                if frame.robot_at.len() <= FEW {
-                    // A few robots: tested each, the grid's answer without building it.
-                    let limit = reach.crowd_distance * reach.crowd_distance;
-                    near.clear();
-                    near.extend(
-                        (0..frame.robot_at.len() as u32).filter(|&r| {
-                            frame.robot_at[r as usize].distance_squared(eye2) <= limit
-                        }),
-                    );
-                } else {
-                    let grid = frame.crowd.get_or_init(|| {
-                        Box::new(CrowdGrid::new(&frame.robot_at, reach.crowd_distance))
-                    });
-                    grid.within(&frame.robot_at, eye2, reach.crowd_distance, near);
-                }
-                // The viewer's own parts, as its turret sees them, wherever the eye is.
-                if let Some(viewer) = viewer.filter(|&v| v < frame.robot_at.len()) {
-                    if let Err(at) = near.binary_search(&(viewer as u32)) {
-                        near.insert(at, viewer as u32);
-                    }
-                }
-                for &robot in near.iter() {
-                    let other = Some(robot as usize) != viewer;
-                    for entry in parts_of.get(robot as usize).cloned().unwrap_or(0..0) {
+                let mut place_robot = |robot: usize| {
+                    let other = Some(robot) != viewer;
+                    for entry in parts_of.get(robot).cloned().unwrap_or(0..0) {
                         // Other robots' parts tucked under their body are left out.
                         if other && self.tucked.get(entry).copied().unwrap_or(false) {
                             continue;
@@ -878,6 +857,31 @@ impl ColumnScene<'_> {
                         if let Some(object) = part(entry) {
                             place(statics, object, false);
                         }
+                    }
+                };
+                if frame.robot_at.len() <= FEW {
+                    // A few robots: tested each in order, the grid's answer (with the
+                    // viewer's own parts, as its turret sees them, wherever the eye is)
+                    // without building it.
+                    let limit = reach.crowd_distance * reach.crowd_distance;
+                    for (robot, at) in frame.robot_at.iter().enumerate() {
+                        if Some(robot) == viewer || at.distance_squared(eye2) <= limit {
+                            place_robot(robot);
+                        }
+                    }
+                } else {
+                    let grid = frame.crowd.get_or_init(|| {
+                        Box::new(CrowdGrid::new(&frame.robot_at, reach.crowd_distance))
+                    });
+                    grid.within(&frame.robot_at, eye2, reach.crowd_distance, near);
+                    // The viewer's own parts, as its turret sees them, wherever the eye is.
+                    if let Some(viewer) = viewer.filter(|&v| v < frame.robot_at.len()) {
+                        if let Err(at) = near.binary_search(&(viewer as u32)) {
+                            near.insert(at, viewer as u32);
+                        }
+                    }
+                    for &robot in near.iter() {
+                        place_robot(robot as usize);
                     }
                 }
             }
