@@ -676,6 +676,9 @@ impl ColumnScene<'_> {
         // from `statics` on) and says how many static objects it took: a far buoy and its
         // lamp become one impostor at once.
         let (extent_lo, extent_hi) = reach.extent;
+        // Only a look that tells impostors has any for standing objects to hide (given the
+        // kept groups, it places them exactly and tells none).
+        let tells_impostors = impostor_width > 0.0 && reach.rounds != Rounds::Given;
         // The crowd level of detail draws a floor its walls enclose as the ground; whether they
         // do is known once every wall is placed.
         let floor = self.floor.as_ref().filter(|floor| {
@@ -775,7 +778,7 @@ impl ColumnScene<'_> {
                     wall_cover.push((lo, hi));
                 }
             }
-            if impostor_width > 0.0 {
+            if tells_impostors {
                 // Round objects drawn exactly may hide impostors: stacked pieces of one
                 // footprint (a near buoy and its lamp) as one.
                 if let (Footprint::Circle { center, .. }, false) = (object.footprint, placed.wraps)
