@@ -106,7 +106,7 @@ fn with_start_frame<R>(
     };
     let poses = start_poses(&compiled);
     let mut shared = None;
-    renderer.prepare_shared(&compiled.plan, &poses, &mut shared);
+    renderer.prepare_shared(&compiled.plan, &poses, &[], &mut shared);
     let frame = shared.expect("the column renderer shares its frame");
     f(&compiled, scene, &frame)
 }

@@ -16,7 +16,7 @@ use glam::DVec3;
 
 use crate::compile::graph::RenderGraph;
 use crate::compile::plan::{Plan, RendererChoice};
-use crate::compile::rig::{LinearCameraRig, Optics, PanoramicRig, Pose2};
+use crate::compile::rig::{LinearCameraRig, Optics, PanoramicRig, Placement, Pose2};
 use crate::render::column::{ColumnFrame, ColumnScene, KeptImpostors, Look, Strip};
 use crate::render::raycast::{Prepared, RayCaster};
 use crate::render::{Detail, Poses};
@@ -87,12 +87,19 @@ impl<'g> Renderer<'g> {
 
     /// Places the world for every viewer of a step at once, into `shared` (its buffers
     /// reused): the column renderer's frame. The ray caster prepares per viewer
-    /// ([`Renderer::view`]) and leaves `shared` empty.
-    pub fn prepare_shared(&self, plan: &Plan, poses: &Poses, shared: &mut Option<ColumnFrame>) {
+    /// ([`Renderer::view`]) and leaves `shared` empty. `placements`, when it has one per
+    /// pose, gives the headings' sines and cosines already worked out.
+    pub fn prepare_shared(
+        &self,
+        plan: &Plan,
+        poses: &Poses,
+        placements: &[Placement],
+        shared: &mut Option<ColumnFrame>,
+    ) {
         match self {
             Renderer::Columns(scene) => {
                 let frame = shared.get_or_insert_with(|| scene.empty_frame());
-                scene.prepare_into(plan, poses, frame);
+                scene.prepare_placed(plan, poses, placements, frame);
             }
             Renderer::Rays(_) => *shared = None,
         }

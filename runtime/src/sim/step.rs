@@ -504,7 +504,7 @@ impl<'c> Simulation<'c> {
         let frame = &mut scratch.frame;
         match renderer {
             Some(renderer) if self.robots.iter().any(|r| r.vision_due(t)) => {
-                renderer.prepare_shared(&compiled.plan, poses, frame)
+                renderer.prepare_shared(&compiled.plan, poses, placements, frame)
             }
             _ => {}
         }

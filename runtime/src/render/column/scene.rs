@@ -14,6 +14,7 @@ use super::footprint::{corner_hiders, corner_of, upright_of, Hider, Upright};
 use super::shading::{FastShade, Shades};
 use crate::compile::graph::{Owner, RenderGraph};
 use crate::compile::plan::Plan;
+use crate::compile::rig::Placement;
 use crate::geometry::{Footprint, Frame};
 
 /// The upright objects of a graph. Immutable once built, so every viewer of a step can render
@@ -269,6 +270,19 @@ impl<'g> ColumnScene<'g> {
     /// Places every robot's parts for `poses` into `frame`, reusing its buffers: once per
     /// step, for every viewer.
     pub fn prepare_into(&self, plan: &Plan, poses: &Poses, frame: &mut ColumnFrame) {
+        self.prepare_placed(plan, poses, &[], frame);
+    }
+
+    /// [`ColumnScene::prepare_into`] with each robot's placement for the step, when there is
+    /// one per pose: its heading's sine and cosine (`libm`'s, as `Pose2::placement` works
+    /// them out) are not worked out again.
+    pub fn prepare_placed(
+        &self,
+        plan: &Plan,
+        poses: &Poses,
+        placements: &[Placement],
+        frame: &mut ColumnFrame,
+    ) {
         if !Arc::ptr_eq(&frame.statics, &self.statics) {
             frame.statics = self.statics.clone();
         }
@@ -284,12 +298,22 @@ impl<'g> ColumnScene<'g> {
             .robot_at
             .extend(poses.poses.iter().map(|p| DVec2::new(p.x, p.z)));
         frame.turns.clear();
-        frame.turns.extend(
-            poses
-                .poses
-                .iter()
-                .map(|p| (p.heading, libm::cos(p.heading), libm::sin(p.heading))),
-        );
+        if placements.len() == poses.poses.len() {
+            frame.turns.extend(
+                poses
+                    .poses
+                    .iter()
+                    .zip(placements)
+                    .map(|(p, placed)| (p.heading, placed.cos, placed.sin)),
+            );
+        } else {
+            frame.turns.extend(
+                poses
+                    .poses
+                    .iter()
+                    .map(|p| (p.heading, libm::cos(p.heading), libm::sin(p.heading))),
+            );
+        }
         frame.crowd = OnceLock::new();
         if frame.part_robot.len() != self.robot_parts.len() {
             frame.part_robot.clear();
