@@ -735,6 +735,10 @@ impl ColumnScene<'_> {
             // A shared round silhouette's edges are already in (a rectangle's may yet be
             // hidden for one object and not for the other).
             let edges_in = shared && interval.is_some_and(|i| i.corners.is_none());
+            // Edges wrapped into (−π, π]: an interval through ±π wraps to lo > hi.
+            let (lo, hi) = interval.map_or((f64::NEG_INFINITY, f64::INFINITY), |i| {
+                (wrap(i.lo), wrap(i.hi))
+            });
             if let Some(interval) = interval.filter(|_| !edges_in) {
                 // An interval may reach past ±π; its edges are where a column of (−π, π] meets
                 // them. An edge another object may hide waits until every object is placed.
@@ -742,10 +746,9 @@ impl ColumnScene<'_> {
                 // tested for hiding), as the regions would leave them out.
                 let hiders = self.hiders.get(order).map_or(&[][..], Vec::as_slice);
                 for (angle, corner) in [
-                    (interval.lo, interval.corners.map(|c| c.0)),
-                    (interval.hi, interval.corners.map(|c| c.1)),
+                    (lo, interval.corners.map(|c| c.0)),
+                    (hi, interval.corners.map(|c| c.1)),
                 ] {
-                    let angle = wrap(angle);
                     if !(angle > extent_lo && angle < extent_hi) {
                         continue;
                     }
@@ -766,10 +769,6 @@ impl ColumnScene<'_> {
                     }
                 }
             }
-            // Edges wrapped into (−π, π]: an interval through ±π wraps to lo > hi.
-            let (lo, hi) = interval.map_or((f64::NEG_INFINITY, f64::INFINITY), |i| {
-                (wrap(i.lo), wrap(i.hi))
-            });
             let placed = eye_object(object, eye, lo, hi);
             if let Some(floor) = floor.filter(|_| order < statics) {
                 if order == floor.order {
