@@ -1012,7 +1012,7 @@ mod tests {
             2.0 * tan_half,
             -2.0 * tan_half,
         ];
-        let mut pick = |unit: &mut dyn FnMut() -> f64| {
+        let pick = |unit: &mut dyn FnMut() -> f64| {
             if unit() < 0.3 {
                 special[(unit() * special.len() as f64) as usize % special.len()]
             } else {
