@@ -5,7 +5,7 @@
 //! sides seen straight on, in front of everything that column shows there: its effect is its
 //! sides' luminance over their angle less the column's own integral over the same span, read
 //! off the running integrals the profile keeps (an arctangent per side's end). The general
-//! path (`integrate.rs`: every piece crossed with the column and composited into its pieces,
+//! path (`integrate/`: every piece crossed with the column and composited into its pieces,
 //! two arctangents per piece met) draws any other; it cost 1,400 instructions an impostor at
 //! 1000 robots, the short one about 550.
 

@@ -18,7 +18,7 @@
 //!
 //! `scene.rs` holds the scene and a step's frame, `sweep.rs` what one eye sees of it
 //! (`angular.rs` the sweep that hands each region its facing objects),
-//! `integrate.rs` the strip integrated region by region, `photodiode.rs` a column's segments
+//! `integrate/` the strip integrated (`regions.rs`: region by region), `photodiode.rs` a column's segments
 //! and the band over each photodiode window, `footprint.rs` the placed upright objects,
 //! `shading.rs` the fast shading, `crowd.rs` which other robots an eye draws (`compact.rs` builds
 //! such lists without a branch per candidate), `impostor.rs`

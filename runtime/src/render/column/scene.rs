@@ -2,7 +2,7 @@
 //! with what may hide their corners), robot parts to place, and lights and fast shading
 //! cached while no light moves; and the frame of one step, every robot's parts placed once
 //! for every viewer. What one eye sees of it is `sweep.rs`'s; integrating it,
-//! `integrate.rs`'s.
+//! `integrate/`'s.
 
 use std::sync::{Arc, OnceLock};
 
