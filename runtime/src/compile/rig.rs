@@ -36,7 +36,7 @@ impl Pose2 {
     /// The robot's frame in the world: upright on the floor at height `floor_y`, turned by its
     /// heading about +y.
     pub fn frame(&self, floor_y: f64) -> crate::geometry::Frame {
-        self.frame_turned(floor_y, (libm::sin(self.heading), libm::cos(self.heading)))
+        self.frame_turned(floor_y, libm::sincos(self.heading))
     }
 
     /// [`Pose2::frame`] from the heading's sine and cosine, worked out by the caller.
@@ -47,14 +47,16 @@ impl Pose2 {
         }
     }
 
-    /// The pose with its sine and cosine computed once, for many transforms.
+    /// The pose with its sine and cosine computed once, for many transforms (by one
+    /// `sincos`: one argument reduction, `sin`'s and `cos`'s bits).
     pub fn placement(&self, floor_y: f64) -> Placement {
+        let (sin, cos) = libm::sincos(self.heading);
         Placement {
             x: self.x,
             z: self.z,
             floor_y,
-            sin: libm::sin(self.heading),
-            cos: libm::cos(self.heading),
+            sin,
+            cos,
         }
     }
 

@@ -175,5 +175,14 @@ mod tests {
             assert_eq!(sin.to_bits(), libm::sin(angle).to_bits(), "{angle}");
             assert_eq!(cos.to_bits(), libm::cos(angle).to_bits(), "{angle}");
         }
+        // Headings too (placements take both from one `sincos`): a robot that has turned
+        // for a long time, either way, has a heading far past a turn.
+        for i in 0..20_000 {
+            let scale = [1.0, 10.0, 1e3, 1e6, 1e12][i % 5];
+            let heading = (2.0 * stream.uniform() - 1.0) * scale;
+            let (sin, cos) = libm::sincos(heading);
+            assert_eq!(sin.to_bits(), libm::sin(heading).to_bits(), "{heading}");
+            assert_eq!(cos.to_bits(), libm::cos(heading).to_bits(), "{heading}");
+        }
     }
 }
