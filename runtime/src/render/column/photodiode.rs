@@ -698,21 +698,10 @@ impl Band {
             sum += free(-tan_half, tan_half, -half_band, half_band);
             return Some(sum / band);
         }
-        let angle = |x: f64| {
-            if x == tan_half {
-                half_band
-            } else if x == -tan_half {
-                -half_band
-            } else if x == 0.0 {
-                0.0
-            } else {
-                band_atan(x)
-            }
-        };
         // The free span (−T, T) taken over [a, b]: cut below and above where they lie inside.
         let (cut_below, cut_above) = (-tan_half < a, b < tan_half);
-        let a0 = if cut_below { angle(a) } else { -half_band };
-        let a1 = if cut_above { angle(b) } else { half_band };
+        let a0 = if cut_below { self.angle(a) } else { -half_band };
+        let a1 = if cut_above { self.angle(b) } else { half_band };
         let covered = 0.0 + (a1 - a0);
         if covered > 0.0 {
             sum += luminance * covered;

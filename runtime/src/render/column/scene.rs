@@ -153,7 +153,10 @@ impl ColumnFrame {
     pub(super) fn turn(&self, viewer: Option<usize>, heading: f64) -> (f64, f64) {
         match viewer.and_then(|v| self.turns.get(v)) {
             Some(&(known, cos, sin)) if known.to_bits() == heading.to_bits() => (cos, sin),
-            _ => (libm::cos(heading), libm::sin(heading)),
+            _ => {
+                let (sin, cos) = libm::sincos(heading);
+                (cos, sin)
+            }
         }
     }
 
@@ -307,12 +310,10 @@ impl<'g> ColumnScene<'g> {
                     .map(|(p, placed)| (p.heading, placed.cos, placed.sin)),
             );
         } else {
-            frame.turns.extend(
-                poses
-                    .poses
-                    .iter()
-                    .map(|p| (p.heading, libm::cos(p.heading), libm::sin(p.heading))),
-            );
+            frame.turns.extend(poses.poses.iter().map(|p| {
+                let (sin, cos) = libm::sincos(p.heading);
+                (p.heading, cos, sin)
+            }));
         }
         frame.crowd = OnceLock::new();
         if frame.part_robot.len() != self.robot_parts.len() {

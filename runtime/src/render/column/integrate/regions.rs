@@ -244,3 +244,77 @@ fn facing_masks(objects: &[EyeObject], bounds: &[f64], masks: &mut Vec<u64>) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::footprint::Relative;
+    use super::*;
+    use glam::DVec2;
+
+    /// The masks hold each region's objects as testing each object against the region does
+    /// (`EyeObject::meets`): intervals within, across and beyond the bounds, passing ±π,
+    /// empty (a floor drawn as the ground), infinite (surrounding the eye) and NaN, and bounds
+    /// with repeats.
+    #[test]
+    fn facing_masks_are_what_meets_finds() {
+        let mut unit = crate::test_random::unit_stream(21);
+        let mut turns = crate::test_random::unit_stream(22);
+        let mut angle = || (turns() * 2.0 - 1.0) * 3.5;
+        let special = [
+            (f64::NEG_INFINITY, f64::INFINITY),
+            (f64::INFINITY, f64::NEG_INFINITY),
+            (f64::NAN, 0.5),
+            (0.2, f64::NAN),
+        ];
+        let mut masks = Vec::new();
+        for trial in 0..2_000 {
+            let mut bounds: Vec<f64> = (0..2 + trial % 20).map(|_| angle()).collect();
+            bounds.sort_by(f64::total_cmp);
+            if trial % 3 == 0 && bounds.len() > 2 {
+                bounds[1] = bounds[0];
+            }
+            let objects: Vec<EyeObject> = (0..trial % 64)
+                .map(|k| {
+                    // Most ends are bounds, as a look's are its edges.
+                    let end = |pick: f64, other: f64| {
+                        if pick < 0.6 {
+                            bounds[(pick * 100.0) as usize % bounds.len()]
+                        } else {
+                            other
+                        }
+                    };
+                    let (lo, hi) = if k % 17 == 5 {
+                        special[(k / 17) % special.len()]
+                    } else {
+                        (end(unit(), angle()), end(unit(), angle()))
+                    };
+                    EyeObject {
+                        lo,
+                        hi,
+                        wraps: lo > hi && lo.is_finite() && hi.is_finite(),
+                        relative: Relative::Circle {
+                            oc: DVec2::ONE,
+                            c: 1.0,
+                            radius: 0.1,
+                        },
+                        y0: -0.1,
+                        y1: 0.1,
+                        side: true,
+                        top: false,
+                        bottom: false,
+                        primitive: 0,
+                    }
+                })
+                .collect();
+            facing_masks(&objects, &bounds, &mut masks);
+            for (region, pair) in bounds.windows(2).enumerate() {
+                let expected = objects
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, o)| o.meets(pair[0], pair[1]))
+                    .fold(0u64, |mask, (k, _)| mask | 1 << k);
+                assert_eq!(masks[region], expected, "trial {trial} region {region}");
+            }
+        }
+    }
+}
