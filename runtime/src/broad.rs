@@ -361,6 +361,108 @@ impl Grid {
     }
 }
 
+/// Most cells a [`Clearance`] map may have (one bit each: 128 KiB).
+const MAX_CLEARANCE_CELLS: usize = 1 << 20;
+
+/// A bitmap over the floor that answers "is there surely no box within `reach` of this
+/// point" in one lookup: the common answer in a sparse world, where a grid query would still
+/// convert four coordinates and walk its cells to find nothing. A cell is marked when some
+/// box comes within `reach` of any point of it (with a margin far wider than rounding), so
+/// an unmarked cell's points have no box within `reach`; points outside the map are never
+/// clear. It changes what a caller queries, never what it finds.
+#[derive(Clone, Debug, Default)]
+pub struct Clearance {
+    origin: DVec2,
+    inverse_cell: f64,
+    columns: usize,
+    /// Columns and rows as floating point, the bounds a point's cell is checked against.
+    columns_f: f64,
+    rows_f: f64,
+    /// One bit per cell, row-major: set where some box may be within `reach`.
+    marked: Vec<u64>,
+}
+
+impl Clearance {
+    /// A map of `[min, max]` for boxes (min, max) and a `reach` (m): cells of about `reach`,
+    /// coarser where the region would need more than [`MAX_CLEARANCE_CELLS`].
+    pub fn new(
+        min: DVec2,
+        max: DVec2,
+        reach: f64,
+        boxes: impl IntoIterator<Item = (DVec2, DVec2)>,
+    ) -> Clearance {
+        let usable = min.is_finite()
+            && max.is_finite()
+            && max.cmpge(min).all()
+            && reach.is_finite()
+            && reach >= 0.0;
+        if !usable {
+            return Clearance::default();
+        }
+        let extent = (max - min).max(DVec2::splat(1e-9));
+        let mut cell = reach.max(extent.max_element() / 4096.0).max(1e-6);
+        let count =
+            |cell: f64| (extent.x / cell).ceil().max(1.0) * (extent.y / cell).ceil().max(1.0);
+        while count(cell) > MAX_CLEARANCE_CELLS as f64 {
+            cell *= 2.0;
+        }
+        let columns = (extent.x / cell).ceil().max(1.0) as usize;
+        let rows = (extent.y / cell).ceil().max(1.0) as usize;
+        let mut map = Clearance {
+            origin: min,
+            inverse_cell: 1.0 / cell,
+            columns,
+            columns_f: columns as f64,
+            rows_f: rows as f64,
+            marked: vec![0; (columns * rows).div_ceil(64)],
+        };
+        // Far wider than any rounding of a point's cell or of the boxes' own margins.
+        let margin = 1e-9 * (1.0 + extent.max_element() + min.abs().max_element()) + 1e-9;
+        let widen = reach + margin;
+        let cell_of = |value: f64, origin: f64, last: usize| -> usize {
+            let x = libm::floor((value - origin) * map.inverse_cell);
+            if x >= last as f64 {
+                last
+            } else if x >= 0.0 {
+                x as usize
+            } else {
+                0
+            }
+        };
+        for (lo, hi) in boxes {
+            if !(lo.is_finite() && hi.is_finite()) {
+                // Anything may be near a box without bounds: the whole map is marked.
+                map.marked.fill(u64::MAX);
+                return map;
+            }
+            let c0 = cell_of(lo.x - widen, min.x, columns - 1);
+            let c1 = cell_of(hi.x + widen, min.x, columns - 1);
+            let r0 = cell_of(lo.y - widen, min.y, rows - 1);
+            let r1 = cell_of(hi.y + widen, min.y, rows - 1);
+            for row in r0..=r1 {
+                for column in c0..=c1 {
+                    let i = row * columns + column;
+                    map.marked[i / 64] |= 1 << (i % 64);
+                }
+            }
+        }
+        map
+    }
+
+    /// Whether no box comes within the map's `reach` of `p` (false outside the map, and for
+    /// NaN).
+    #[inline]
+    pub fn is_clear(&self, p: DVec2) -> bool {
+        let x = (p.x - self.origin.x) * self.inverse_cell;
+        let y = (p.y - self.origin.y) * self.inverse_cell;
+        if !(x >= 0.0 && y >= 0.0 && x < self.columns_f && y < self.rows_f) {
+            return false;
+        }
+        let i = y as i64 as usize * self.columns + x as i64 as usize;
+        self.marked[i / 64] & (1 << (i % 64)) == 0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -454,6 +556,50 @@ mod tests {
 
     /// `query_where` hands exactly the items `query` hands that pass its test, ascending, and
     /// asks the test once per item, on grids of boxes and of points.
+    /// A point the map calls clear has no box within its reach, and the map is not
+    /// trivially marked: in a sparse field most points are clear.
+    #[test]
+    fn clearance_never_calls_a_point_clear_that_a_box_is_near() {
+        let mut next = crate::test_random::unit_stream(11);
+        let boxes: Vec<(DVec2, DVec2)> = (0..60)
+            .map(|_| {
+                let c = DVec2::new(next() * 20.0 - 2.0, next() * 20.0 - 2.0);
+                let h = DVec2::new(next() * 0.3, next() * 0.3);
+                (c - h, c + h)
+            })
+            .collect();
+        for reach in [0.0, 0.05, 0.117, 0.5] {
+            let map = Clearance::new(DVec2::splat(-2.0), DVec2::splat(18.0), reach, boxes.clone());
+            let mut clear = 0;
+            for i in 0..40_000 {
+                // Points anywhere, some beyond the map; every tenth on a box's edge grown by
+                // the reach, where rounding would show.
+                let p = if i % 10 == 0 {
+                    let (lo, hi) = boxes[i / 10 % boxes.len()];
+                    DVec2::new(hi.x + reach, lo.y + next() * (hi.y - lo.y))
+                } else {
+                    DVec2::new(next() * 24.0 - 4.0, next() * 24.0 - 4.0)
+                };
+                if !map.is_clear(p) {
+                    continue;
+                }
+                clear += 1;
+                let square = (p - reach, p + reach);
+                assert!(
+                    boxes.iter().all(|&b| !meets(b, square)),
+                    "{p} is called clear with a box within {reach}"
+                );
+            }
+            assert!(clear > 12_000, "reach {reach}: only {clear} points clear");
+        }
+        // NaN and points off the map are never clear.
+        let map = Clearance::new(DVec2::ZERO, DVec2::ONE, 0.1, []);
+        assert!(map.is_clear(DVec2::splat(0.5)));
+        assert!(!map.is_clear(DVec2::new(f64::NAN, 0.5)));
+        assert!(!map.is_clear(DVec2::new(1.5, 0.5)));
+        assert!(!Clearance::default().is_clear(DVec2::ZERO));
+    }
+
     #[test]
     fn query_where_keeps_what_passes_in_order() {
         let items = boxes();

@@ -7,7 +7,7 @@
 use glam::DVec2;
 
 use super::world2d::Slab;
-use crate::broad::Grid;
+use crate::broad::{Clearance, Grid};
 use crate::compile::Compiled;
 
 /// Relative and absolute margins that keep a candidate box on the safe side of rounding.
@@ -16,6 +16,15 @@ const MARGIN: f64 = 1e-9;
 pub(super) struct BroadPhase {
     pub statics: Grid,
     pub landmarks: Grid,
+    /// Where no static obstacle comes within [`BroadPhase::statics_reach`]: a robot there
+    /// has no obstacle to sense or to touch without asking the grid (most robots, in an
+    /// open arena).
+    pub statics_clear: Clearance,
+    /// The reach `statics_clear` answers for (m): the farthest any robot's IR sensors
+    /// reach, or its body and a collision pass's slack do, with margins for rounding.
+    pub statics_reach: f64,
+    /// Where no landmark's visit disc reaches: a robot there visits nothing.
+    pub landmarks_clear: Clearance,
     pub robots: Grid,
     /// The largest body radius (m).
     pub max_radius: f64,
@@ -69,9 +78,28 @@ impl BroadPhase {
             landmark_box(&compiled.landmarks[i], max_radius)
         });
         let robots = Grid::new(min, max, cell, rigs.len());
+        let statics_reach = statics_reach(rigs, max_radius);
+        let statics_clear = Clearance::new(
+            min,
+            max,
+            statics_reach,
+            slab.obstacles.iter().map(|o| obstacle_box(&o.shape)),
+        );
+        let landmarks_clear = Clearance::new(
+            min,
+            max,
+            0.0,
+            compiled
+                .landmarks
+                .iter()
+                .map(|l| landmark_box(l, max_radius)),
+        );
         BroadPhase {
             statics,
             landmarks,
+            statics_clear,
+            statics_reach,
+            landmarks_clear,
             robots,
             max_radius,
             radii: rigs.iter().map(|r| r.body_radius).collect(),
@@ -86,6 +114,18 @@ impl BroadPhase {
         let centres = &self.centres;
         self.robots.rebuild_points(count, |i| centres[i]);
     }
+}
+
+/// The half side of the largest square about a robot's centre in which static obstacles are
+/// asked for: its IR sensors' reach (`sensors::ir_reach`), or a collision pass's (its body,
+/// 1 µm and the slack, widened as [`square`] widens it), whichever is larger, widened again.
+fn statics_reach(rigs: &[crate::compile::rig::RobotRig], max_radius: f64) -> f64 {
+    let ir = rigs
+        .iter()
+        .map(|r| super::sensors::ir_reach(&r.distance_sensors))
+        .fold(0.0, f64::max);
+    let collision = (max_radius + 1e-6 + super::contacts::SLACK) * (1.0 + MARGIN) + MARGIN;
+    ir.max(collision) * (1.0 + MARGIN) + MARGIN
 }
 
 /// The square of half side `reach` about `center`, widened for rounding.

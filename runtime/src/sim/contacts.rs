@@ -21,7 +21,7 @@ pub const PENETRATION_TOLERANCE: f64 = 1e-9;
 const PASSES: usize = 3;
 
 /// How far a robot may move before its collision candidates are asked again (m).
-const SLACK: f64 = 0.005;
+pub(super) const SLACK: f64 = 0.005;
 
 /// What a step's motion reads and writes of a simulation.
 pub(super) struct Motion<'a> {
@@ -152,8 +152,13 @@ impl Motion<'_> {
                 // Candidates from where the robot is; asked again if pushes carry it further
                 // than SLACK from there.
                 let mut anchor = DVec2::new(robot.pose.x, robot.pose.z);
-                let (lo, hi) = broad_phase::square(anchor, reach + SLACK);
-                self.broad.statics.query(lo, hi, &mut candidates);
+                if rig.body_radius <= max_radius && self.broad.statics_clear.is_clear(anchor) {
+                    // No obstacle within the square below (`statics_reach` covers it).
+                    candidates.clear();
+                } else {
+                    let (lo, hi) = broad_phase::square(anchor, reach + SLACK);
+                    self.broad.statics.query(lo, hi, &mut candidates);
+                }
                 let mut next = 0;
                 while let Some(&k) = candidates.get(next) {
                     next += 1;

@@ -309,7 +309,17 @@ impl SenseShared<'_, '_> {
         nearby_robots: &mut Vec<u32>,
     ) {
         let placement = &self.placements[index];
-        sensors::nearby_obstacles(self.slab, &self.broad.statics, placement, reach, nearby);
+        if reach <= self.broad.statics_reach
+            && self
+                .broad
+                .statics_clear
+                .is_clear(DVec2::new(placement.x, placement.z))
+        {
+            // No obstacle comes within `reach`: the list the grid would give, empty.
+            nearby.clear();
+        } else {
+            sensors::nearby_obstacles(self.slab, &self.broad.statics, placement, reach, nearby);
+        }
         nearby_robots.clear();
         if self.placements.len() > 1 {
             let (lo, hi) = broad_phase::square(

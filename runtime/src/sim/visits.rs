@@ -27,6 +27,9 @@ pub(super) fn track_visits(
             // A few: each tested, as the grid would hand them (ascending).
             candidates.clear();
             candidates.extend(0..compiled.landmarks.len() as u32);
+        } else if broad.landmarks_clear.is_clear(center) {
+            // No visit disc holds the centre.
+            candidates.clear();
         } else {
             broad.landmarks.query_point(center, &mut candidates);
         }
