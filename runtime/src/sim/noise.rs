@@ -97,6 +97,27 @@ impl Stream {
         }
     }
 
+    /// [`Stream::skip_gaussian`] `n` times, the pairs' uniforms drawn and dropped: the
+    /// numbers that follow are the same as after `n` single skips.
+    pub fn skip_gaussians(&mut self, mut n: u64) {
+        if n == 0 {
+            return;
+        }
+        if !matches!(self.spare, Spare::None) {
+            // The first skip takes the waiting second number of a pair.
+            self.spare = Spare::None;
+            n -= 1;
+        }
+        // Two skips from no spare draw a pair's two uniforms and leave no spare.
+        for _ in 0..n / 2 {
+            self.rng.next_u64();
+            self.rng.next_u64();
+        }
+        if n % 2 == 1 {
+            self.skip_gaussian();
+        }
+    }
+
     /// Both numbers of a Box–Muller pair (cosine first).
     #[inline]
     fn box_muller(u1: f64, u2: f64) -> (f64, f64) {
@@ -149,6 +170,37 @@ mod tests {
             }
         }
         assert_eq!(all.uniform().to_bits(), some.uniform().to_bits());
+    }
+
+    /// Many skips at once are the same as one at a time, from any spare state.
+    #[test]
+    fn skipping_many_gaussians_is_skipping_each() {
+        let mut pattern = Stream::new(2, 0, kind::WHEELS, 0);
+        for case in 0..2_000 {
+            let mut one_by_one = Stream::new(8, case, kind::PROXIMITY, 0);
+            // A spare waiting (computed or only drawn), or none.
+            match case % 3 {
+                0 => {}
+                1 => {
+                    one_by_one.gaussian();
+                }
+                _ => one_by_one.skip_gaussian(),
+            }
+            let mut at_once = one_by_one.clone();
+            let n = (pattern.uniform() * 9.0) as u64 + if case % 50 == 0 { 1000 } else { 0 };
+            for _ in 0..n {
+                one_by_one.skip_gaussian();
+            }
+            at_once.skip_gaussians(n);
+            for _ in 0..3 {
+                assert_eq!(
+                    one_by_one.gaussian().to_bits(),
+                    at_once.gaussian().to_bits(),
+                    "case {case}, {n} skips"
+                );
+            }
+            assert_eq!(one_by_one.uniform().to_bits(), at_once.uniform().to_bits());
+        }
     }
 
     /// `gaussian` takes sine and cosine from one `sincos`: the noise must stay what separate

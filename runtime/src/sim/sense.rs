@@ -195,12 +195,32 @@ impl SenseShared<'_, '_> {
                     &mut robot.nearby_robots,
                 );
                 robot.updated.proximity = true;
-                let sensors = robot.ir_streams[..count]
-                    .iter_mut()
-                    .zip(robot.ir_nothing.iter());
-                if robot.nearby.is_empty() && robot.nearby_robots.is_empty() && robot.raw.is_none()
-                {
-                    for ((stream, nothing), slot) in sensors.zip(&mut robot.proximity) {
+                let nothing_near = robot.nearby.is_empty()
+                    && robot.nearby_robots.is_empty()
+                    && robot.raw.is_none();
+                if nothing_near && robot.ir_quiet && count == robot.ir_streams.len() {
+                    // Every sensor reads its far value, which has no noise: each stream owes
+                    // one draw more, paid when a reading next needs it (a robot alone
+                    // leaves its streams' memory untouched).
+                    robot.ir_skipped += 1;
+                    for (nothing, slot) in robot.ir_nothing.iter().zip(&mut robot.proximity) {
+                        *slot = nothing.reading;
+                    }
+                    return;
+                }
+                robot.ir_streams_caught_up();
+                let RobotState {
+                    ir_streams,
+                    ir_nothing,
+                    proximity,
+                    raw,
+                    nearby,
+                    nearby_robots,
+                    ..
+                } = &mut *robot;
+                let sensors = ir_streams[..count].iter_mut().zip(ir_nothing.iter());
+                if nothing_near {
+                    for ((stream, nothing), slot) in sensors.zip(proximity) {
                         *slot = sensors::proximity_of_nothing(nothing, stream).0;
                     }
                     return;
@@ -210,18 +230,19 @@ impl SenseShared<'_, '_> {
                 {
                     let read = self.read_proximity(
                         index,
-                        (&robot.nearby, &robot.nearby_robots),
+                        (nearby, nearby_robots),
                         sensor,
                         stream,
                         nothing,
                     );
-                    keep_reading(&mut robot.proximity, &mut robot.raw, s, read);
+                    keep_reading(proximity, raw, s, read);
                 }
                 return;
             }
         }
         // Otherwise each sensor is tested; those that share a period and a due time with the
         // last one tested take its answer without a division.
+        robot.ir_streams_caught_up();
         let mut nearby_found = false;
         let mut last_due: Option<(u64, f64, bool, f64)> = None;
         let ir_sensors = rig

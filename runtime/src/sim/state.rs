@@ -159,6 +159,15 @@ pub struct RobotState {
     /// step loop).
     pub(super) ir_period: Option<f64>,
     pub(super) ir_due: Vec<f64>,
+    /// Readings of nothing whose draws every IR stream still owes: a robot alone reads its
+    /// sensors' far values without touching its streams, and they catch up (the same draws,
+    /// skipped) before a reading needs one ([`RobotState::ir_streams_caught_up`]).
+    pub(super) ir_skipped: u64,
+    /// Whether every IR sensor reads nothing without noise (the table's far rows have none):
+    /// what lets a reading of nothing leave its stream behind.
+    pub(super) ir_quiet: bool,
+    /// Each IR sensor's noise stream: read only through
+    /// [`RobotState::ir_streams_caught_up`], which pays what `ir_skipped` owes.
     pub(super) ir_streams: Vec<Stream>,
     /// Each IR sensor's reading with nothing in range
     /// ([`super::sensors::nothing_in_range`]), shared by robots with the same sensors.
@@ -205,6 +214,18 @@ pub struct Fall {
 }
 
 impl RobotState {
+    /// The IR sensors' noise streams, each moved past the draws it still owes.
+    #[inline]
+    pub(super) fn ir_streams_caught_up(&mut self) -> &mut [Stream] {
+        if self.ir_skipped > 0 {
+            for stream in &mut self.ir_streams {
+                stream.skip_gaussians(self.ir_skipped);
+            }
+            self.ir_skipped = 0;
+        }
+        &mut self.ir_streams
+    }
+
     /// Keeps this robot's [`RawReadings`] from the next step on (all its distance and light
     /// sensors, before rounding), `NaN` until first read.
     pub fn keep_raw_readings(&mut self, rig: &RobotRig) {

@@ -128,6 +128,21 @@ impl<'c> Simulation<'c> {
                     robot: rig.name.clone(),
                     source,
                 })?;
+            let ir_nothing: Nothing = match &last_nothing {
+                Some((sensors, nothing)) if Arc::ptr_eq(sensors, &rig.distance_sensors) => {
+                    nothing.clone()
+                }
+                _ => {
+                    let nothing: Nothing = rig
+                        .distance_sensors
+                        .iter()
+                        .map(sensors::nothing_in_range)
+                        .collect();
+                    last_nothing = Some((&rig.distance_sensors, nothing.clone()));
+                    nothing
+                }
+            };
+            let ir_quiet = ir_nothing.iter().all(|n| n.spread == 0.0);
             robots.push(RobotState {
                 name: rig.name.clone(),
                 updated: Updated::default(),
@@ -145,20 +160,8 @@ impl<'c> Simulation<'c> {
                 // Made when first read (most robots' controllers never do): the same due
                 // times and streams as if made here, since none is drawn before that.
                 ambient_due: Vec::new(),
-                ir_nothing: match &last_nothing {
-                    Some((sensors, nothing)) if Arc::ptr_eq(sensors, &rig.distance_sensors) => {
-                        nothing.clone()
-                    }
-                    _ => {
-                        let nothing: Nothing = rig
-                            .distance_sensors
-                            .iter()
-                            .map(sensors::nothing_in_range)
-                            .collect();
-                        last_nothing = Some((&rig.distance_sensors, nothing.clone()));
-                        nothing
-                    }
-                },
+                ir_nothing,
+                ir_quiet,
                 ir_reach: sensors::ir_reach(&rig.distance_sensors),
                 ir_period: rig.distance_sensors.first().map(|s| s.period).filter(|&p| {
                     rig.distance_sensors
@@ -166,6 +169,7 @@ impl<'c> Simulation<'c> {
                         .all(|s| s.period.to_bits() == p.to_bits())
                 }),
                 ir_streams,
+                ir_skipped: 0,
                 ambient_streams: Vec::new(),
                 wheel_stream: Stream::new(seed, index, kind::WHEELS, 0),
                 wheel_noise: (1.0, 1.0),
