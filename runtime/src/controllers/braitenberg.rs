@@ -96,7 +96,9 @@ pub fn weighted_speeds(
 /// Mondada's Braitenberg obstacle avoider.
 pub struct Braitenberg {
     pub parameters: Parameters,
-    pub weights: Weights,
+    /// The weights unless they are K-Team's, which a swarm's robots share from one static
+    /// copy rather than each reading two cache lines of its own every step.
+    other_weights: Option<Box<Weights>>,
     escape: StallEscape,
 }
 
@@ -105,16 +107,21 @@ impl Braitenberg {
     pub fn new(parameters: Parameters, weights: Weights, period: f64) -> Braitenberg {
         Braitenberg {
             parameters,
-            weights,
+            other_weights: (weights != Weights::KTEAM).then(|| Box::new(weights)),
             escape: StallEscape::new(period),
         }
+    }
+
+    /// The network's weights.
+    pub fn weights(&self) -> &Weights {
+        self.other_weights.as_deref().unwrap_or(&Weights::KTEAM)
     }
 }
 
 impl Controller for Braitenberg {
     fn step(&mut self, robot: &mut dyn Khepera) -> Result<(), KheperaError> {
         let proximity = robot.proximity()?;
-        let (left, right) = weighted_speeds(&proximity, &self.weights, &self.parameters);
+        let (left, right) = weighted_speeds(&proximity, self.weights(), &self.parameters);
         let command = (to_command(left), to_command(right));
         let (left, right) = self
             .escape
@@ -133,6 +140,16 @@ impl Controller for Braitenberg {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_controller_keeps_the_weights_it_was_given() {
+        let mut other = Weights::KTEAM;
+        other.right[7] = 2.5;
+        for weights in [Weights::KTEAM, other] {
+            let controller = Braitenberg::new(Parameters::default(), weights, 0.032);
+            assert_eq!(*controller.weights(), weights);
+        }
+    }
 
     #[test]
     fn an_obstacle_on_the_left_turns_the_robot_right() {

@@ -5,9 +5,8 @@
 use glam::DVec2;
 
 use super::broad_phase::{self, BroadPhase};
-use super::state::{PhaseClock, PhaseTimes, RobotState, StepScratch};
+use super::state::{Body, PhaseClock, PhaseTimes, RobotState, StepScratch};
 use super::world2d::{Footprint, Slab};
-use crate::compile::rig::RobotRig;
 
 /// Most collision sub-steps in one step. A world whose robots could need more (a long time
 /// step at a high top speed) is refused when it is checked (`check.rs`), so the bound
@@ -23,9 +22,40 @@ const PASSES: usize = 3;
 /// How far a robot may move before its collision candidates are asked again (m).
 pub(super) const SLACK: f64 = 0.005;
 
+/// Counts a robot's contacts at the end of a step of `dt` seconds: what it touched in the
+/// step's sub-steps (`touched`) against what it touched at the end of the last step.
+#[inline]
+pub(super) fn count_contacts(robot: &mut RobotState, dt: f64) {
+    robot.touched.sort_unstable();
+    robot.touched.dedup();
+    let RobotState {
+        contacts, touched, ..
+    } = robot;
+    let any = !touched.is_empty();
+    for &k in touched.iter() {
+        if contacts.touching.binary_search(&k).is_err() {
+            contacts.count_event(k);
+        }
+    }
+    let was = !contacts.touching.is_empty();
+    if any && !was {
+        contacts.events += 1;
+    }
+    robot.updated.contact |= any != was;
+    if any {
+        contacts.steps += 1;
+        contacts.current += dt;
+        contacts.longest = contacts.longest.max(contacts.current);
+    } else {
+        contacts.current = 0.0;
+    }
+    contacts.touching.clone_from(touched);
+}
+
 /// What a step's motion reads and writes of a simulation.
 pub(super) struct Motion<'a> {
-    pub(super) rigs: &'a [RobotRig],
+    /// Each robot's [`Body`]: what motion reads of its rig.
+    pub(super) rigs: &'a [Body],
     pub(super) slab: &'a Slab,
     /// Grids over the floor: what pairs bodies without testing every pair.
     pub(super) broad: &'a mut BroadPhase,
@@ -102,32 +132,8 @@ impl Motion<'_> {
             }
             clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));
         }
-        for robot in self.robots.iter_mut() {
-            robot.touched.sort_unstable();
-            robot.touched.dedup();
-            let RobotState {
-                contacts, touched, ..
-            } = robot;
-            let any = !touched.is_empty();
-            for &k in touched.iter() {
-                if contacts.touching.binary_search(&k).is_err() {
-                    contacts.count_event(k);
-                }
-            }
-            let was = !contacts.touching.is_empty();
-            if any && !was {
-                contacts.events += 1;
-            }
-            robot.updated.contact |= any != was;
-            if any {
-                contacts.steps += 1;
-                contacts.current += dt;
-                contacts.longest = contacts.longest.max(contacts.current);
-            } else {
-                contacts.current = 0.0;
-            }
-            contacts.touching.clone_from(touched);
-        }
+        // Each robot's contacts are counted where its visits are, in the step's last sweep
+        // (`visits::finish_step`).
         self.scratch.speeds = speeds;
     }
 

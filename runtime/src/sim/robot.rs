@@ -80,7 +80,7 @@ impl Khepera for SimulatedKhepera<'_> {
         self.robot
             .panoramic
             .as_mut()
-            .map(|p| p as &mut dyn PanoramicTurret)
+            .map(|p| &mut **p as &mut dyn PanoramicTurret)
     }
 
     fn linear_camera(&mut self) -> Option<&mut dyn LinearCameraTurret> {

@@ -18,10 +18,10 @@ use super::robot::SimulatedKhepera;
 use super::sense::SenseShared;
 use super::sensors;
 use super::state::{
-    CameraState, Contacts, LinearCameraState, PanoramicState, PhaseClock, PhaseTimes, RobotState,
-    StepScratch, Updated, Visits,
+    Body, CameraState, Contacts, LinearCameraState, PanoramicState, PhaseClock, PhaseTimes,
+    RobotState, StepScratch, Updated, Visits,
 };
-use super::visits::{track_falls, track_visits};
+use super::visits::{finish_step, track_visits};
 use super::world2d::Slab;
 use crate::compile::rig::{DistanceSensorRig, TurretRig};
 use crate::compile::Compiled;
@@ -66,6 +66,8 @@ pub struct Simulation<'c> {
     /// Grids over the floor: what pairs bodies without testing every pair.
     broad: BroadPhase,
     pub robots: Vec<RobotState>,
+    /// What every step reads of each robot's rig, in a line a robot ([`Body`]).
+    bodies: Vec<Body>,
     /// Simulated time (s) and steps done.
     pub time: f64,
     pub steps: u64,
@@ -174,7 +176,7 @@ impl<'c> Simulation<'c> {
                 wheel_stream: Stream::new(seed, index, kind::WHEELS, 0),
                 wheel_noise: (1.0, 1.0),
                 panoramic: match &rig.turret {
-                    Some(TurretRig::Panoramic(p)) => Some(PanoramicState {
+                    Some(TurretRig::Panoramic(p)) => Some(Box::new(PanoramicState {
                         model: Panoramic::new_like(
                             p,
                             last_panoramic
@@ -184,7 +186,7 @@ impl<'c> Simulation<'c> {
                         output: RetinaOutput::default(),
                         due: 0.0,
                         sensed: true,
-                    }),
+                    })),
                     _ => None,
                 },
                 linear_camera: match &rig.turret {
@@ -257,6 +259,7 @@ impl<'c> Simulation<'c> {
             slab,
             broad,
             robots,
+            bodies: compiled.rig.robots.iter().map(Body::of).collect(),
             time: 0.0,
             steps: 0,
             time_step,
@@ -276,6 +279,7 @@ impl<'c> Simulation<'c> {
         track_visits(
             &mut simulation.robots,
             compiled,
+            &simulation.bodies,
             &simulation.broad,
             simulation.time,
             &mut simulation.scratch,
@@ -369,11 +373,12 @@ impl<'c> Simulation<'c> {
     pub fn act(&mut self) {
         let mut clock = PhaseClock::start(self.profile.is_some());
         let rigs = &self.compiled.rig.robots;
+        let bodies = &self.bodies;
         let steps = self.steps;
         let control = |index: usize, robot: &mut RobotState| {
             // A controller runs at its own period, on the step grid from time 0; its
             // commands hold in between.
-            if !steps.is_multiple_of(rigs[index].control_steps) {
+            if !steps.is_multiple_of(bodies[index].control_steps) {
                 return;
             }
             let Some(mut controller) = robot.controller.take() else {
@@ -404,7 +409,7 @@ impl<'c> Simulation<'c> {
         }
         clock.lap(self.profile.as_mut().map(|p| &mut p.control));
         Motion {
-            rigs: &self.compiled.rig.robots,
+            rigs: &self.bodies,
             slab: &self.slab,
             broad: &mut self.broad,
             robots: &mut self.robots,
@@ -416,12 +421,12 @@ impl<'c> Simulation<'c> {
         .move_robots(&mut clock);
         self.steps += 1;
         self.time = self.steps as f64 * self.time_step;
-        track_falls(&mut self.robots, &self.compiled.rig.robots, self.time);
-        track_visits(
+        finish_step(
             &mut self.robots,
             self.compiled,
+            &self.bodies,
             &self.broad,
-            self.time,
+            (self.time_step, self.time),
             &mut self.scratch,
         );
         clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));
@@ -474,9 +479,7 @@ impl<'c> Simulation<'c> {
         poses.poses.clear();
         poses.poses.extend(self.robots.iter().map(|r| r.pose));
         poses.floor_y.clear();
-        poses
-            .floor_y
-            .extend(compiled.rig.robots.iter().map(|r| r.floor_y));
+        poses.floor_y.extend(self.bodies.iter().map(|b| b.floor_y));
         let poses = &*poses;
         placements.clear();
         placements.extend(

@@ -4,80 +4,129 @@
 use glam::DVec2;
 
 use super::broad_phase::BroadPhase;
-use super::state::{Fall, RobotState, StepScratch, Visits};
+use super::state::{Body, Fall, RobotState, StepScratch, Visits};
 use crate::compile::rig::RobotRig;
 use crate::compile::Compiled;
 
 /// Below this many landmarks, each is tested rather than looked up in the grid.
 const FEW_LANDMARKS: usize = 8;
 
+/// The end of a step, robot by robot in one sweep (each robot's state is read once, not once
+/// per kind of bookkeeping): its contacts counted over the step of `dt` seconds, its fall
+/// kept, its entries into visit discs counted, at `time`, the end of the step.
+pub(super) fn finish_step(
+    robots: &mut [RobotState],
+    compiled: &Compiled,
+    bodies: &[Body],
+    broad: &BroadPhase,
+    (dt, time): (f64, f64),
+    scratch: &mut StepScratch,
+) {
+    let mut candidates = std::mem::take(&mut scratch.candidates);
+    let mut was = std::mem::take(&mut scratch.was_inside);
+    for ((robot, rig), body) in robots.iter_mut().zip(&compiled.rig.robots).zip(bodies) {
+        super::contacts::count_contacts(robot, dt);
+        track_fall(robot, rig, time);
+        track_visits_of(
+            robot,
+            body,
+            compiled,
+            broad,
+            time,
+            (&mut candidates, &mut was),
+        );
+    }
+    scratch.was_inside = was;
+    scratch.candidates = candidates;
+}
+
 /// Counts entries into each landmark's visit disc (its radius plus two body diameters).
 pub(super) fn track_visits(
     robots: &mut [RobotState],
     compiled: &Compiled,
+    bodies: &[Body],
     broad: &BroadPhase,
     time: f64,
     scratch: &mut StepScratch,
 ) {
     let mut candidates = std::mem::take(&mut scratch.candidates);
     let mut was = std::mem::take(&mut scratch.was_inside);
-    for (robot, rig) in robots.iter_mut().zip(&compiled.rig.robots) {
-        let center = DVec2::new(robot.pose.x, robot.pose.z);
-        if compiled.landmarks.len() <= FEW_LANDMARKS {
-            // A few: each tested, as the grid would hand them (ascending).
-            candidates.clear();
-            candidates.extend(0..compiled.landmarks.len() as u32);
-        } else if broad.landmarks_clear.is_clear(center) {
-            // No visit disc holds the centre.
-            candidates.clear();
-        } else {
-            broad.landmarks.query_point(center, &mut candidates);
-        }
-        let visits = &mut robot.visits;
-        was.clear();
-        was.extend_from_slice(&visits.inside);
-        visits.inside.clear();
-        for &k in &candidates {
-            let landmark = &compiled.landmarks[k as usize];
-            let distance = DVec2::new(
-                robot.pose.x - landmark.center.x,
-                robot.pose.z - landmark.center.y,
-            )
-            .length();
-            if distance <= Visits::disc_radius(landmark.radius, rig.body_radius) {
-                if was.binary_search(&k).is_err() {
-                    visits.sequence.push(k as usize);
-                    visits.times.push(time);
-                }
-                visits.inside.push(k);
-            }
-        }
+    for (robot, body) in robots.iter_mut().zip(bodies) {
+        track_visits_of(
+            robot,
+            body,
+            compiled,
+            broad,
+            time,
+            (&mut candidates, &mut was),
+        );
     }
     scratch.was_inside = was;
     scratch.candidates = candidates;
 }
 
+/// One robot's entries into visit discs (`candidates` and `was`: working lists).
+#[inline]
+fn track_visits_of(
+    robot: &mut RobotState,
+    rig: &Body,
+    compiled: &Compiled,
+    broad: &BroadPhase,
+    time: f64,
+    (candidates, was): (&mut Vec<u32>, &mut Vec<u32>),
+) {
+    let center = DVec2::new(robot.pose.x, robot.pose.z);
+    if compiled.landmarks.len() <= FEW_LANDMARKS {
+        // A few: each tested, as the grid would hand them (ascending).
+        candidates.clear();
+        candidates.extend(0..compiled.landmarks.len() as u32);
+    } else if broad.landmarks_clear.is_clear(center) {
+        // No visit disc holds the centre.
+        candidates.clear();
+    } else {
+        broad.landmarks.query_point(center, candidates);
+    }
+    let visits = &mut robot.visits;
+    was.clear();
+    was.extend_from_slice(&visits.inside);
+    visits.inside.clear();
+    for &k in candidates.iter() {
+        let landmark = &compiled.landmarks[k as usize];
+        let distance = DVec2::new(
+            robot.pose.x - landmark.center.x,
+            robot.pose.z - landmark.center.y,
+        )
+        .length();
+        if distance <= Visits::disc_radius(landmark.radius, rig.body_radius) {
+            if was.binary_search(&k).is_err() {
+                visits.sequence.push(k as usize);
+                visits.times.push(time);
+            }
+            visits.inside.push(k);
+        }
+    }
+}
+
 /// A robot whose centre has left every floor it started on has fallen off the world: the
 /// event is kept, and the robot stays where it fell.
-pub(super) fn track_falls(robots: &mut [RobotState], rigs: &[RobotRig], time: f64) {
-    for (robot, rig) in robots.iter_mut().zip(rigs) {
-        if let Some(fall) = robot.fell {
-            robot.pose = fall.pose;
-            continue;
-        }
-        if rig.floors.is_empty() {
-            continue;
-        }
-        let (x, z) = (robot.pose.x, robot.pose.z);
-        let on_floor = rig
-            .floors
-            .iter()
-            .any(|f| (f[0]..=f[2]).contains(&x) && (f[1]..=f[3]).contains(&z));
-        if !on_floor {
-            robot.fell = Some(Fall {
-                time,
-                pose: robot.pose,
-            });
-        }
+#[inline]
+fn track_fall(robot: &mut RobotState, rig: &RobotRig, time: f64) {
+    if let Some(fall) = robot.fell {
+        robot.pose = fall.pose;
+        return;
+    }
+    if rig.floors.is_empty() {
+        return;
+    }
+    let (x, z) = (robot.pose.x, robot.pose.z);
+    let on_floor = rig
+        .floors
+        .iter()
+        .any(|f| (f[0]..=f[2]).contains(&x) && (f[1]..=f[3]).contains(&z));
+    if !on_floor {
+        robot.fell = Some(Fall {
+            time,
+            pose: robot.pose,
+        });
     }
 }
