@@ -10,6 +10,9 @@ use super::world2d::Slab;
 use crate::broad::{Clearance, Grid};
 use crate::compile::Compiled;
 
+/// How far a robot may move before its collision candidates are asked again (m).
+pub(super) const SLACK: f64 = 0.005;
+
 /// Relative and absolute margins that keep a candidate box on the safe side of rounding.
 const MARGIN: f64 = 1e-9;
 
@@ -124,7 +127,7 @@ fn statics_reach(rigs: &[crate::compile::rig::RobotRig], max_radius: f64) -> f64
         .iter()
         .map(|r| super::sensors::ir_reach(&r.distance_sensors))
         .fold(0.0, f64::max);
-    let collision = (max_radius + 1e-6 + super::contacts::SLACK) * (1.0 + MARGIN) + MARGIN;
+    let collision = (max_radius + 1e-6 + SLACK) * (1.0 + MARGIN) + MARGIN;
     ir.max(collision) * (1.0 + MARGIN) + MARGIN
 }
 

@@ -4,7 +4,7 @@
 
 use glam::DVec2;
 
-use super::broad_phase::{self, BroadPhase};
+use super::broad_phase::{self, BroadPhase, SLACK};
 use super::state::{Body, PhaseClock, PhaseTimes, RobotState, StepScratch};
 use super::world2d::{Footprint, Slab};
 
@@ -18,9 +18,6 @@ pub const PENETRATION_TOLERANCE: f64 = 1e-9;
 
 /// Collision passes in one sub-step, at most.
 const PASSES: usize = 3;
-
-/// How far a robot may move before its collision candidates are asked again (m).
-pub(super) const SLACK: f64 = 0.005;
 
 /// Counts a robot's contacts at the end of a step of `dt` seconds: what it touched in the
 /// step's sub-steps (`touched`) against what it touched at the end of the last step.
