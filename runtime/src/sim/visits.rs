@@ -1,5 +1,6 @@
-//! Where robots end up after a step: entries into each landmark's visit disc (buoy visits),
-//! and robots that left every floor (fallen off the world).
+//! Where robots end up after a step, in one sweep: their contacts counted, entries into each
+//! landmark's visit disc (buoy visits), and robots that left every floor (fallen off the
+//! world).
 
 use glam::DVec2;
 
