@@ -361,8 +361,12 @@ impl Grid {
     }
 }
 
-/// Most cells a [`Clearance`] map may have (one bit each: 128 KiB).
+/// Most cells a [`Clearance`] map may have (one bit each: 128 KiB), and most per box (its
+/// bits then cost no more than the box's own entry in a grid): memory follows the boxes, not
+/// the region.
 const MAX_CLEARANCE_CELLS: usize = 1 << 20;
+const CLEARANCE_CELLS_PER_BOX: usize = 64;
+const MIN_CLEARANCE_CELLS: usize = 4096;
 
 /// A bitmap over the floor that answers "is there surely no box within `reach` of this
 /// point" in one lookup: the common answer in a sparse world, where a grid query would still
@@ -384,12 +388,13 @@ pub struct Clearance {
 
 impl Clearance {
     /// A map of `[min, max]` for boxes (min, max) and a `reach` (m): cells of about `reach`,
-    /// coarser where the region would need more than [`MAX_CLEARANCE_CELLS`].
+    /// coarser where the region would need more than 64 a box (at least 4096, at most
+    /// [`MAX_CLEARANCE_CELLS`]).
     pub fn new(
         min: DVec2,
         max: DVec2,
         reach: f64,
-        boxes: impl IntoIterator<Item = (DVec2, DVec2)>,
+        boxes: impl ExactSizeIterator<Item = (DVec2, DVec2)>,
     ) -> Clearance {
         let usable = min.is_finite()
             && max.is_finite()
@@ -403,7 +408,11 @@ impl Clearance {
         let mut cell = reach.max(extent.max_element() / 4096.0).max(1e-6);
         let count =
             |cell: f64| (extent.x / cell).ceil().max(1.0) * (extent.y / cell).ceil().max(1.0);
-        while count(cell) > MAX_CLEARANCE_CELLS as f64 {
+        let budget = boxes
+            .len()
+            .saturating_mul(CLEARANCE_CELLS_PER_BOX)
+            .clamp(MIN_CLEARANCE_CELLS, MAX_CLEARANCE_CELLS);
+        while count(cell) > budget as f64 {
             cell *= 2.0;
         }
         let columns = (extent.x / cell).ceil().max(1.0) as usize;
@@ -569,7 +578,12 @@ mod tests {
             })
             .collect();
         for reach in [0.0, 0.05, 0.117, 0.5] {
-            let map = Clearance::new(DVec2::splat(-2.0), DVec2::splat(18.0), reach, boxes.clone());
+            let map = Clearance::new(
+                DVec2::splat(-2.0),
+                DVec2::splat(18.0),
+                reach,
+                boxes.iter().copied(),
+            );
             let mut clear = 0;
             for i in 0..40_000 {
                 // Points anywhere, some beyond the map; every tenth on a box's edge grown by
@@ -593,7 +607,7 @@ mod tests {
             assert!(clear > 12_000, "reach {reach}: only {clear} points clear");
         }
         // NaN and points off the map are never clear.
-        let map = Clearance::new(DVec2::ZERO, DVec2::ONE, 0.1, []);
+        let map = Clearance::new(DVec2::ZERO, DVec2::ONE, 0.1, [].into_iter());
         assert!(map.is_clear(DVec2::splat(0.5)));
         assert!(!map.is_clear(DVec2::new(f64::NAN, 0.5)));
         assert!(!map.is_clear(DVec2::new(1.5, 0.5)));
