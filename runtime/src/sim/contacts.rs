@@ -49,6 +49,33 @@ pub(super) fn count_contacts(robot: &mut RobotState, dt: f64) {
     contacts.touching.clone_from(touched);
 }
 
+/// One sub-step's motion, done robot by robot as the first collision pass reaches each.
+struct Moving<'a> {
+    /// Each robot's wheel speeds (m/s).
+    speeds: &'a [(f64, f64)],
+    /// The sub-step (s).
+    h: f64,
+    /// Whether the step's contacts start here (each robot's `touched` is emptied).
+    first_sub_step: bool,
+    /// Where each robot was before the sub-step, pushed as it moves (what `settle` returns
+    /// a robot to).
+    before: &'a mut Vec<DVec2>,
+}
+
+impl Moving<'_> {
+    #[inline]
+    fn advance(&mut self, robot: &mut RobotState, rig: &Body, index: usize) {
+        if self.first_sub_step {
+            robot.touched.clear();
+        }
+        self.before.push(DVec2::new(robot.pose.x, robot.pose.z));
+        let (left, right) = self.speeds[index];
+        robot.pose = super::kinematics::advance(robot.pose, left, right, rig.axle_length, self.h);
+        robot.travel.0 += left * self.h;
+        robot.travel.1 += right * self.h;
+    }
+}
+
 /// What a step's motion reads and writes of a simulation.
 pub(super) struct Motion<'a> {
     /// Each robot's [`Body`]: what motion reads of its rig.
@@ -71,7 +98,9 @@ impl Motion<'_> {
         let steps = self.steps;
         let rigs = self.rigs;
         let mut speeds = std::mem::take(&mut self.scratch.speeds);
-        // Wheel speeds (m/s) of every robot for this step.
+        // Wheel speeds (m/s) of every robot for this step, and the sub-steps the fastest
+        // needs: short enough that no body crosses half its radius in one (no tunnelling).
+        let mut most_sub_steps = 0;
         speeds.clear();
         speeds.extend(self.robots.iter_mut().zip(rigs).map(|(robot, rig)| {
             let to_metres = 100.0 / rig.encoder_resolution;
@@ -96,39 +125,34 @@ impl Motion<'_> {
                 left *= robot.wheel_noise.0;
                 right *= robot.wheel_noise.1;
             }
+            let needed =
+                libm::ceil(left.abs().max(right.abs()) * dt / (0.5 * rig.body_radius)) as usize;
+            most_sub_steps = most_sub_steps.max(needed);
             (left, right)
         }));
-        // Sub-steps short enough that no body crosses half its radius in one: no tunnelling.
-        let sub_steps = speeds
-            .iter()
-            .zip(rigs)
-            .map(|(&(l, r), rig)| {
-                libm::ceil(l.abs().max(r.abs()) * dt / (0.5 * rig.body_radius)) as usize
-            })
-            .max()
-            .unwrap_or(1)
-            .clamp(1, MAX_SUB_STEPS);
+        let sub_steps = most_sub_steps.clamp(1, MAX_SUB_STEPS);
         let h = dt / sub_steps as f64;
-        for robot in self.robots.iter_mut() {
-            robot.touched.clear();
-        }
-        for _ in 0..sub_steps {
-            self.scratch.before.clear();
-            self.scratch
-                .before
-                .extend(self.robots.iter().map(|r| DVec2::new(r.pose.x, r.pose.z)));
-            for ((robot, rig), &(left, right)) in self.robots.iter_mut().zip(rigs).zip(&speeds) {
-                robot.pose =
-                    super::kinematics::advance(robot.pose, left, right, rig.axle_length, h);
-                robot.travel.0 += left * h;
-                robot.travel.1 += right * h;
-            }
-            clock.lap(self.profile.as_mut().map(|p| &mut p.kinematics));
-            if self.resolve_collisions() {
+        let mut before = std::mem::take(&mut self.scratch.before);
+        for sub_step in 0..sub_steps {
+            // Each robot moves along its arc as the first collision pass reaches it: one
+            // sweep over the robots, not three (their motions are independent of each
+            // other and of every other robot's pass against the static obstacles).
+            before.clear();
+            let moving = Moving {
+                speeds: &speeds,
+                h,
+                first_sub_step: sub_step == 0,
+                before: &mut before,
+            };
+            let unsettled = self.resolve_collisions(moving, clock);
+            self.scratch.before = std::mem::take(&mut before);
+            if unsettled {
                 self.settle();
             }
+            before = std::mem::take(&mut self.scratch.before);
             clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));
         }
+        self.scratch.before = before;
         // Each robot's contacts are counted where its visits are, in the step's last sweep
         // (`visits::finish_step`).
         self.scratch.speeds = speeds;
@@ -138,7 +162,7 @@ impl Motion<'_> {
     /// against each static obstacle in order, then each pair of robots in order, every push
     /// seen by the tests after it. The grids only leave out pairs that cannot touch, so the
     /// pushes are those of testing every pair.
-    fn resolve_collisions(&mut self) -> bool {
+    fn resolve_collisions(&mut self, mut moving: Moving, clock: &mut PhaseClock) -> bool {
         let rigs = self.rigs;
         let statics = self.slab.obstacles.len();
         let mut candidates = std::mem::take(&mut self.scratch.candidates);
@@ -150,6 +174,9 @@ impl Motion<'_> {
             let mut pushed = false;
             for (index, robot) in self.robots.iter_mut().enumerate() {
                 let rig = &rigs[index];
+                if pass == 0 {
+                    moving.advance(robot, rig, index);
+                }
                 let (floor, top) = (rig.floor_y, rig.floor_y + rig.body_height);
                 let reach = rig.body_radius + 1e-6;
                 // Candidates from where the robot is; asked again if pushes carry it further
@@ -193,6 +220,10 @@ impl Motion<'_> {
                         robot.touched.push(k);
                     }
                 }
+            }
+            if pass == 0 {
+                // The motion and the first pass against static obstacles, timed together.
+                clock.lap(self.profile.as_mut().map(|p| &mut p.kinematics));
             }
             let count = self.robots.len();
             if count > 1 {

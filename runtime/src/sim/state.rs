@@ -299,9 +299,10 @@ pub struct PhaseTimes {
     pub sense: std::time::Duration,
     /// Controllers.
     pub control: std::time::Duration,
-    /// Wheels moved along their arcs.
+    /// Wheel speeds, and wheels moved along their arcs, with the first collision pass
+    /// against static obstacles (done robot by robot as each moves).
     pub kinematics: std::time::Duration,
-    /// Bodies pushed apart, contacts and visits counted.
+    /// Bodies pushed apart (the rest of the passes), contacts and visits counted.
     pub collisions: std::time::Duration,
 }
 
