@@ -49,6 +49,41 @@ pub(super) fn count_contacts(robot: &mut RobotState, dt: f64) {
     contacts.touching.clone_from(touched);
 }
 
+/// A robot's wheel speeds (m/s) for a step of `dt` seconds, the step after `steps` steps
+/// (its wheel noise drawn anew where its control period starts), and the sub-steps they need:
+/// short enough that its body crosses no more than half its radius in one (no tunnelling).
+#[inline]
+pub(super) fn wheel_speeds(
+    robot: &mut RobotState,
+    rig: &Body,
+    steps: u64,
+    dt: f64,
+) -> ((f64, f64), usize) {
+    let to_metres = 100.0 / rig.encoder_resolution;
+    let clamp = |command: i32| (command as f64 * to_metres).clamp(-rig.max_speed, rig.max_speed);
+    let (mut left, mut right) = match robot.wheel_velocity {
+        Some((left, right)) => (
+            left.clamp(-rig.max_speed, rig.max_speed),
+            right.clamp(-rig.max_speed, rig.max_speed),
+        ),
+        None => (clamp(robot.command.0), clamp(robot.command.1)),
+    };
+    if rig.wheel_speed_noise > 0.0 {
+        // Drawn with each control command and held for its period, so that the noise a
+        // robot's path integrates is the same at any physics step.
+        if steps.is_multiple_of(rig.control_steps) {
+            robot.wheel_noise = (
+                1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian(),
+                1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian(),
+            );
+        }
+        left *= robot.wheel_noise.0;
+        right *= robot.wheel_noise.1;
+    }
+    let needed = libm::ceil(left.abs().max(right.abs()) * dt / (0.5 * rig.body_radius)) as usize;
+    ((left, right), needed)
+}
+
 /// One sub-step's motion, done robot by robot as the first collision pass reaches each.
 struct Moving<'a> {
     /// Each robot's wheel speeds (m/s).
@@ -88,48 +123,19 @@ pub(super) struct Motion<'a> {
     /// Wall time spent in each phase, when profiling.
     pub(super) profile: &'a mut Option<PhaseTimes>,
     pub(super) time_step: f64,
-    /// Steps done before this one: which robots' control periods start here.
-    pub(super) steps: u64,
 }
 
 impl Motion<'_> {
-    pub(super) fn move_robots(&mut self, clock: &mut PhaseClock) {
+    /// Moves the robots at `speeds` (each robot's wheel speeds, m/s, from
+    /// [`wheel_speeds`]), in sub-steps enough for the fastest (`most_sub_steps`, the largest
+    /// count [`wheel_speeds`] gave).
+    pub(super) fn move_robots(
+        &mut self,
+        clock: &mut PhaseClock,
+        speeds: &[(f64, f64)],
+        most_sub_steps: usize,
+    ) {
         let dt = self.time_step;
-        let steps = self.steps;
-        let rigs = self.rigs;
-        let mut speeds = std::mem::take(&mut self.scratch.speeds);
-        // Wheel speeds (m/s) of every robot for this step, and the sub-steps the fastest
-        // needs: short enough that no body crosses half its radius in one (no tunnelling).
-        let mut most_sub_steps = 0;
-        speeds.clear();
-        speeds.extend(self.robots.iter_mut().zip(rigs).map(|(robot, rig)| {
-            let to_metres = 100.0 / rig.encoder_resolution;
-            let clamp =
-                |command: i32| (command as f64 * to_metres).clamp(-rig.max_speed, rig.max_speed);
-            let (mut left, mut right) = match robot.wheel_velocity {
-                Some((left, right)) => (
-                    left.clamp(-rig.max_speed, rig.max_speed),
-                    right.clamp(-rig.max_speed, rig.max_speed),
-                ),
-                None => (clamp(robot.command.0), clamp(robot.command.1)),
-            };
-            if rig.wheel_speed_noise > 0.0 {
-                // Drawn with each control command and held for its period, so that the
-                // noise a robot's path integrates is the same at any physics step.
-                if steps.is_multiple_of(rig.control_steps) {
-                    robot.wheel_noise = (
-                        1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian(),
-                        1.0 + rig.wheel_speed_noise * robot.wheel_stream.gaussian(),
-                    );
-                }
-                left *= robot.wheel_noise.0;
-                right *= robot.wheel_noise.1;
-            }
-            let needed =
-                libm::ceil(left.abs().max(right.abs()) * dt / (0.5 * rig.body_radius)) as usize;
-            most_sub_steps = most_sub_steps.max(needed);
-            (left, right)
-        }));
         let sub_steps = most_sub_steps.clamp(1, MAX_SUB_STEPS);
         let h = dt / sub_steps as f64;
         let mut before = std::mem::take(&mut self.scratch.before);
@@ -139,7 +145,7 @@ impl Motion<'_> {
             // other and of every other robot's pass against the static obstacles).
             before.clear();
             let moving = Moving {
-                speeds: &speeds,
+                speeds,
                 h,
                 first_sub_step: sub_step == 0,
                 before: &mut before,
@@ -155,7 +161,6 @@ impl Motion<'_> {
         self.scratch.before = before;
         // Each robot's contacts are counted where its visits are, in the step's last sweep
         // (`visits::finish_step`).
-        self.scratch.speeds = speeds;
     }
 
     /// Pushes bodies out of obstacles and out of each other: up to 3 passes, each robot

@@ -297,10 +297,10 @@ impl RobotState {
 pub struct PhaseTimes {
     /// Sensors: IR, ambient light, vision.
     pub sense: std::time::Duration,
-    /// Controllers.
+    /// Controllers, and the wheel speeds their commands give (robot by robot).
     pub control: std::time::Duration,
-    /// Wheel speeds, and wheels moved along their arcs, with the first collision pass
-    /// against static obstacles (done robot by robot as each moves).
+    /// Wheels moved along their arcs, with the first collision pass against static
+    /// obstacles (robot by robot as each moves).
     pub kinematics: std::time::Duration,
     /// Bodies pushed apart (the rest of the passes), contacts and visits counted.
     pub collisions: std::time::Duration,

@@ -12,7 +12,7 @@ use std::sync::Arc;
 use glam::DVec2;
 
 use super::broad_phase::BroadPhase;
-use super::contacts::Motion;
+use super::contacts::{wheel_speeds, Motion};
 use super::noise::{kind, Stream};
 use super::robot::SimulatedKhepera;
 use super::sense::SenseShared;
@@ -395,18 +395,34 @@ impl<'c> Simulation<'c> {
             }
             robot.controller = Some(controller);
         };
-        // Each controller drives its own robot only: side by side, the same results.
-        if parallel(self.robots.len() as u64 * CONTROL_NS) {
+        // Each controller drives its own robot only, and its wheel speeds follow from its own
+        // commands and noise: side by side, the same results; robot by robot, one sweep.
+        let dt = self.time_step;
+        let drive = |index: usize, robot: &mut RobotState, speeds: &mut (f64, f64)| {
+            control(index, robot);
+            let (wheels, sub_steps) = wheel_speeds(robot, &bodies[index], steps, dt);
+            *speeds = wheels;
+            sub_steps
+        };
+        let mut speeds = std::mem::take(&mut self.scratch.speeds);
+        speeds.clear();
+        speeds.resize(self.robots.len(), (0.0, 0.0));
+        let most_sub_steps = if parallel(self.robots.len() as u64 * CONTROL_NS) {
             use rayon::prelude::*;
             self.robots
                 .par_iter_mut()
+                .zip(speeds.par_iter_mut())
                 .enumerate()
-                .for_each(|(index, robot)| control(index, robot));
+                .map(|(index, (robot, speeds))| drive(index, robot, speeds))
+                .max()
+                .unwrap_or(0)
         } else {
-            for (index, robot) in self.robots.iter_mut().enumerate() {
-                control(index, robot);
+            let mut most = 0;
+            for (index, (robot, speeds)) in self.robots.iter_mut().zip(&mut speeds).enumerate() {
+                most = most.max(drive(index, robot, speeds));
             }
-        }
+            most
+        };
         clock.lap(self.profile.as_mut().map(|p| &mut p.control));
         Motion {
             rigs: &self.bodies,
@@ -416,9 +432,9 @@ impl<'c> Simulation<'c> {
             scratch: &mut self.scratch,
             profile: &mut self.profile,
             time_step: self.time_step,
-            steps: self.steps,
         }
-        .move_robots(&mut clock);
+        .move_robots(&mut clock, &speeds, most_sub_steps);
+        self.scratch.speeds = speeds;
         self.steps += 1;
         self.time = self.steps as f64 * self.time_step;
         finish_step(
