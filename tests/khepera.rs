@@ -299,3 +299,48 @@ Khepera {{ name \"b\" translation {} 0 0 controller \"none\" }}
     assert!(near > 300, "2 cm: {near}");
     assert!(far < 10, "30 cm: {far}");
 }
+
+/// A robot with nothing near reads its far values and leaves its IR streams behind, to catch
+/// up when a reading next needs a draw; a robot whose raw readings are kept draws every
+/// reading as it comes. Both read the same numbers, step for step, through stretches of open
+/// floor and stretches along the walls.
+#[test]
+fn owed_ir_draws_are_the_draws_every_reading_takes() {
+    // Three Kheperas avoiding each other, two buoys and the walls of a 0.8 m arena.
+    let compiled = compile_text(
+        "#VRML_SIM R2023b utf8\n\
+         WorldInfo { coordinateSystem \"NUE\" basicTimeStep 32 randomSeed 3 }\n\
+         Arena { size 0.8 0.8 }\n\
+         Buoy { translation -0.2 0 0.1 irReflectance 1 }\n\
+         Buoy { translation 0.15 0 -0.2 irReflectance 1 }\n\
+         Khepera { translation 0.25 0 0.1 rotation 0 1 0 2.8 name \"k0\" controller \"braitenberg\" }\n\
+         Khepera { translation -0.1 0 -0.1 rotation 0 1 0 -0.7 name \"k1\" controller \"braitenberg\" }\n\
+         Khepera { translation 0.0 0 0.3 rotation 0 1 0 1.6 name \"k2\" controller \"braitenberg\" }\n",
+    );
+    let mut owing = Simulation::new(&compiled, None).unwrap();
+    let mut drawing = Simulation::new(&compiled, None).unwrap();
+    for (robot, rig) in drawing.robots.iter_mut().zip(&compiled.rig.robots) {
+        robot.keep_raw_readings(rig);
+    }
+    // Steps a robot read only far values, and steps it came near something after a stretch
+    // apart (where the owed draws are paid).
+    let mut far = vec![None; owing.robots.len()];
+    let mut was_apart = vec![false; owing.robots.len()];
+    let (mut apart, mut arrivals) = (0, 0);
+    for step in 0..3000 {
+        owing.step();
+        drawing.step();
+        for (r, (a, b)) in owing.robots.iter().zip(&drawing.robots).enumerate() {
+            assert_eq!(a.proximity, b.proximity, "robot {r}, step {step}");
+            assert_eq!(a.pose, b.pose, "robot {r}, step {step}");
+            let alone = a.proximity == *far[r].get_or_insert(a.proximity);
+            apart += alone as u32;
+            arrivals += (was_apart[r] && !alone) as u32;
+            was_apart[r] = alone;
+        }
+    }
+    assert!(
+        apart > 1000 && arrivals > 10,
+        "{apart} robot-steps apart, {arrivals} arrivals"
+    );
+}

@@ -150,12 +150,9 @@ impl Motion<'_> {
                 first_sub_step: sub_step == 0,
                 before: &mut before,
             };
-            let unsettled = self.resolve_collisions(moving, clock);
-            self.scratch.before = std::mem::take(&mut before);
-            if unsettled {
-                self.settle();
+            if self.resolve_collisions(moving, clock) {
+                self.settle(&before);
             }
-            before = std::mem::take(&mut self.scratch.before);
             clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));
         }
         self.scratch.before = before;
@@ -317,8 +314,9 @@ impl Motion<'_> {
 
     /// After the passes of a crowd: every robot still overlapping something beyond the
     /// tolerance goes back to where it was before this sub-step (where nothing overlapped),
-    /// until nothing does. Blocked robots stay put; the others keep their motion.
-    fn settle(&mut self) {
+    /// until nothing does (`before`: where each robot was). Blocked robots stay put; the
+    /// others keep their motion.
+    fn settle(&mut self, before: &[DVec2]) {
         let rigs = self.rigs;
         let mut candidates = std::mem::take(&mut self.scratch.candidates);
         let mut marked = std::mem::take(&mut self.scratch.marked);
@@ -368,12 +366,7 @@ impl Motion<'_> {
             if !any {
                 break;
             }
-            for ((robot, &back), before) in self
-                .robots
-                .iter_mut()
-                .zip(&marked)
-                .zip(&self.scratch.before)
-            {
+            for ((robot, &back), before) in self.robots.iter_mut().zip(&marked).zip(before) {
                 if back {
                     robot.pose.x = before.x;
                     robot.pose.z = before.y;

@@ -21,7 +21,7 @@ use super::state::{
     Body, CameraState, Contacts, LinearCameraState, PanoramicState, PhaseClock, PhaseTimes,
     RobotState, StepScratch, Updated, Visits,
 };
-use super::visits::{finish_step, track_visits};
+use super::visits::finish_step;
 use super::world2d::Slab;
 use crate::compile::rig::{DistanceSensorRig, TurretRig};
 use crate::compile::Compiled;
@@ -276,12 +276,13 @@ impl<'c> Simulation<'c> {
             .any(|&l| compiled.graph.lights[l].owner != crate::compile::graph::Owner::Static);
         simulation.scratch.lights =
             crate::render::world_lights(&compiled.graph, plan, &simulation.poses());
-        track_visits(
+        // Robots that start inside a visit disc visit it at time 0.
+        finish_step(
             &mut simulation.robots,
             compiled,
             &simulation.bodies,
             &simulation.broad,
-            simulation.time,
+            (None, simulation.time),
             &mut simulation.scratch,
         );
         Ok(simulation)
@@ -442,7 +443,7 @@ impl<'c> Simulation<'c> {
             self.compiled,
             &self.bodies,
             &self.broad,
-            (self.time_step, self.time),
+            (Some(self.time_step), self.time),
             &mut self.scratch,
         );
         clock.lap(self.profile.as_mut().map(|p| &mut p.collisions));

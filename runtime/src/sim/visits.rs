@@ -13,46 +13,24 @@ use crate::compile::Compiled;
 const FEW_LANDMARKS: usize = 8;
 
 /// The end of a step, robot by robot in one sweep (each robot's state is read once, not once
-/// per kind of bookkeeping): its contacts counted over the step of `dt` seconds, its fall
-/// kept, its entries into visit discs counted, at `time`, the end of the step.
+/// per kind of bookkeeping): its contacts counted over the step of `dt` seconds and its fall
+/// kept (where a step of `dt` ended: `None` before the first, visits only), then its entries
+/// into visit discs counted, at `time`.
 pub(super) fn finish_step(
     robots: &mut [RobotState],
     compiled: &Compiled,
     bodies: &[Body],
     broad: &BroadPhase,
-    (dt, time): (f64, f64),
+    (dt, time): (Option<f64>, f64),
     scratch: &mut StepScratch,
 ) {
     let mut candidates = std::mem::take(&mut scratch.candidates);
     let mut was = std::mem::take(&mut scratch.was_inside);
     for ((robot, rig), body) in robots.iter_mut().zip(&compiled.rig.robots).zip(bodies) {
-        super::contacts::count_contacts(robot, dt);
-        track_fall(robot, rig, time);
-        track_visits_of(
-            robot,
-            body,
-            compiled,
-            broad,
-            time,
-            (&mut candidates, &mut was),
-        );
-    }
-    scratch.was_inside = was;
-    scratch.candidates = candidates;
-}
-
-/// Counts entries into each landmark's visit disc (its radius plus two body diameters).
-pub(super) fn track_visits(
-    robots: &mut [RobotState],
-    compiled: &Compiled,
-    bodies: &[Body],
-    broad: &BroadPhase,
-    time: f64,
-    scratch: &mut StepScratch,
-) {
-    let mut candidates = std::mem::take(&mut scratch.candidates);
-    let mut was = std::mem::take(&mut scratch.was_inside);
-    for (robot, body) in robots.iter_mut().zip(bodies) {
+        if let Some(dt) = dt {
+            super::contacts::count_contacts(robot, dt);
+            track_fall(robot, rig, time);
+        }
         track_visits_of(
             robot,
             body,
