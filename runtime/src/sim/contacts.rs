@@ -23,6 +23,14 @@ const PASSES: usize = 3;
 /// step's sub-steps (`touched`) against what it touched at the end of the last step.
 #[inline]
 pub(super) fn count_contacts(robot: &mut RobotState, dt: f64) {
+    if robot.touched.is_empty() && robot.contacts.touching.is_empty() {
+        // Touching nothing, then or now: only an unbroken contact's length to end, and
+        // nothing of the robot written when there was none (most robots, most steps).
+        if robot.contacts.current != 0.0 {
+            robot.contacts.current = 0.0;
+        }
+        return;
+    }
     robot.touched.sort_unstable();
     robot.touched.dedup();
     let RobotState {

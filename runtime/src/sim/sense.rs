@@ -367,7 +367,7 @@ impl SenseShared<'_, '_> {
 #[inline]
 fn keep_reading(
     proximity: &mut [u16; 8],
-    raw: &mut Option<super::state::RawReadings>,
+    raw: &mut Option<Box<super::state::RawReadings>>,
     s: usize,
     (reading, value): (u16, f64),
 ) {

@@ -166,37 +166,50 @@ impl Body {
 }
 
 /// One simulated robot.
-#[repr(C)]
+///
+/// Laid out by the sweeps of a step that read each field (`repr(C)` keeps this order, and
+/// each robot starts a cache line): a crowd's step sweeps its robots several times, and at
+/// 10,000 robots the lines each sweep pulls in, not the arithmetic, were most of its cost.
+/// Line 0 is read by every sweep; then what sensing reads (lines 1–3), what the controller and
+/// the wheels read (4–5), what motion, contacts and visits read (6–9), and last what a step
+/// of IR and motion does not read.
+#[repr(C, align(64))]
 pub struct RobotState {
-    // What a step reads or writes of every robot comes first, in a few cache lines side by
-    // side (`repr(C)` keeps this order): a crowd's step sweeps its robots a dozen times, and at
-    // 10,000 robots the lines each sweep pulls in, not the arithmetic, were most of its cost.
+    // Line 0: every sweep.
     pub pose: Pose2,
-    /// Wheel speed commands (pulses per 10 ms).
-    pub command: (i32, i32),
-    /// Wheel travel since the start (m), from which the encoders count.
-    pub travel: (f64, f64),
-    /// Wheel rim speeds (m/s) that replace `command` when set: a robot driven in SI units
-    /// (a Webots controller's motors) rather than in the Khepera's pulses.
-    pub wheel_velocity: Option<(f64, f64)>,
-    /// Each wheel's speed factor (1 + relative noise), drawn with each control command and
-    /// held for its period: the noise's statistics do not depend on the physics step.
-    pub(super) wheel_noise: (f64, f64),
     /// Which readings the last step refreshed (what a log records, at each sensor's rate).
     pub updated: Updated,
+    /// The sensors refreshed in the last step: those the controller reads, or all.
+    pub senses: Senses,
+    /// A batched backend is to render this robot's vision device in this step.
+    pub(super) vision_requested: bool,
+    /// Whether every IR sensor reads nothing without noise (the table's far rows have none):
+    /// what lets a reading of nothing leave its stream behind.
+    pub(super) ir_quiet: bool,
+    pub leds: [bool; 2],
+    pub(super) controller: Option<Box<dyn Controller>>,
+    // Line 1: what a step asks of every robot's devices before it senses.
+    /// Boxed: each step asks whether there is one, and the robots without one (an IR-only
+    /// swarm's) keep 550 bytes less each.
+    pub panoramic: Option<Box<PanoramicState>>,
+    pub linear_camera: Option<Box<LinearCameraState>>,
+    pub cameras: Vec<CameraState>,
+    /// Readings before rounding, when kept ([`RawReadings`]): boxed, as few robots keep them.
+    pub raw: Option<Box<RawReadings>>,
     /// How far from the centre any IR sensor reaches ([`super::sensors::ir_reach`]).
     pub(super) ir_reach: f64,
-    /// The IR sensors' period when they all share one (read here, not from the rig, in the
-    /// step loop).
-    pub(super) ir_period: Option<f64>,
-    pub(super) ir_due: Vec<f64>,
     /// Readings of nothing whose draws every IR stream still owes: a robot alone reads its
     /// sensors' far values without touching its streams, and they catch up (the same draws,
     /// skipped) before a reading needs one ([`RobotState::ir_streams_caught_up`]).
     pub(super) ir_skipped: u64,
-    /// Whether every IR sensor reads nothing without noise (the table's far rows have none):
-    /// what lets a reading of nothing leave its stream behind.
-    pub(super) ir_quiet: bool,
+    // Lines 2–3: the IR sensors, and the controller's commands beside the readings it reads.
+    /// The IR sensors' period when they all share one (read here, not from the rig, in the
+    /// step loop).
+    pub(super) ir_period: Option<f64>,
+    pub(super) ir_due: Vec<f64>,
+    pub proximity: [u16; 8],
+    /// Wheel speed commands (pulses per 10 ms).
+    pub command: (i32, i32),
     /// Each IR sensor's noise stream: read only through
     /// [`RobotState::ir_streams_caught_up`], which pays what `ir_skipped` owes.
     pub(super) ir_streams: Vec<Stream>,
@@ -207,35 +220,31 @@ pub struct RobotState {
     /// side by side): static obstacles and robots near enough for the IR sensors, obstacles
     /// touched in this step.
     pub(super) nearby: Vec<u32>,
+    // Lines 4–5: the wheels (and, filling the lines, what is read only now and then).
+    pub(super) wheel_stream: Stream,
+    /// Controller calls that returned an error, and the last message.
+    pub controller_errors: u64,
+    /// Each wheel's speed factor (1 + relative noise), drawn with each control command and
+    /// held for its period: the noise's statistics do not depend on the physics step.
+    pub(super) wheel_noise: (f64, f64),
+    /// Wheel rim speeds (m/s) that replace `command` when set: a robot driven in SI units
+    /// (a Webots controller's motors) rather than in the Khepera's pulses.
+    pub wheel_velocity: Option<(f64, f64)>,
     pub(super) nearby_robots: Vec<u32>,
+    // Lines 6–9: motion, the encoders, contacts, falls and visits.
+    /// Wheel travel since the start (m), from which the encoders count.
+    pub travel: (f64, f64),
     pub(super) touched: Vec<u32>,
-    pub(super) controller: Option<Box<dyn Controller>>,
-    pub linear_camera: Option<Box<LinearCameraState>>,
-    pub cameras: Vec<CameraState>,
-    /// Readings before rounding, when kept ([`RawReadings`]).
-    pub raw: Option<RawReadings>,
     pub(super) counter_offset: (i64, i64),
+    pub contacts: Contacts,
     /// Where and when the robot left every floor (it stays there, fallen off the world).
     pub fell: Option<Fall>,
-    pub(super) wheel_stream: Stream,
-    /// The sensors refreshed in the last step: those the controller reads, or all.
-    pub senses: Senses,
-    pub proximity: [u16; 8],
-    pub ambient: [u16; 8],
-    pub leds: [bool; 2],
-    /// A batched backend is to render this robot's vision device in this step.
-    pub(super) vision_requested: bool,
-    pub contacts: Contacts,
     pub visits: Visits,
-    /// Boxed: each step asks whether there is one, and the robots without one (an IR-only
-    /// swarm's) keep 550 bytes less each, the lines after the hot ones close behind them.
-    pub panoramic: Option<Box<PanoramicState>>,
     // Below: what a step of IR and motion does not read.
+    pub ambient: [u16; 8],
     pub(super) ambient_due: Vec<f64>,
     pub(super) ambient_streams: Vec<Stream>,
     pub name: String,
-    /// Controller calls that returned an error, and the last message.
-    pub controller_errors: u64,
     pub last_controller_error: Option<String>,
 }
 
@@ -262,10 +271,10 @@ impl RobotState {
     /// Keeps this robot's [`RawReadings`] from the next step on (all its distance and light
     /// sensors, before rounding), `NaN` until first read.
     pub fn keep_raw_readings(&mut self, rig: &RobotRig) {
-        self.raw = Some(RawReadings {
+        self.raw = Some(Box::new(RawReadings {
             distance: vec![f64::NAN; rig.distance_sensors.len()],
             light: vec![f64::NAN; rig.light_sensors.len()],
-        });
+        }));
     }
 
     /// Whether its vision device is read and due at `t` (without moving its due time).
@@ -347,4 +356,63 @@ pub(super) struct StepScratch {
     pub(super) marked: Vec<bool>,
     /// The world placed once for every viewer of the step (column renderer).
     pub(super) frame: Option<crate::render::column::ColumnFrame>,
+}
+#[cfg(test)]
+mod tests {
+    use super::RobotState;
+    use std::mem::offset_of;
+
+    /// The line of the robot's state a field starts on, and the line it ends on.
+    macro_rules! lines {
+        ($field:ident) => {{
+            let start = offset_of!(RobotState, $field);
+            let size = {
+                let probe = std::mem::MaybeUninit::<RobotState>::uninit();
+                // SAFETY: only the field's address is taken, never read.
+                let field = unsafe { std::ptr::addr_of!((*probe.as_ptr()).$field) };
+                std::mem::size_of_val(unsafe { &*field })
+            };
+            (start / 64, (start + size - 1) / 64)
+        }};
+    }
+
+    #[test]
+    fn each_sweep_finds_its_fields_in_the_lines_it_reads() {
+        assert_eq!(std::mem::align_of::<RobotState>(), 64);
+        // Every sweep: line 0.
+        for line in [
+            lines!(pose),
+            lines!(updated),
+            lines!(senses),
+            lines!(controller),
+        ] {
+            assert_eq!(line, (0, 0));
+        }
+        // Before sensing, and an IR reading of nothing: lines 1 to 3.
+        for line in [
+            lines!(panoramic),
+            lines!(linear_camera),
+            lines!(cameras),
+            lines!(raw),
+            lines!(ir_reach),
+            lines!(ir_skipped),
+            lines!(ir_period),
+            lines!(ir_due),
+            lines!(proximity),
+            lines!(ir_nothing),
+            lines!(nearby),
+        ] {
+            assert!(line.0 >= 1 && line.1 <= 3, "{line:?}");
+        }
+        // The controller's commands beside the readings it reads.
+        assert_eq!(lines!(command), lines!(proximity));
+        // The wheels: lines 4 and 5.
+        for line in [
+            lines!(wheel_stream),
+            lines!(wheel_noise),
+            lines!(wheel_velocity),
+        ] {
+            assert!(line.0 >= 4 && line.1 <= 5, "{line:?}");
+        }
+    }
 }

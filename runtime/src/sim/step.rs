@@ -21,7 +21,7 @@ use super::state::{
     Body, CameraState, Contacts, LinearCameraState, PanoramicState, PhaseClock, PhaseTimes,
     RobotState, StepScratch, Updated, Visits,
 };
-use super::visits::finish_step;
+use super::visits::{finish_step, FloorSets};
 use super::world2d::Slab;
 use crate::compile::rig::{DistanceSensorRig, TurretRig};
 use crate::compile::Compiled;
@@ -68,6 +68,8 @@ pub struct Simulation<'c> {
     pub robots: Vec<RobotState>,
     /// What every step reads of each robot's rig, in a line a robot ([`Body`]).
     bodies: Vec<Body>,
+    /// The floors each robot started on (leaving all of them is a fall).
+    floors: FloorSets,
     /// Simulated time (s) and steps done.
     pub time: f64,
     pub steps: u64,
@@ -260,6 +262,7 @@ impl<'c> Simulation<'c> {
             broad,
             robots,
             bodies: compiled.rig.robots.iter().map(Body::of).collect(),
+            floors: FloorSets::of(&compiled.rig.robots),
             time: 0.0,
             steps: 0,
             time_step,
@@ -279,8 +282,7 @@ impl<'c> Simulation<'c> {
         // Robots that start inside a visit disc visit it at time 0.
         finish_step(
             &mut simulation.robots,
-            compiled,
-            &simulation.bodies,
+            (compiled, &simulation.bodies, &simulation.floors),
             &simulation.broad,
             (None, simulation.time),
             &mut simulation.scratch,
@@ -440,8 +442,7 @@ impl<'c> Simulation<'c> {
         self.time = self.steps as f64 * self.time_step;
         finish_step(
             &mut self.robots,
-            self.compiled,
-            &self.bodies,
+            (self.compiled, &self.bodies, &self.floors),
             &self.broad,
             (Some(self.time_step), self.time),
             &mut self.scratch,

@@ -9,6 +9,43 @@ use super::state::{Body, Fall, RobotState, StepScratch, Visits};
 use crate::compile::rig::RobotRig;
 use crate::compile::Compiled;
 
+/// The floors each robot started on, each distinct set kept once: most robots of a world
+/// share one, so the end of a step reads one small table, not a line of every robot's rig
+/// and then its list.
+#[derive(Debug, Default)]
+pub(super) struct FloorSets {
+    sets: Vec<Vec<[f64; 4]>>,
+    /// Each robot's set, an index into `sets`.
+    of: Vec<u32>,
+}
+
+impl FloorSets {
+    pub(super) fn of(rigs: &[RobotRig]) -> FloorSets {
+        let mut table = FloorSets::default();
+        let bits = |floors: &[[f64; 4]]| -> Vec<u64> {
+            floors.iter().flatten().map(|v| v.to_bits()).collect()
+        };
+        for rig in rigs {
+            let key = bits(&rig.floors);
+            let set = match table.sets.iter().position(|s| bits(s) == key) {
+                Some(set) => set,
+                None => {
+                    table.sets.push(rig.floors.clone());
+                    table.sets.len() - 1
+                }
+            };
+            table.of.push(set as u32);
+        }
+        table
+    }
+
+    /// The floors robot `robot` started on.
+    #[inline]
+    pub(super) fn floors(&self, robot: usize) -> &[[f64; 4]] {
+        &self.sets[self.of[robot] as usize]
+    }
+}
+
 /// Below this many landmarks, each is tested rather than looked up in the grid.
 const FEW_LANDMARKS: usize = 8;
 
@@ -18,18 +55,17 @@ const FEW_LANDMARKS: usize = 8;
 /// into visit discs counted, at `time`.
 pub(super) fn finish_step(
     robots: &mut [RobotState],
-    compiled: &Compiled,
-    bodies: &[Body],
+    (compiled, bodies, floors): (&Compiled, &[Body], &FloorSets),
     broad: &BroadPhase,
     (dt, time): (Option<f64>, f64),
     scratch: &mut StepScratch,
 ) {
     let mut candidates = std::mem::take(&mut scratch.candidates);
     let mut was = std::mem::take(&mut scratch.was_inside);
-    for ((robot, rig), body) in robots.iter_mut().zip(&compiled.rig.robots).zip(bodies) {
+    for (index, (robot, body)) in robots.iter_mut().zip(bodies).enumerate() {
         if let Some(dt) = dt {
             super::contacts::count_contacts(robot, dt);
-            track_fall(robot, rig, time);
+            track_fall(robot, floors.floors(index), time);
         }
         track_visits_of(
             robot,
@@ -66,6 +102,10 @@ fn track_visits_of(
         broad.landmarks.query_point(center, candidates);
     }
     let visits = &mut robot.visits;
+    if candidates.is_empty() && visits.inside.is_empty() {
+        // In no disc, then or now: nothing to count, and nothing of the robot written.
+        return;
+    }
     was.clear();
     was.extend_from_slice(&visits.inside);
     visits.inside.clear();
@@ -89,17 +129,16 @@ fn track_visits_of(
 /// A robot whose centre has left every floor it started on has fallen off the world: the
 /// event is kept, and the robot stays where it fell.
 #[inline]
-fn track_fall(robot: &mut RobotState, rig: &RobotRig, time: f64) {
+fn track_fall(robot: &mut RobotState, floors: &[[f64; 4]], time: f64) {
     if let Some(fall) = robot.fell {
         robot.pose = fall.pose;
         return;
     }
-    if rig.floors.is_empty() {
+    if floors.is_empty() {
         return;
     }
     let (x, z) = (robot.pose.x, robot.pose.z);
-    let on_floor = rig
-        .floors
+    let on_floor = floors
         .iter()
         .any(|f| (f[0]..=f[2]).contains(&x) && (f[1]..=f[3]).contains(&z));
     if !on_floor {
