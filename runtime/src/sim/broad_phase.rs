@@ -117,6 +117,14 @@ impl BroadPhase {
         let centres = &self.centres;
         self.robots.rebuild_points(count, |i| centres[i]);
     }
+
+    /// [`BroadPhase::file_robots`] from centres already gathered, one a robot in order:
+    /// they become [`BroadPhase::centres`], and `centres` gets the buffer they replace.
+    pub fn file_centres(&mut self, centres: &mut Vec<DVec2>) {
+        std::mem::swap(&mut self.centres, centres);
+        let centres = &self.centres;
+        self.robots.rebuild_points(centres.len(), |i| centres[i]);
+    }
 }
 
 /// The half side of the largest square about a robot's centre in which static obstacles are

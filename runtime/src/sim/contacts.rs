@@ -55,6 +55,9 @@ pub(super) fn count_contacts(robot: &mut RobotState, dt: f64) {
         contacts.current = 0.0;
     }
     contacts.touching.clone_from(touched);
+    // Emptied here, where it was just read, for the next step's sub-steps to fill: the
+    // motion's sweep then writes nothing of a robot that touches nothing.
+    touched.clear();
 }
 
 /// A robot's wheel speeds (m/s) for a step of `dt` seconds, the step after `steps` steps
@@ -92,14 +95,24 @@ pub(super) fn wheel_speeds(
     ((left, right), needed)
 }
 
+/// Where robot `i` is in a collision pass: where the robots' grid filed it (`filed`) while no
+/// push has moved it since (`drift`), so that a robot with no neighbour costs the pass no
+/// line of its state.
+#[inline]
+fn centre_of(robots: &[RobotState], filed: &[DVec2], drift: &[f64], i: usize) -> DVec2 {
+    if drift[i] == 0.0 {
+        filed[i]
+    } else {
+        DVec2::new(robots[i].pose.x, robots[i].pose.z)
+    }
+}
+
 /// One sub-step's motion, done robot by robot as the first collision pass reaches each.
 struct Moving<'a> {
     /// Each robot's wheel speeds (m/s).
     speeds: &'a [(f64, f64)],
     /// The sub-step (s).
     h: f64,
-    /// Whether the step's contacts start here (each robot's `touched` is emptied).
-    first_sub_step: bool,
     /// Where each robot was before the sub-step, pushed as it moves (what `settle` returns
     /// a robot to).
     before: &'a mut Vec<DVec2>,
@@ -108,9 +121,6 @@ struct Moving<'a> {
 impl Moving<'_> {
     #[inline]
     fn advance(&mut self, robot: &mut RobotState, rig: &Body, index: usize) {
-        if self.first_sub_step {
-            robot.touched.clear();
-        }
         self.before.push(DVec2::new(robot.pose.x, robot.pose.z));
         let (left, right) = self.speeds[index];
         robot.pose = super::kinematics::advance(robot.pose, left, right, rig.axle_length, self.h);
@@ -147,7 +157,7 @@ impl Motion<'_> {
         let sub_steps = most_sub_steps.clamp(1, MAX_SUB_STEPS);
         let h = dt / sub_steps as f64;
         let mut before = std::mem::take(&mut self.scratch.before);
-        for sub_step in 0..sub_steps {
+        for _ in 0..sub_steps {
             // Each robot moves along its arc as the first collision pass reaches it: one
             // sweep over the robots, not three (their motions are independent of each
             // other and of every other robot's pass against the static obstacles).
@@ -155,7 +165,6 @@ impl Motion<'_> {
             let moving = Moving {
                 speeds,
                 h,
-                first_sub_step: sub_step == 0,
                 before: &mut before,
             };
             if self.resolve_collisions(moving, clock) {
@@ -177,11 +186,15 @@ impl Motion<'_> {
         let statics = self.slab.obstacles.len();
         let mut candidates = std::mem::take(&mut self.scratch.candidates);
         let mut drift = std::mem::take(&mut self.scratch.drift);
+        // Each robot's centre after its pass against the static obstacles, in robot order:
+        // what the robots' grid is filed from without a second sweep over the robots.
+        let mut centres = std::mem::take(&mut self.scratch.centres);
         let max_radius = self.broad.max_radius;
         let mut unsettled = false;
         for pass in 0..PASSES {
             // A pass that pushes nothing leaves the next one nothing new to find.
             let mut pushed = false;
+            centres.clear();
             for (index, robot) in self.robots.iter_mut().enumerate() {
                 let rig = &rigs[index];
                 if pass == 0 {
@@ -230,6 +243,7 @@ impl Motion<'_> {
                         robot.touched.push(k);
                     }
                 }
+                centres.push(DVec2::new(robot.pose.x, robot.pose.z));
             }
             if pass == 0 {
                 // The motion and the first pass against static obstacles, timed together.
@@ -237,9 +251,7 @@ impl Motion<'_> {
             }
             let count = self.robots.len();
             if count > 1 {
-                let robots = &self.robots;
-                self.broad
-                    .file_robots(count, |i| DVec2::new(robots[i].pose.x, robots[i].pose.z));
+                self.broad.file_centres(&mut centres);
                 drift.clear();
                 drift.resize(count, 0.0);
             }
@@ -250,7 +262,7 @@ impl Motion<'_> {
                 // Candidates b > a whose filed centre is near enough that they might touch a,
                 // allowing for SLACK of motion of a, or of anyone, before they are asked again.
                 let (mut anchor, mut drift_then) = (
-                    DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z),
+                    centre_of(self.robots, &self.broad.centres, &drift, a),
                     max_drift,
                 );
                 // Only b > a, and only those whose filed centre lies within the square's
@@ -274,7 +286,7 @@ impl Motion<'_> {
                     next += 1;
                     let b = b as usize;
                     if moved + (max_drift - drift_then) > SLACK {
-                        anchor = DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z);
+                        anchor = centre_of(self.robots, centres, &drift, a);
                         drift_then = max_drift;
                         moved = 0.0;
                         query(anchor, drift_then, &mut candidates);
@@ -283,8 +295,8 @@ impl Motion<'_> {
                     }
                     // The compact copy: a candidate that touches nothing costs no rig line.
                     let rb = self.broad.radii[b];
-                    let ca = DVec2::new(self.robots[a].pose.x, self.robots[a].pose.z);
-                    let cb = DVec2::new(self.robots[b].pose.x, self.robots[b].pose.z);
+                    let ca = centre_of(self.robots, centres, &drift, a);
+                    let cb = centre_of(self.robots, centres, &drift, b);
                     if let Some((depth, normal)) = (Footprint::Circle {
                         center: cb,
                         radius: rb,
@@ -299,8 +311,9 @@ impl Motion<'_> {
                         self.robots[a].touched.push((statics + b) as u32);
                         self.robots[b].touched.push((statics + a) as u32);
                         pushed = true;
-                        // Bounds on how far each has gone since the grid was filed.
-                        let step = half.length() * (1.0 + 1e-9);
+                        // Bounds on how far each has gone since the grid was filed: never 0
+                        // for a push (`centre_of` reads a robot's state once it has one).
+                        let step = (half.length() * (1.0 + 1e-9)).max(f64::MIN_POSITIVE);
                         drift[a] += step;
                         drift[b] += step;
                         moved += step;
@@ -317,6 +330,7 @@ impl Motion<'_> {
         }
         self.scratch.candidates = candidates;
         self.scratch.drift = drift;
+        self.scratch.centres = centres;
         unsettled
     }
 

@@ -349,6 +349,8 @@ pub(super) struct StepScratch {
     pub(super) candidates: Vec<u32>,
     /// How far each robot was pushed since the robots' grid was filed (an upper bound).
     pub(super) drift: Vec<f64>,
+    /// Each robot's centre after a collision pass against the static obstacles.
+    pub(super) centres: Vec<DVec2>,
     /// One robot's landmarks inside at the last step.
     pub(super) was_inside: Vec<u32>,
     /// Where each robot was before the sub-step, and which go back there.

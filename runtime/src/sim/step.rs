@@ -347,7 +347,21 @@ impl<'c> Simulation<'c> {
     /// between this and [`Simulation::act`], exactly where a built-in controller runs.
     pub fn sense(&mut self) {
         let t = self.time;
-        for robot in &mut self.robots {
+        // Where every robot is, gathered in the sweep that reads what each senses (each
+        // robot's first line read once, not once per list).
+        let StepScratch {
+            poses, placements, ..
+        } = &mut self.scratch;
+        if poses.floor_y.len() != self.bodies.len() {
+            // Robots never change floors' heights: filed once.
+            poses.floor_y.clear();
+            poses.floor_y.extend(self.bodies.iter().map(|b| b.floor_y));
+        }
+        poses.poses.clear();
+        placements.clear();
+        for (robot, &floor_y) in self.robots.iter_mut().zip(&poses.floor_y) {
+            poses.poses.push(robot.pose);
+            placements.push(robot.pose.placement(floor_y));
             robot.updated = Updated::default();
             // A robot driven from outside may read anything its protocol reads.
             let reads = robot
@@ -494,20 +508,8 @@ impl<'c> Simulation<'c> {
             requests,
             ..
         } = scratch;
-        poses.poses.clear();
-        poses.poses.extend(self.robots.iter().map(|r| r.pose));
-        poses.floor_y.clear();
-        poses.floor_y.extend(self.bodies.iter().map(|b| b.floor_y));
-        let poses = &*poses;
-        placements.clear();
-        placements.extend(
-            poses
-                .poses
-                .iter()
-                .zip(&poses.floor_y)
-                .map(|(p, &y)| p.placement(y)),
-        );
-        let placements = &*placements;
+        // Placed in `sense`'s first sweep.
+        let (poses, placements) = (&*poses, &*placements);
         // Ambient sensors read the plan's lights, placed once per step where they move.
         if *lights_move
             && self
