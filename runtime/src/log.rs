@@ -581,7 +581,7 @@ impl<W: Write + Seek> Recorder<W> {
         let mut end = end;
         // Robots that fell off the world: only then is the key written.
         for robot in &simulation.robots {
-            if let Some(fall) = robot.fell {
+            if let Some(fall) = &robot.fell {
                 end.insert(
                     format!("fell.{}", robot.name),
                     format!("t={} x={} z={}", fall.time, fall.pose.x, fall.pose.z),

@@ -27,20 +27,23 @@ pub struct Updated {
 
 /// Contact bookkeeping of one robot.
 #[derive(Clone, Debug, Default, PartialEq)]
+#[repr(C)]
 pub struct Contacts {
+    // First what every step's end reads ([`RobotState`] lays it beside the robot's other
+    // bookkeeping of the step).
+    /// The obstacles touched at the end of the last step, ascending.
+    pub(super) touching: Vec<u32>,
+    pub(super) current: f64,
     /// Times a contact began.
     pub events: u64,
     /// Steps that ended in contact.
     pub steps: u64,
     /// Longest unbroken contact (s).
     pub longest: f64,
-    pub(super) current: f64,
     /// Contact events per obstacle, for the obstacles ever touched, by obstacle (static
     /// obstacles are numbered first, then robots): kept sparse, so that a swarm's table grows
     /// with its contacts, not with the square of its size.
     pub per_obstacle: Vec<(u32, u64)>,
-    /// The obstacles touched at the end of the last step, ascending.
-    pub(super) touching: Vec<u32>,
 }
 
 impl Contacts {
@@ -81,8 +84,6 @@ pub struct Visits {
     pub sequence: Vec<usize>,
     /// When each entry of `sequence` happened (simulated s, the end of the step).
     pub times: Vec<f64>,
-    /// The landmarks whose visit disc holds the robot now, ascending.
-    pub(super) inside: Vec<u32>,
 }
 
 impl Visits {
@@ -231,14 +232,17 @@ pub struct RobotState {
     /// (a Webots controller's motors) rather than in the Khepera's pulses.
     pub wheel_velocity: Option<(f64, f64)>,
     pub(super) nearby_robots: Vec<u32>,
-    // Lines 6–9: motion, the encoders, contacts, falls and visits.
+    // Lines 6–7: motion, and the end of the step: contacts, falls and visits.
     /// Wheel travel since the start (m), from which the encoders count.
     pub travel: (f64, f64),
     pub(super) touched: Vec<u32>,
-    pub(super) counter_offset: (i64, i64),
+    /// The landmarks whose visit disc holds the robot now, ascending.
+    pub(super) visiting: Vec<u32>,
+    /// Where and when the robot left every floor (it stays there, fallen off the world):
+    /// boxed, as few robots fall.
+    pub fell: Option<Box<Fall>>,
     pub contacts: Contacts,
-    /// Where and when the robot left every floor (it stays there, fallen off the world).
-    pub fell: Option<Fall>,
+    pub(super) counter_offset: (i64, i64),
     pub visits: Visits,
     // Below: what a step of IR and motion does not read.
     pub ambient: [u16; 8],
@@ -416,5 +420,19 @@ mod tests {
         ] {
             assert!(line.0 >= 4 && line.1 <= 5, "{line:?}");
         }
+        // Motion and the end of the step: lines 6 and 7, with what contacts read first.
+        for line in [
+            lines!(travel),
+            lines!(touched),
+            lines!(visiting),
+            lines!(fell),
+        ] {
+            assert!(line.0 >= 6 && line.1 <= 7, "{line:?}");
+        }
+        let contacts = offset_of!(RobotState, contacts);
+        let touching = contacts + offset_of!(super::Contacts, touching);
+        let current = contacts + offset_of!(super::Contacts, current);
+        assert_eq!((touching / 64, (touching + 23) / 64), (7, 7));
+        assert_eq!((current / 64, (current + 7) / 64), (7, 7));
     }
 }

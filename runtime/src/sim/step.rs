@@ -226,8 +226,8 @@ impl<'c> Simulation<'c> {
                 visits: Visits {
                     sequence: Vec::with_capacity(16),
                     times: Vec::with_capacity(16),
-                    inside: Vec::with_capacity(4),
                 },
+                visiting: Vec::with_capacity(4),
                 nearby: Vec::with_capacity(16),
                 nearby_robots: Vec::with_capacity(32),
                 touched: Vec::with_capacity(8),

@@ -101,14 +101,14 @@ fn track_visits_of(
     } else {
         broad.landmarks.query_point(center, candidates);
     }
-    let visits = &mut robot.visits;
-    if candidates.is_empty() && visits.inside.is_empty() {
+    if candidates.is_empty() && robot.visiting.is_empty() {
         // In no disc, then or now: nothing to count, and nothing of the robot written.
         return;
     }
+    let (visits, inside) = (&mut robot.visits, &mut robot.visiting);
     was.clear();
-    was.extend_from_slice(&visits.inside);
-    visits.inside.clear();
+    was.extend_from_slice(inside);
+    inside.clear();
     for &k in candidates.iter() {
         let landmark = &compiled.landmarks[k as usize];
         let distance = DVec2::new(
@@ -121,7 +121,7 @@ fn track_visits_of(
                 visits.sequence.push(k as usize);
                 visits.times.push(time);
             }
-            visits.inside.push(k);
+            inside.push(k);
         }
     }
 }
@@ -130,7 +130,7 @@ fn track_visits_of(
 /// event is kept, and the robot stays where it fell.
 #[inline]
 fn track_fall(robot: &mut RobotState, floors: &[[f64; 4]], time: f64) {
-    if let Some(fall) = robot.fell {
+    if let Some(fall) = &robot.fell {
         robot.pose = fall.pose;
         return;
     }
@@ -142,9 +142,9 @@ fn track_fall(robot: &mut RobotState, floors: &[[f64; 4]], time: f64) {
         .iter()
         .any(|f| (f[0]..=f[2]).contains(&x) && (f[1]..=f[3]).contains(&z));
     if !on_floor {
-        robot.fell = Some(Fall {
+        robot.fell = Some(Box::new(Fall {
             time,
             pose: robot.pose,
-        });
+        }));
     }
 }
