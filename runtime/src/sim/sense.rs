@@ -37,20 +37,39 @@ pub(super) struct SenseShared<'s, 'c> {
     pub(super) streams_seed: u64,
 }
 
+/// Working lists of one robot's sensing: the static obstacles and the robots near enough for
+/// its IR sensors. Kept by whoever senses robots one after another (a thread), not by each
+/// robot, so that a robot's state keeps no lists it only needs while it is sensed.
+#[derive(Debug, Default)]
+pub(super) struct NearbyLists {
+    obstacles: Vec<u32>,
+    robots: Vec<u32>,
+}
+
 impl SenseShared<'_, '_> {
-    /// Refreshes one robot's due sensors.
-    pub(super) fn sense(&self, index: usize, robot: &mut RobotState) {
+    /// Refreshes one robot's due sensors (`lists`: working lists, any content).
+    pub(super) fn sense(&self, index: usize, robot: &mut RobotState, lists: &mut NearbyLists) {
         let (compiled, t) = (self.compiled, self.t);
         let rig = &compiled.rig.robots[index];
         let senses = robot.senses;
         robot.vision_requested = false;
+        // Which devices are read in this step: their APIs refuse the others.
+        if let Some(turret) = &mut robot.panoramic {
+            turret.sensed = senses.vision;
+        }
+        if let Some(camera) = &mut robot.linear_camera {
+            camera.sensed = senses.vision;
+        }
+        for camera in &mut robot.cameras {
+            camera.sensed = senses.camera;
+        }
         // The Khepera API reads eight; a robot whose raw readings are kept reads them all.
         let proximity_sensors = match (senses.proximity, robot.raw.is_some()) {
             (false, _) => 0,
             (true, false) => 8,
             (true, true) => usize::MAX,
         };
-        self.sense_proximity(index, robot, proximity_sensors);
+        self.sense_proximity(index, robot, proximity_sensors, lists);
         let ambient_sensors = match (senses.ambient, robot.raw.is_some()) {
             (false, _) => 0,
             (true, false) => 8,
@@ -167,81 +186,48 @@ impl SenseShared<'_, '_> {
 
     /// Refreshes a robot's first `count` due IR sensors.
     #[inline(never)]
-    fn sense_proximity(&self, index: usize, robot: &mut RobotState, count: usize) {
+    fn sense_proximity(
+        &self,
+        index: usize,
+        robot: &mut RobotState,
+        count: usize,
+        lists: &mut NearbyLists,
+    ) {
         let t = self.t;
-        let rig = &self.compiled.rig.robots[index];
         let count = count.min(robot.ir_due.len());
         if count == 0 {
             return;
         }
         // Sensors that share a period and a due time (a Khepera's eight always do) are due
-        // alike: one test for all, and, with nothing in reach and no noise to add, readings
-        // that need no more than their streams moved on.
+        // alike: one test for all.
         if let Some(period) = robot.ir_period {
+            if robot.ir_together {
+                if count == robot.ir_due.len() {
+                    if due(&mut robot.ir_next, t, period) {
+                        self.read_all_due(index, robot, count, lists);
+                    }
+                    return;
+                }
+                // Some are to be read and not the others: from now on, each its own.
+                robot.ir_due.fill(robot.ir_next);
+                robot.ir_together = false;
+            }
             let first = robot.ir_due[0];
             if robot.ir_due[1..count]
                 .iter()
                 .all(|d| d.to_bits() == first.to_bits())
             {
                 let mut next = first;
-                if !due(&mut next, t, period) {
-                    return;
-                }
-                robot.ir_due[..count].fill(next);
-                self.find_nearby(
-                    index,
-                    robot.ir_reach,
-                    &mut robot.nearby,
-                    &mut robot.nearby_robots,
-                );
-                robot.updated.proximity = true;
-                let nothing_near = robot.nearby.is_empty()
-                    && robot.nearby_robots.is_empty()
-                    && robot.raw.is_none();
-                if nothing_near && robot.ir_quiet && count == robot.ir_streams.len() {
-                    // Every sensor reads its far value, which has no noise: each stream owes
-                    // one draw more, paid when a reading next needs it (a robot alone
-                    // leaves its streams' memory untouched).
-                    robot.ir_skipped += 1;
-                    for (nothing, slot) in robot.ir_nothing.iter().zip(&mut robot.proximity) {
-                        *slot = nothing.reading;
-                    }
-                    return;
-                }
-                robot.ir_streams_caught_up();
-                let RobotState {
-                    ir_streams,
-                    ir_nothing,
-                    proximity,
-                    raw,
-                    nearby,
-                    nearby_robots,
-                    ..
-                } = &mut *robot;
-                let sensors = ir_streams[..count].iter_mut().zip(ir_nothing.iter());
-                if nothing_near {
-                    for ((stream, nothing), slot) in sensors.zip(proximity) {
-                        *slot = sensors::proximity_of_nothing(nothing, stream).0;
-                    }
-                    return;
-                }
-                for (s, ((stream, nothing), sensor)) in
-                    sensors.zip(rig.distance_sensors.iter()).enumerate()
-                {
-                    let read = self.read_proximity(
-                        index,
-                        (nearby, nearby_robots),
-                        sensor,
-                        stream,
-                        nothing,
-                    );
-                    keep_reading(proximity, raw, s, read);
+                if due(&mut next, t, period) {
+                    robot.ir_due[..count].fill(next);
+                    self.read_all_due(index, robot, count, lists);
                 }
                 return;
             }
         }
         // Otherwise each sensor is tested; those that share a period and a due time with the
         // last one tested take its answer without a division.
+        let rig = &self.compiled.rig.robots[index];
         robot.ir_streams_caught_up();
         let mut nearby_found = false;
         let mut last_due: Option<(u64, f64, bool, f64)> = None;
@@ -273,23 +259,71 @@ impl SenseShared<'_, '_> {
                 continue;
             }
             if !nearby_found {
-                self.find_nearby(
-                    index,
-                    robot.ir_reach,
-                    &mut robot.nearby,
-                    &mut robot.nearby_robots,
-                );
+                self.find_nearby(index, robot.ir_reach, lists);
                 nearby_found = true;
                 robot.updated.proximity = true;
             }
             let read = self.read_proximity(
                 index,
-                (&robot.nearby, &robot.nearby_robots),
+                (&lists.obstacles, &lists.robots),
                 sensor,
                 stream,
                 nothing,
             );
             keep_reading(&mut robot.proximity, &mut robot.raw, s, read);
+        }
+    }
+
+    /// Reads a robot's first `count` IR sensors, all due: with nothing in reach and no noise
+    /// to add, readings that need no more than their streams moved on.
+    #[inline]
+    fn read_all_due(
+        &self,
+        index: usize,
+        robot: &mut RobotState,
+        count: usize,
+        lists: &mut NearbyLists,
+    ) {
+        self.find_nearby(index, robot.ir_reach, lists);
+        robot.updated.proximity = true;
+        let nothing_near =
+            lists.obstacles.is_empty() && lists.robots.is_empty() && robot.raw.is_none();
+        if nothing_near && robot.ir_quiet && count == robot.ir_streams.len() {
+            // Every sensor reads its far value, which has no noise: each stream owes one
+            // draw more, paid when a reading next needs it (a robot alone leaves its streams'
+            // memory untouched).
+            robot.ir_skipped += 1;
+            for (nothing, slot) in robot.ir_nothing.iter().zip(&mut robot.proximity) {
+                *slot = nothing.reading;
+            }
+            return;
+        }
+        robot.ir_streams_caught_up();
+        let RobotState {
+            ir_streams,
+            ir_nothing,
+            proximity,
+            raw,
+            ..
+        } = &mut *robot;
+        let sensors = ir_streams[..count].iter_mut().zip(ir_nothing.iter());
+        if nothing_near {
+            for ((stream, nothing), slot) in sensors.zip(proximity) {
+                *slot = sensors::proximity_of_nothing(nothing, stream).0;
+            }
+            return;
+        }
+        let rig = &self.compiled.rig.robots[index];
+        for (s, ((stream, nothing), sensor)) in sensors.zip(rig.distance_sensors.iter()).enumerate()
+        {
+            let read = self.read_proximity(
+                index,
+                (&lists.obstacles, &lists.robots),
+                sensor,
+                stream,
+                nothing,
+            );
+            keep_reading(proximity, raw, s, read);
         }
     }
 
@@ -319,16 +353,14 @@ impl SenseShared<'_, '_> {
         (sensors::to_reading(value), value)
     }
 
-    /// Fills a robot's lists of the static obstacles and the robots within its IR sensors'
-    /// `reach` (m), ascending.
+    /// Fills the lists of the static obstacles and the robots within robot `index`'s IR
+    /// sensors' `reach` (m), ascending.
     #[inline(never)]
-    fn find_nearby(
-        &self,
-        index: usize,
-        reach: f64,
-        nearby: &mut Vec<u32>,
-        nearby_robots: &mut Vec<u32>,
-    ) {
+    fn find_nearby(&self, index: usize, reach: f64, lists: &mut NearbyLists) {
+        let NearbyLists {
+            obstacles: nearby,
+            robots: nearby_robots,
+        } = lists;
         let placement = &self.placements[index];
         if reach <= self.broad.statics_reach
             && self

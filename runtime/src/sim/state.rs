@@ -172,8 +172,8 @@ impl Body {
 /// each robot starts a cache line): a crowd's step sweeps its robots several times, and at
 /// 10,000 robots the lines each sweep pulls in, not the arithmetic, were most of its cost.
 /// Line 0 is read by every sweep; then what sensing reads (lines 1–3), what the controller and
-/// the wheels read (4–5), what motion, contacts and visits read (6–9), and last what a step
-/// of IR and motion does not read.
+/// the wheels read (4–5), what motion, contacts, falls and visits read (5–7), and last what a
+/// step of IR and motion does not read.
 #[repr(C, align(64))]
 pub struct RobotState {
     // Line 0: every sweep.
@@ -187,9 +187,10 @@ pub struct RobotState {
     /// Whether every IR sensor reads nothing without noise (the table's far rows have none):
     /// what lets a reading of nothing leave its stream behind.
     pub(super) ir_quiet: bool,
-    pub leds: [bool; 2],
+    /// Whether every IR sensor is due at `ir_next` (`ir_due` not kept meanwhile).
+    pub(super) ir_together: bool,
     pub(super) controller: Option<Box<dyn Controller>>,
-    // Line 1: what a step asks of every robot's devices before it senses.
+    // Lines 1–3: sensing, and what the controller reads of it.
     /// Boxed: each step asks whether there is one, and the robots without one (an IR-only
     /// swarm's) keep 550 bytes less each.
     pub panoramic: Option<Box<PanoramicState>>,
@@ -203,44 +204,47 @@ pub struct RobotState {
     /// sensors' far values without touching its streams, and they catch up (the same draws,
     /// skipped) before a reading needs one ([`RobotState::ir_streams_caught_up`]).
     pub(super) ir_skipped: u64,
-    // Lines 2–3: the IR sensors, and the controller's commands beside the readings it reads.
     /// The IR sensors' period when they all share one (read here, not from the rig, in the
     /// step loop).
     pub(super) ir_period: Option<f64>,
+    /// When every IR sensor is next due, while they are due together (`ir_together`): a
+    /// Khepera's eight always are, and then their list is left alone.
+    pub(super) ir_next: f64,
+    /// Each IR sensor's next due time, once they are not due together.
     pub(super) ir_due: Vec<f64>,
     pub proximity: [u16; 8],
-    /// Wheel speed commands (pulses per 10 ms).
-    pub command: (i32, i32),
     /// Each IR sensor's noise stream: read only through
     /// [`RobotState::ir_streams_caught_up`], which pays what `ir_skipped` owes.
     pub(super) ir_streams: Vec<Stream>,
     /// Each IR sensor's reading with nothing in range
     /// ([`super::sensors::nothing_in_range`]), shared by robots with the same sensors.
     pub(super) ir_nothing: std::sync::Arc<[super::sensors::NothingInRange]>,
-    /// Working lists, kept from step to step (the robot's own, so that robots can be sensed
-    /// side by side): static obstacles and robots near enough for the IR sensors, obstacles
-    /// touched in this step.
-    pub(super) nearby: Vec<u32>,
-    // Lines 4–5: the wheels (and, filling the lines, what is read only now and then).
+    // Filling line 3: read now and then.
+    pub name: String,
+    // Lines 4–5: the wheels, and the travel motion adds to.
     pub(super) wheel_stream: Stream,
-    /// Controller calls that returned an error, and the last message.
-    pub controller_errors: u64,
+    /// Wheel speed commands (pulses per 10 ms).
+    pub command: (i32, i32),
     /// Each wheel's speed factor (1 + relative noise), drawn with each control command and
     /// held for its period: the noise's statistics do not depend on the physics step.
     pub(super) wheel_noise: (f64, f64),
     /// Wheel rim speeds (m/s) that replace `command` when set: a robot driven in SI units
     /// (a Webots controller's motors) rather than in the Khepera's pulses.
     pub wheel_velocity: Option<(f64, f64)>,
-    pub(super) nearby_robots: Vec<u32>,
-    // Lines 6–7: motion, and the end of the step: contacts, falls and visits.
     /// Wheel travel since the start (m), from which the encoders count.
     pub travel: (f64, f64),
+    /// Controller calls that returned an error, and the last message (filling line 5).
+    pub controller_errors: u64,
+    // Lines 6–7: the end of the step: contacts, falls and visits.
+    /// Obstacles touched in this step's sub-steps (numbered as [`Contacts::per_obstacle`]).
     pub(super) touched: Vec<u32>,
     /// The landmarks whose visit disc holds the robot now, ascending.
     pub(super) visiting: Vec<u32>,
     /// Where and when the robot left every floor (it stays there, fallen off the world):
     /// boxed, as few robots fall.
     pub fell: Option<Box<Fall>>,
+    // Filling line 6.
+    pub leds: [bool; 2],
     pub contacts: Contacts,
     pub(super) counter_offset: (i64, i64),
     pub visits: Visits,
@@ -248,7 +252,6 @@ pub struct RobotState {
     pub ambient: [u16; 8],
     pub(super) ambient_due: Vec<f64>,
     pub(super) ambient_streams: Vec<Stream>,
-    pub name: String,
     pub last_controller_error: Option<String>,
 }
 
@@ -355,6 +358,8 @@ pub(super) struct StepScratch {
     pub(super) drift: Vec<f64>,
     /// Each robot's centre after a collision pass against the static obstacles.
     pub(super) centres: Vec<DVec2>,
+    /// What one robot's IR sensors may see, when robots are sensed one after another.
+    pub(super) nearby: super::sense::NearbyLists,
     /// One robot's landmarks inside at the last step.
     pub(super) was_inside: Vec<u32>,
     /// Where each robot was before the sub-step, and which go back there.
@@ -385,50 +390,57 @@ mod tests {
     #[test]
     fn each_sweep_finds_its_fields_in_the_lines_it_reads() {
         assert_eq!(std::mem::align_of::<RobotState>(), 64);
+        let within = |lines: &[(usize, usize)], first: usize, last: usize| {
+            for line in lines {
+                assert!(line.0 >= first && line.1 <= last, "{line:?}");
+            }
+        };
         // Every sweep: line 0.
-        for line in [
-            lines!(pose),
-            lines!(updated),
-            lines!(senses),
-            lines!(controller),
-        ] {
-            assert_eq!(line, (0, 0));
-        }
-        // Before sensing, and an IR reading of nothing: lines 1 to 3.
-        for line in [
-            lines!(panoramic),
-            lines!(linear_camera),
-            lines!(cameras),
-            lines!(raw),
-            lines!(ir_reach),
-            lines!(ir_skipped),
-            lines!(ir_period),
-            lines!(ir_due),
-            lines!(proximity),
-            lines!(ir_nothing),
-            lines!(nearby),
-        ] {
-            assert!(line.0 >= 1 && line.1 <= 3, "{line:?}");
-        }
-        // The controller's commands beside the readings it reads.
-        assert_eq!(lines!(command), lines!(proximity));
-        // The wheels: lines 4 and 5.
-        for line in [
-            lines!(wheel_stream),
-            lines!(wheel_noise),
-            lines!(wheel_velocity),
-        ] {
-            assert!(line.0 >= 4 && line.1 <= 5, "{line:?}");
-        }
-        // Motion and the end of the step: lines 6 and 7, with what contacts read first.
-        for line in [
-            lines!(travel),
-            lines!(touched),
-            lines!(visiting),
-            lines!(fell),
-        ] {
-            assert!(line.0 >= 6 && line.1 <= 7, "{line:?}");
-        }
+        within(
+            &[
+                lines!(pose),
+                lines!(updated),
+                lines!(senses),
+                lines!(ir_together),
+                lines!(controller),
+            ],
+            0,
+            0,
+        );
+        // Sensing: lines 1 to 3.
+        within(
+            &[
+                lines!(panoramic),
+                lines!(linear_camera),
+                lines!(cameras),
+                lines!(raw),
+                lines!(ir_reach),
+                lines!(ir_skipped),
+                lines!(ir_period),
+                lines!(ir_next),
+                lines!(ir_due),
+                lines!(proximity),
+                lines!(ir_streams),
+                lines!(ir_nothing),
+            ],
+            1,
+            3,
+        );
+        // The wheels: lines 4 and 5, with the travel that motion adds to.
+        within(
+            &[
+                lines!(wheel_stream),
+                lines!(command),
+                lines!(wheel_noise),
+                lines!(wheel_velocity),
+                lines!(travel),
+            ],
+            4,
+            5,
+        );
+        assert_eq!(lines!(travel), lines!(wheel_noise));
+        // The end of the step: lines 6 and 7, with what contacts read first.
+        within(&[lines!(touched), lines!(visiting), lines!(fell)], 6, 7);
         let contacts = offset_of!(RobotState, contacts);
         let touching = contacts + offset_of!(super::Contacts, touching);
         let current = contacts + offset_of!(super::Contacts, current);

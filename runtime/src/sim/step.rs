@@ -15,6 +15,7 @@ use super::broad_phase::BroadPhase;
 use super::contacts::{wheel_speeds, Motion};
 use super::noise::{kind, Stream};
 use super::robot::SimulatedKhepera;
+use super::sense::NearbyLists;
 use super::sense::SenseShared;
 use super::sensors;
 use super::state::{
@@ -147,6 +148,11 @@ impl<'c> Simulation<'c> {
                 }
             };
             let ir_quiet = ir_nothing.iter().all(|n| n.spread == 0.0);
+            let ir_period = rig.distance_sensors.first().map(|s| s.period).filter(|&p| {
+                rig.distance_sensors
+                    .iter()
+                    .all(|s| s.period.to_bits() == p.to_bits())
+            });
             robots.push(RobotState {
                 name: rig.name.clone(),
                 updated: Updated::default(),
@@ -160,6 +166,11 @@ impl<'c> Simulation<'c> {
                 senses: Senses::ALL,
                 proximity: [0; 8],
                 ambient: [0; 8],
+                ir_together: ir_period.is_some()
+                    && ir_due
+                        .iter()
+                        .all(|d: &f64| d.to_bits() == ir_due[0].to_bits()),
+                ir_next: ir_due.first().copied().unwrap_or(0.0),
                 ir_due,
                 // Made when first read (most robots' controllers never do): the same due
                 // times and streams as if made here, since none is drawn before that.
@@ -167,11 +178,7 @@ impl<'c> Simulation<'c> {
                 ir_nothing,
                 ir_quiet,
                 ir_reach: sensors::ir_reach(&rig.distance_sensors),
-                ir_period: rig.distance_sensors.first().map(|s| s.period).filter(|&p| {
-                    rig.distance_sensors
-                        .iter()
-                        .all(|s| s.period.to_bits() == p.to_bits())
-                }),
+                ir_period,
                 ir_streams,
                 ir_skipped: 0,
                 ambient_streams: Vec::new(),
@@ -228,8 +235,6 @@ impl<'c> Simulation<'c> {
                     times: Vec::with_capacity(16),
                 },
                 visiting: Vec::with_capacity(4),
-                nearby: Vec::with_capacity(16),
-                nearby_robots: Vec::with_capacity(32),
                 touched: Vec::with_capacity(8),
                 vision_requested: false,
                 fell: None,
@@ -369,16 +374,8 @@ impl<'c> Simulation<'c> {
                 .as_ref()
                 .map_or(Senses::PROTOCOL, |c| c.senses());
             robot.senses = reads.union(self.always_sensed);
-            let vision = robot.senses.vision;
-            if let Some(turret) = &mut robot.panoramic {
-                turret.sensed = vision;
-            }
-            if let Some(camera) = &mut robot.linear_camera {
-                camera.sensed = vision;
-            }
-            for camera in &mut robot.cameras {
-                camera.sensed = robot.senses.camera;
-            }
+            // Which devices are read is marked as each robot senses (where their line is
+            // read anyway).
         }
         let mut clock = PhaseClock::start(self.profile.is_some());
         self.update_sensors(t);
@@ -576,10 +573,12 @@ impl<'c> Simulation<'c> {
                 .enumerate()
                 .with_min_len(run)
                 .with_max_len(run)
-                .for_each(|(index, robot)| shared.sense(index, robot));
+                .for_each_init(NearbyLists::default, |lists, (index, robot)| {
+                    shared.sense(index, robot, lists)
+                });
         } else {
             for (index, robot) in self.robots.iter_mut().enumerate() {
-                shared.sense(index, robot);
+                shared.sense(index, robot, &mut scratch.nearby);
             }
         }
         requests.clear();
