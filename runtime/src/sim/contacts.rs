@@ -5,7 +5,7 @@
 use glam::DVec2;
 
 use super::broad_phase::{self, BroadPhase, SLACK};
-use super::state::{Body, PhaseClock, PhaseTimes, RobotState, StepScratch};
+use super::state::{Bodies, Body, PhaseClock, PhaseTimes, RobotState, StepScratch};
 use super::world2d::{Footprint, Slab};
 
 /// Most collision sub-steps in one step. A world whose robots could need more (a long time
@@ -132,7 +132,7 @@ impl Moving<'_> {
 /// What a step's motion reads and writes of a simulation.
 pub(super) struct Motion<'a> {
     /// Each robot's [`Body`]: what motion reads of its rig.
-    pub(super) rigs: &'a [Body],
+    pub(super) rigs: &'a Bodies,
     pub(super) slab: &'a Slab,
     /// Grids over the floor: what pairs bodies without testing every pair.
     pub(super) broad: &'a mut BroadPhase,
@@ -196,7 +196,7 @@ impl Motion<'_> {
             let mut pushed = false;
             centres.clear();
             for (index, robot) in self.robots.iter_mut().enumerate() {
-                let rig = &rigs[index];
+                let rig = rigs.get(index);
                 if pass == 0 {
                     moving.advance(robot, rig, index);
                 }
@@ -258,7 +258,7 @@ impl Motion<'_> {
             // The largest drift of any robot since the grid was filed.
             let mut max_drift = 0.0f64;
             for a in 0..count.saturating_sub(1) {
-                let ra = rigs[a].body_radius;
+                let ra = rigs.get(a).body_radius;
                 // Candidates b > a whose filed centre is near enough that they might touch a,
                 // allowing for SLACK of motion of a, or of anyone, before they are asked again.
                 let (mut anchor, mut drift_then) = (
@@ -348,7 +348,7 @@ impl Motion<'_> {
             marked.resize(self.robots.len(), false);
             let mut any = false;
             for (index, robot) in self.robots.iter().enumerate() {
-                let rig = &rigs[index];
+                let rig = rigs.get(index);
                 let (floor, top) = (rig.floor_y, rig.floor_y + rig.body_height);
                 let center = DVec2::new(robot.pose.x, robot.pose.z);
                 let (lo, hi) = broad_phase::square(center, rig.body_radius);
@@ -372,7 +372,7 @@ impl Motion<'_> {
             });
             for a in 0..robots.len() {
                 let ca = DVec2::new(robots[a].pose.x, robots[a].pose.z);
-                let ra = rigs[a].body_radius;
+                let ra = rigs.get(a).body_radius;
                 let (lo, hi) = broad_phase::square(ca, ra + max_radius);
                 self.broad.robots.query(lo, hi, &mut candidates);
                 for &b in candidates.iter().filter(|&&b| b as usize > a) {

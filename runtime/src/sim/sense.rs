@@ -54,14 +54,16 @@ impl SenseShared<'_, '_> {
         let senses = robot.senses;
         robot.vision_requested = false;
         // Which devices are read in this step: their APIs refuse the others.
-        if let Some(turret) = &mut robot.panoramic {
-            turret.sensed = senses.vision;
-        }
-        if let Some(camera) = &mut robot.linear_camera {
-            camera.sensed = senses.vision;
-        }
-        for camera in &mut robot.cameras {
-            camera.sensed = senses.camera;
+        if robot.has_devices {
+            if let Some(turret) = &mut robot.panoramic {
+                turret.sensed = senses.vision;
+            }
+            if let Some(camera) = &mut robot.linear_camera {
+                camera.sensed = senses.vision;
+            }
+            for camera in &mut robot.cameras {
+                camera.sensed = senses.camera;
+            }
         }
         // The Khepera API reads eight; a robot whose raw readings are kept reads them all.
         let proximity_sensors = match (senses.proximity, robot.raw.is_some()) {

@@ -151,6 +151,47 @@ pub(super) struct Body {
     pub control_steps: u64,
 }
 
+/// Each robot's [`Body`], each distinct one kept once: most robots of a world share one, so
+/// a sweep reads one line for them all, not a line a robot.
+#[derive(Debug, Default)]
+pub(super) struct Bodies {
+    table: Vec<Body>,
+    /// Each robot's body, an index into `table` (unread while there is one).
+    of: Vec<u32>,
+}
+
+impl Bodies {
+    pub fn of(rigs: &[RobotRig]) -> Bodies {
+        let mut bodies = Bodies::default();
+        for body in rigs.iter().map(Body::of) {
+            let index = match bodies.table.iter().position(|b| *b == body) {
+                Some(index) => index,
+                None => {
+                    bodies.table.push(body);
+                    bodies.table.len() - 1
+                }
+            };
+            bodies.of.push(index as u32);
+        }
+        bodies
+    }
+
+    /// Robot `robot`'s body.
+    #[inline]
+    pub fn get(&self, robot: usize) -> &Body {
+        if self.table.len() == 1 {
+            &self.table[0]
+        } else {
+            &self.table[self.of[robot] as usize]
+        }
+    }
+
+    /// How many robots.
+    pub fn len(&self) -> usize {
+        self.of.len()
+    }
+}
+
 impl Body {
     pub fn of(rig: &RobotRig) -> Body {
         Body {
@@ -171,9 +212,9 @@ impl Body {
 /// Laid out by the sweeps of a step that read each field (`repr(C)` keeps this order, and
 /// each robot starts a cache line): a crowd's step sweeps its robots several times, and at
 /// 10,000 robots the lines each sweep pulls in, not the arithmetic, were most of its cost.
-/// Line 0 is read by every sweep; then what sensing reads (lines 1–3), what the controller and
-/// the wheels read (4–5), what motion, contacts, falls and visits read (5–7), and last what a
-/// step of IR and motion does not read.
+/// Line 0 is read by every sweep; then what IR sensing reads (lines 1–2), the devices (3),
+/// what the controller's wheels and motion read (4–5), what the end of the step reads (6–7),
+/// and last what a step of IR and motion does not read.
 #[repr(C, align(64))]
 pub struct RobotState {
     // Line 0: every sweep.
@@ -189,13 +230,11 @@ pub struct RobotState {
     pub(super) ir_quiet: bool,
     /// Whether every IR sensor is due at `ir_next` (`ir_due` not kept meanwhile).
     pub(super) ir_together: bool,
+    /// Whether it carries a vision device or a 2-D camera (set where they are made): a robot
+    /// without leaves their line unread.
+    pub(super) has_devices: bool,
     pub(super) controller: Option<Box<dyn Controller>>,
-    // Lines 1–3: sensing, and what the controller reads of it.
-    /// Boxed: each step asks whether there is one, and the robots without one (an IR-only
-    /// swarm's) keep 550 bytes less each.
-    pub panoramic: Option<Box<PanoramicState>>,
-    pub linear_camera: Option<Box<LinearCameraState>>,
-    pub cameras: Vec<CameraState>,
+    // Lines 1–2: the IR sensors, and their readings that the controller reads.
     /// Readings before rounding, when kept ([`RawReadings`]): boxed, as few robots keep them.
     pub raw: Option<Box<RawReadings>>,
     /// How far from the centre any IR sensor reaches ([`super::sensors::ir_reach`]).
@@ -210,18 +249,23 @@ pub struct RobotState {
     /// When every IR sensor is next due, while they are due together (`ir_together`): a
     /// Khepera's eight always are, and then their list is left alone.
     pub(super) ir_next: f64,
+    pub proximity: [u16; 8],
     /// Each IR sensor's next due time, once they are not due together.
     pub(super) ir_due: Vec<f64>,
-    pub proximity: [u16; 8],
     /// Each IR sensor's noise stream: read only through
     /// [`RobotState::ir_streams_caught_up`], which pays what `ir_skipped` owes.
     pub(super) ir_streams: Vec<Stream>,
     /// Each IR sensor's reading with nothing in range
     /// ([`super::sensors::nothing_in_range`]), shared by robots with the same sensors.
     pub(super) ir_nothing: std::sync::Arc<[super::sensors::NothingInRange]>,
+    // Line 3: the devices, read only where `has_devices` says there are some.
+    /// Boxed: the robots without one (an IR-only swarm's) keep 550 bytes less each.
+    pub panoramic: Option<Box<PanoramicState>>,
+    pub linear_camera: Option<Box<LinearCameraState>>,
+    pub cameras: Vec<CameraState>,
     // Filling line 3: read now and then.
     pub name: String,
-    // Lines 4–5: the wheels, and the travel motion adds to.
+    // Lines 4–5: the wheels, and the travel that motion adds to.
     pub(super) wheel_stream: Stream,
     /// Wheel speed commands (pulses per 10 ms).
     pub command: (i32, i32),
@@ -402,17 +446,15 @@ mod tests {
                 lines!(updated),
                 lines!(senses),
                 lines!(ir_together),
+                lines!(has_devices),
                 lines!(controller),
             ],
             0,
             0,
         );
-        // Sensing: lines 1 to 3.
+        // IR sensing: lines 1 and 2.
         within(
             &[
-                lines!(panoramic),
-                lines!(linear_camera),
-                lines!(cameras),
                 lines!(raw),
                 lines!(ir_reach),
                 lines!(ir_skipped),
@@ -424,6 +466,13 @@ mod tests {
                 lines!(ir_nothing),
             ],
             1,
+            2,
+        );
+        // The controller's readings beside its IR sensors' due time.
+        assert_eq!(lines!(proximity), lines!(ir_next));
+        within(
+            &[lines!(panoramic), lines!(linear_camera), lines!(cameras)],
+            3,
             3,
         );
         // The wheels: lines 4 and 5, with the travel that motion adds to.

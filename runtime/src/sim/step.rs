@@ -19,7 +19,7 @@ use super::sense::NearbyLists;
 use super::sense::SenseShared;
 use super::sensors;
 use super::state::{
-    Body, CameraState, Contacts, LinearCameraState, PanoramicState, PhaseClock, PhaseTimes,
+    Bodies, CameraState, Contacts, LinearCameraState, PanoramicState, PhaseClock, PhaseTimes,
     RobotState, StepScratch, Updated, Visits,
 };
 use super::visits::{finish_step, FloorSets};
@@ -68,7 +68,7 @@ pub struct Simulation<'c> {
     broad: BroadPhase,
     pub robots: Vec<RobotState>,
     /// What every step reads of each robot's rig, in a line a robot ([`Body`]).
-    bodies: Vec<Body>,
+    bodies: Bodies,
     /// The floors each robot started on (leaving all of them is a fall).
     floors: FloorSets,
     /// Simulated time (s) and steps done.
@@ -171,6 +171,7 @@ impl<'c> Simulation<'c> {
                         .iter()
                         .all(|d: &f64| d.to_bits() == ir_due[0].to_bits()),
                 ir_next: ir_due.first().copied().unwrap_or(0.0),
+                has_devices: false,
                 ir_due,
                 // Made when first read (most robots' controllers never do): the same due
                 // times and streams as if made here, since none is drawn before that.
@@ -239,7 +240,11 @@ impl<'c> Simulation<'c> {
                 vision_requested: false,
                 fell: None,
             });
-            if robots[index].panoramic.is_some() {
+            let robot = &mut robots[index];
+            robot.has_devices = robot.panoramic.is_some()
+                || robot.linear_camera.is_some()
+                || !robot.cameras.is_empty();
+            if robot.panoramic.is_some() {
                 last_panoramic = Some(index);
             }
         }
@@ -266,7 +271,7 @@ impl<'c> Simulation<'c> {
             slab,
             broad,
             robots,
-            bodies: compiled.rig.robots.iter().map(Body::of).collect(),
+            bodies: Bodies::of(&compiled.rig.robots),
             floors: FloorSets::of(&compiled.rig.robots),
             time: 0.0,
             steps: 0,
@@ -360,7 +365,10 @@ impl<'c> Simulation<'c> {
         if poses.floor_y.len() != self.bodies.len() {
             // Robots never change floors' heights: filed once.
             poses.floor_y.clear();
-            poses.floor_y.extend(self.bodies.iter().map(|b| b.floor_y));
+            let bodies = &self.bodies;
+            poses
+                .floor_y
+                .extend((0..bodies.len()).map(|i| bodies.get(i).floor_y));
         }
         poses.poses.clear();
         placements.clear();
@@ -392,7 +400,7 @@ impl<'c> Simulation<'c> {
         let control = |index: usize, robot: &mut RobotState| {
             // A controller runs at its own period, on the step grid from time 0; its
             // commands hold in between.
-            if !steps.is_multiple_of(bodies[index].control_steps) {
+            if !steps.is_multiple_of(bodies.get(index).control_steps) {
                 return;
             }
             let Some(mut controller) = robot.controller.take() else {
@@ -414,7 +422,7 @@ impl<'c> Simulation<'c> {
         let dt = self.time_step;
         let drive = |index: usize, robot: &mut RobotState, speeds: &mut (f64, f64)| {
             control(index, robot);
-            let (wheels, sub_steps) = wheel_speeds(robot, &bodies[index], steps, dt);
+            let (wheels, sub_steps) = wheel_speeds(robot, bodies.get(index), steps, dt);
             *speeds = wheels;
             sub_steps
         };

@@ -5,7 +5,7 @@
 use glam::DVec2;
 
 use super::broad_phase::BroadPhase;
-use super::state::{Body, Fall, RobotState, StepScratch, Visits};
+use super::state::{Bodies, Body, Fall, RobotState, StepScratch, Visits};
 use crate::compile::rig::RobotRig;
 use crate::compile::Compiled;
 
@@ -55,14 +55,15 @@ const FEW_LANDMARKS: usize = 8;
 /// into visit discs counted, at `time`.
 pub(super) fn finish_step(
     robots: &mut [RobotState],
-    (compiled, bodies, floors): (&Compiled, &[Body], &FloorSets),
+    (compiled, bodies, floors): (&Compiled, &Bodies, &FloorSets),
     broad: &BroadPhase,
     (dt, time): (Option<f64>, f64),
     scratch: &mut StepScratch,
 ) {
     let mut candidates = std::mem::take(&mut scratch.candidates);
     let mut was = std::mem::take(&mut scratch.was_inside);
-    for (index, (robot, body)) in robots.iter_mut().zip(bodies).enumerate() {
+    for (index, robot) in robots.iter_mut().enumerate() {
+        let body = bodies.get(index);
         if let Some(dt) = dt {
             super::contacts::count_contacts(robot, dt);
             track_fall(robot, floors.floors(index), time);
