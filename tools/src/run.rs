@@ -144,21 +144,26 @@ fn run_here(mut args: Args, color: bool) -> anyhow::Result<Outcome> {
         if stop.requested() {
             break;
         }
-        simulation.sense();
-        if let Some(programs) = &mut programs {
-            // A project's controller that fails ends the run; the log keeps the steps before.
-            if let Err(error) = programs.exchange(&mut simulation) {
-                failure = Some(error.to_string());
-                break;
-            }
-            // A supervisor's wb_supervisor_simulation_quit ends the run after this step.
-            if let Some(status) = programs.quit_requested() {
-                eprintln!("a supervisor ended the run (status {status})");
+        match &mut programs {
+            // Nothing between sensing and acting: each robot sensed and driven in one sweep.
+            None => simulation.step(),
+            Some(programs) => {
+                simulation.sense();
+                // A project's controller that fails ends the run; the log keeps the steps
+                // before.
+                if let Err(error) = programs.exchange(&mut simulation) {
+                    failure = Some(error.to_string());
+                    break;
+                }
+                // A supervisor's wb_supervisor_simulation_quit ends the run after this step.
+                if let Some(status) = programs.quit_requested() {
+                    eprintln!("a supervisor ended the run (status {status})");
+                    simulation.act();
+                    break;
+                }
                 simulation.act();
-                break;
             }
         }
-        simulation.act();
         if let Some(error) = &simulation.vision_error {
             anyhow::bail!("step {}: {error}", simulation.steps);
         }

@@ -4,12 +4,14 @@
 //! robot and per sensor; robots are visited in file order; nothing depends on wall time.
 //!
 //! [`Simulation`] and its step loop are in `step.rs`; a step's phases each have their file:
-//! `sense.rs` (one robot's sensing), `contacts.rs` (motion, collisions and contacts),
+//! `sense.rs` (one robot's sensing), `drive.rs` (one robot's controller and wheel speeds),
+//! `contacts.rs` (motion, collisions and contacts),
 //! `visits.rs` (buoy visits and falls). `state.rs` holds what is kept of each robot,
 //! `robot.rs` the simulated robot behind the Khepera API.
 
 mod broad_phase;
 mod contacts;
+mod drive;
 pub mod kinematics;
 pub mod noise;
 mod robot;

@@ -12,7 +12,8 @@ use std::sync::Arc;
 use glam::DVec2;
 
 use super::broad_phase::BroadPhase;
-use super::contacts::{wheel_speeds, Motion};
+use super::contacts::Motion;
+use super::drive::Drive;
 use super::noise::{kind, Stream};
 use super::robot::SimulatedKhepera;
 use super::sense::NearbyLists;
@@ -346,26 +347,49 @@ impl<'c> Simulation<'c> {
         }
     }
 
-    /// Advances the world by one step: [`Simulation::sense`] then [`Simulation::act`].
+    /// Advances the world by one step: [`Simulation::sense`] then [`Simulation::act`]. Where
+    /// nothing comes between them (no batched vision backend, no profile of the phases),
+    /// each robot is sensed and driven in one sweep: its controller reads only its own
+    /// readings, so the results are the same, and each robot's lines are read once for both.
     pub fn step(&mut self) {
-        self.sense();
-        self.act();
+        if self.vision.is_some() || self.profile.is_some() {
+            self.sense();
+            self.act();
+            return;
+        }
+        self.mark_senses();
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let mut speeds = std::mem::take(&mut scratch.speeds);
+        speeds.clear();
+        speeds.resize(self.robots.len(), (0.0, 0.0));
+        let most_sub_steps = self.update_sensors_with(self.time, &mut scratch, Some(&mut speeds));
+        self.scratch = scratch;
+        self.move_and_finish(&mut PhaseClock::start(false), speeds, most_sub_steps);
     }
 
     /// The first half of a step: clears the update flags and refreshes the sensors that are
     /// due. A robot driven from outside (over the serial protocol) is read and commanded
     /// between this and [`Simulation::act`], exactly where a built-in controller runs.
     pub fn sense(&mut self) {
-        let t = self.time;
-        // Where every robot is, gathered in the sweep that reads what each senses (each
-        // robot's first line read once, not once per list).
+        self.mark_senses();
+        let mut clock = PhaseClock::start(self.profile.is_some());
+        let mut scratch = std::mem::take(&mut self.scratch);
+        self.update_sensors_with(self.time, &mut scratch, None);
+        self.scratch = scratch;
+        clock.lap(self.profile.as_mut().map(|p| &mut p.sense));
+    }
+
+    /// Clears each robot's update flags and marks what it senses in this step; gathers where
+    /// every robot is, in the same sweep (each robot's first line read once, not once per
+    /// list).
+    fn mark_senses(&mut self) {
         let StepScratch {
             poses, placements, ..
         } = &mut self.scratch;
         if poses.floor_y.len() != self.bodies.len() {
             // Robots never change floors' heights: filed once.
-            poses.floor_y.clear();
             let bodies = &self.bodies;
+            poses.floor_y.clear();
             poses
                 .floor_y
                 .extend((0..bodies.len()).map(|i| bodies.get(i).floor_y));
@@ -376,55 +400,27 @@ impl<'c> Simulation<'c> {
             poses.poses.push(robot.pose);
             placements.push(robot.pose.placement(floor_y));
             robot.updated = Updated::default();
-            // A robot driven from outside may read anything its protocol reads.
+            // A robot driven from outside may read anything its protocol reads. Which of its
+            // devices are read is marked as it senses (where their line is read anyway).
             let reads = robot
                 .controller
                 .as_ref()
                 .map_or(Senses::PROTOCOL, |c| c.senses());
             robot.senses = reads.union(self.always_sensed);
-            // Which devices are read is marked as each robot senses (where their line is
-            // read anyway).
         }
-        let mut clock = PhaseClock::start(self.profile.is_some());
-        self.update_sensors(t);
-        clock.lap(self.profile.as_mut().map(|p| &mut p.sense));
     }
 
     /// The second half of a step: runs the built-in controllers, moves the robots and
     /// advances time.
     pub fn act(&mut self) {
         let mut clock = PhaseClock::start(self.profile.is_some());
-        let rigs = &self.compiled.rig.robots;
-        let bodies = &self.bodies;
-        let steps = self.steps;
-        let control = |index: usize, robot: &mut RobotState| {
-            // A controller runs at its own period, on the step grid from time 0; its
-            // commands hold in between.
-            if !steps.is_multiple_of(bodies.get(index).control_steps) {
-                return;
-            }
-            let Some(mut controller) = robot.controller.take() else {
-                return;
-            };
-            let mut io = SimulatedKhepera {
-                robot,
-                rig: &rigs[index],
-            };
-            if let Err(error) = controller.step(&mut io) {
-                robot.updated.controller_error = true;
-                robot.controller_errors += 1;
-                robot.last_controller_error = Some(error.to_string());
-            }
-            robot.controller = Some(controller);
-        };
         // Each controller drives its own robot only, and its wheel speeds follow from its own
         // commands and noise: side by side, the same results; robot by robot, one sweep.
-        let dt = self.time_step;
-        let drive = |index: usize, robot: &mut RobotState, speeds: &mut (f64, f64)| {
-            control(index, robot);
-            let (wheels, sub_steps) = wheel_speeds(robot, bodies.get(index), steps, dt);
-            *speeds = wheels;
-            sub_steps
+        let drive = Drive {
+            rigs: &self.compiled.rig.robots,
+            bodies: &self.bodies,
+            steps: self.steps,
+            dt: self.time_step,
         };
         let mut speeds = std::mem::take(&mut self.scratch.speeds);
         speeds.clear();
@@ -435,17 +431,28 @@ impl<'c> Simulation<'c> {
                 .par_iter_mut()
                 .zip(speeds.par_iter_mut())
                 .enumerate()
-                .map(|(index, (robot, speeds))| drive(index, robot, speeds))
+                .map(|(index, (robot, speeds))| drive.drive(index, robot, speeds))
                 .max()
                 .unwrap_or(0)
         } else {
             let mut most = 0;
             for (index, (robot, speeds)) in self.robots.iter_mut().zip(&mut speeds).enumerate() {
-                most = most.max(drive(index, robot, speeds));
+                most = most.max(drive.drive(index, robot, speeds));
             }
             most
         };
         clock.lap(self.profile.as_mut().map(|p| &mut p.control));
+        self.move_and_finish(&mut clock, speeds, most_sub_steps);
+    }
+
+    /// Moves the robots at `speeds` (m/s, each robot's wheels) in `most_sub_steps` sub-steps,
+    /// advances time, and counts contacts, falls and visits.
+    fn move_and_finish(
+        &mut self,
+        clock: &mut PhaseClock,
+        speeds: Vec<(f64, f64)>,
+        most_sub_steps: usize,
+    ) {
         Motion {
             rigs: &self.bodies,
             slab: &self.slab,
@@ -455,7 +462,7 @@ impl<'c> Simulation<'c> {
             profile: &mut self.profile,
             time_step: self.time_step,
         }
-        .move_robots(&mut clock, &speeds, most_sub_steps);
+        .move_robots(clock, &speeds, most_sub_steps);
         self.scratch.speeds = speeds;
         self.steps += 1;
         self.time = self.steps as f64 * self.time_step;
@@ -497,13 +504,15 @@ impl<'c> Simulation<'c> {
         }
     }
 
-    fn update_sensors(&mut self, t: f64) {
-        let mut scratch = std::mem::take(&mut self.scratch);
-        self.update_sensors_with(t, &mut scratch);
-        self.scratch = scratch;
-    }
-
-    fn update_sensors_with(&mut self, t: f64, scratch: &mut StepScratch) {
+    /// Refreshes every robot's due sensors at `t`; with `control`, drives each robot right
+    /// after it senses, its wheel speeds into `control`, and returns the most sub-steps any
+    /// needs (0 without).
+    fn update_sensors_with(
+        &mut self,
+        t: f64,
+        scratch: &mut StepScratch,
+        control: Option<&mut [(f64, f64)]>,
+    ) -> usize {
         let compiled = self.compiled;
         let StepScratch {
             poses,
@@ -570,28 +579,63 @@ impl<'c> Simulation<'c> {
                 }
             })
             .sum();
-        if parallel(work) {
-            use rayon::prelude::*;
-            // Robots are handed out in runs of about TASK_NS of work: one a task when each
-            // renders, dozens when they only cast IR rays.
-            let per_robot = (work / self.robots.len() as u64).max(1);
-            let run = (TASK_NS / per_robot).max(1) as usize;
-            self.robots
-                .par_iter_mut()
-                .enumerate()
-                .with_min_len(run)
-                .with_max_len(run)
-                .for_each_init(NearbyLists::default, |lists, (index, robot)| {
-                    shared.sense(index, robot, lists)
-                });
-        } else {
-            for (index, robot) in self.robots.iter_mut().enumerate() {
-                shared.sense(index, robot, &mut scratch.nearby);
+        let drive = Drive {
+            rigs: &compiled.rig.robots,
+            bodies: &self.bodies,
+            steps: self.steps,
+            dt: self.time_step,
+        };
+        let robots = self.robots.len();
+        let work = work + control.as_ref().map_or(0, |_| robots as u64 * CONTROL_NS);
+        // Robots are handed out in runs of about TASK_NS of work: one a task when each
+        // renders, dozens when they only cast IR rays.
+        let run = (TASK_NS / (work / robots.max(1) as u64).max(1)).max(1) as usize;
+        let most_sub_steps = match (parallel(work), control) {
+            (true, None) => {
+                use rayon::prelude::*;
+                self.robots
+                    .par_iter_mut()
+                    .enumerate()
+                    .with_min_len(run)
+                    .with_max_len(run)
+                    .for_each_init(NearbyLists::default, |lists, (index, robot)| {
+                        shared.sense(index, robot, lists)
+                    });
+                0
             }
-        }
+            (true, Some(speeds)) => {
+                use rayon::prelude::*;
+                self.robots
+                    .par_iter_mut()
+                    .zip(speeds.par_iter_mut())
+                    .enumerate()
+                    .with_min_len(run)
+                    .with_max_len(run)
+                    .map_init(NearbyLists::default, |lists, (index, (robot, speeds))| {
+                        shared.sense(index, robot, lists);
+                        drive.drive(index, robot, speeds)
+                    })
+                    .max()
+                    .unwrap_or(0)
+            }
+            (false, None) => {
+                for (index, robot) in self.robots.iter_mut().enumerate() {
+                    shared.sense(index, robot, &mut scratch.nearby);
+                }
+                0
+            }
+            (false, Some(speeds)) => {
+                let mut most = 0;
+                for (index, (robot, speeds)) in self.robots.iter_mut().zip(speeds).enumerate() {
+                    shared.sense(index, robot, &mut scratch.nearby);
+                    most = most.max(drive.drive(index, robot, speeds));
+                }
+                most
+            }
+        };
         requests.clear();
         if !shared.batched {
-            return;
+            return most_sub_steps;
         }
         requests.extend(
             self.robots
@@ -601,15 +645,15 @@ impl<'c> Simulation<'c> {
                 .map(|(robot, _)| VisionRequest { instance: 0, robot }),
         );
         if requests.is_empty() || self.vision_error.is_some() {
-            return;
+            return most_sub_steps;
         }
         let Some(backend) = &mut self.vision else {
-            return;
+            return most_sub_steps;
         };
         let instances = [WorldInstance { scene: 0, poses }];
         if let Err(error) = backend.render(&instances, requests, &mut self.vision_buffers) {
             self.vision_error = Some(error);
-            return;
+            return most_sub_steps;
         }
         for (request, luminance) in requests.iter().zip(&self.vision_buffers) {
             let robot = &mut self.robots[request.robot];
@@ -620,6 +664,7 @@ impl<'c> Simulation<'c> {
                 camera.model.accept(luminance, &mut camera.output);
             }
         }
+        most_sub_steps
     }
 
     /// A name for everything a robot can touch, in [`Contacts::per_obstacle`] order: a buoy's
