@@ -59,6 +59,21 @@ impl Raster<'_> {
     /// Adds the mean over each pixel window of `value + slope·(α − x0)` on `[x0, x1]`.
     #[inline]
     pub(super) fn add(&mut self, x0: f64, x1: f64, value: f64, slope: f64) {
+        // α = origin − u·width, so the line is value + slope_u·(u1 − u), slope_u = slope·width.
+        // A level piece (most: a region sampled once) leaves the line's slope terms out: they
+        // add a zero to each value, and pixels summed from +0 take the same bits. Told once
+        // here, not at each of the pixels it changes.
+        let slope_u = slope * self.width;
+        if slope_u == 0.0 {
+            self.add_line::<true>(x0, x1, value, slope_u);
+        } else {
+            self.add_line::<false>(x0, x1, value, slope_u);
+        }
+    }
+
+    /// [`Raster::add`] of the line of slope `slope_u` in pixel units, `LEVEL` where that is 0.
+    #[inline(always)]
+    fn add_line<const LEVEL: bool>(&mut self, x0: f64, x1: f64, value: f64, slope_u: f64) {
         // In pixel units u = (origin − α)/width, pixel i covering [i, i + 1].
         let (u0, u1) = (
             (self.origin - x1) * self.inverse_width,
@@ -68,8 +83,6 @@ impl Raster<'_> {
             return;
         }
         let pixels = self.out.len();
-        // α = origin − u·width, so the line is value + slope_u·(u1 − u), slope_u = slope·width.
-        let slope_u = slope * self.width;
         let first = index_below(u0, pixels);
         // ⌈u1⌉ without a libm call: u1 > 0 here (u1 > u0, and a piece left of the strip
         // ends at u1 ≤ 0 only when empty below).
@@ -80,14 +93,11 @@ impl Raster<'_> {
         }
         // Windows the piece covers whole take the line's value at their centre; the one or
         // two it covers in part, the mean over the part times its share.
-        // A level piece (most: a region sampled once) leaves the line's slope terms out: they
-        // add a zero to each value, and pixels summed from +0 take the same bits.
-        let level = slope_u == 0.0;
         let partial = |i: usize| {
             let i = i as i64 as f64;
             let (a, b) = (larger(u0, i), smaller(u1, i + 1.0));
             if b > a {
-                if level {
+                if LEVEL {
                     (b - a) * value
                 } else {
                     (b - a) * (value + slope_u * (u1 - 0.5 * (a + b)))
@@ -107,7 +117,7 @@ impl Raster<'_> {
         // conversion exists on every x86-64, i64 → f64 does not; strips are far shorter than
         // 2³¹ pixels).
         let whole = &mut self.out[first + 1..last - 1];
-        if level {
+        if LEVEL {
             whole.iter_mut().for_each(|out| *out += value);
             return;
         }
@@ -211,15 +221,22 @@ pub(super) fn nearest_index(x: f64, limit: usize) -> usize {
     (whole + (x - whole as i64 as f64 >= 0.5) as usize).min(limit)
 }
 
-/// `(x.max(0.0) as usize).min(limit)`, `x` truncated: clamped in floating point first, so one
-/// signed conversion does (an unsigned one costs a dozen instructions on x86-64). NaN gives 0.
-/// Indices go back to floating point through `i64` likewise (`as i64 as f64`: one instruction,
-/// where `usize as f64` takes five; the same value for any index).
+/// `(x.max(0.0) as usize).min(limit)`, `x` truncated, for limits below 2⁶² (a strip's
+/// pixels): clamped in floating point first, so one signed conversion does (an unsigned one
+/// costs a dozen instructions on x86-64). NaN gives 0. Indices go back to floating point
+/// through `i64` likewise (`as i64 as f64`: one instruction, where `usize as f64` takes five;
+/// the same value for any index).
 #[inline(always)]
 pub(super) fn index_below(x: f64, limit: usize) -> usize {
-    let top = limit as i64 as f64;
+    // Below 2⁶², whatever the limit: the conversion then has nothing to saturate.
+    const TOP: f64 = (1u64 << 62) as f64;
+    let top = smaller(limit as i64 as f64, TOP);
     let clamped = if x > 0.0 { smaller(x, top) } else { 0.0 };
-    clamped as i64 as usize
+    // SAFETY: `clamped` is 0 or at most `top`, and at least `limit as i64` (≥ −2⁶³) where that
+    // is negative: never NaN, and within i64's range. The checked `as i64` would spend five
+    // instructions a call on a saturation that cannot happen (Raster::add converts twice a
+    // piece, each sampled column once).
+    unsafe { clamped.to_int_unchecked::<i64>() as usize }
 }
 
 /// `x`'s place in [`f64::total_cmp`]'s order, as an unsigned integer.
