@@ -679,13 +679,12 @@ pub fn convert_scaled(filtered: f64, half: f64, gain: f64, top: f64) -> u16 {
     let ceiling = if top < 65535.0 { top } else { 65535.0 };
     let clamped = if value > 0.0 { value } else { 0.0 };
     let clamped = if clamped < ceiling { clamped } else { ceiling };
-    // Then floored without the saturating conversion's fix-ups, so that a row of pixels
-    // converts in vector lanes: adding 2⁵² rounds to the nearest integer, which lands in the
-    // low bits, one less where that rounded up. Exact for 0 ≤ x < 2⁵².
-    const SHIFT: f64 = 4503599627370496.0;
-    let shifted = clamped + SHIFT;
-    let rounded_up = shifted - SHIFT > clamped;
-    (shifted.to_bits() - rounded_up as u64) as u16
+    // Then floored by truncation (the value is not negative) without the saturating
+    // conversion's fix-ups, so that a row of pixels converts in vector lanes, two a packed
+    // conversion.
+    // SAFETY: `clamped` lies in [0, 65535] (a NaN failed the first clamp and read 0): within
+    // i32's range, and its truncation within u16's.
+    unsafe { clamped.to_int_unchecked::<i32>() as u16 }
 }
 
 #[cfg(test)]
