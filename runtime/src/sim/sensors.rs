@@ -162,21 +162,34 @@ pub fn proximity_value_far(
             }
         }
     }
-    // Other robots' bodies at the sensor's height and within its range, likewise.
-    let robot_near = |other: usize, place: &Placement| {
-        other != robot
+    // Other robots' bodies at the sensor's height and within its range, likewise: gathered
+    // once, with what a hit reads of them, for every ray to test.
+    let mut bodies = [(DVec2::ZERO, 0.0, 0.0); 8];
+    let mut body_count = 0;
+    let mut more_bodies = Vec::new();
+    for &other in robots {
+        let other = other as usize;
+        let place = &placements[other];
+        if other != robot
             && height >= place.floor_y
             && height <= place.floor_y + slab.robot_bodies[other].height
             && DVec2::new(place.x, place.z).distance(origin2)
                 <= reach + slab.robot_bodies[other].radius
-    };
-    let candidates_near = || {
-        robots
-            .iter()
-            .map(|&o| (o as usize, &placements[o as usize]))
-            .filter(|&(o, p)| robot_near(o, p))
-    };
-    if count == 0 && candidates_near().next().is_none() {
+        {
+            let body = (
+                DVec2::new(place.x, place.z),
+                slab.robot_bodies[other].radius,
+                slab.robot_reflectance.get(other).copied().unwrap_or(1.0),
+            );
+            if body_count < bodies.len() {
+                bodies[body_count] = body;
+                body_count += 1;
+            } else {
+                more_bodies.push(body);
+            }
+        }
+    }
+    if count == 0 && body_count == 0 {
         // Every ray misses: the same sums with no ray traced.
         return sample(sensor, far, stream, |_| None);
     }
@@ -186,6 +199,7 @@ pub fn proximity_value_far(
         .iter()
         .chain(&overflow)
         .map(|&i| &slab.obstacles[i as usize]);
+    let bodies = bodies[..body_count].iter().chain(&more_bodies);
     sample(sensor, far, stream, |(cos, sin)| {
         // Counter-clockwise seen from above, in (x, z): the same sense as headings.
         let ray = DVec2::new(
@@ -202,15 +216,11 @@ pub fn proximity_value_far(
                 }
             }
         }
-        for (other, place) in candidates_near() {
-            let body = Footprint::Circle {
-                center: DVec2::new(place.x, place.z),
-                radius: slab.robot_bodies[other].radius,
-            };
-            if let Some(t) = body.ray(origin2, ray) {
+        for &(center, radius, body_reflectance) in bodies.clone() {
+            if let Some(t) = (Footprint::Circle { center, radius }).ray(origin2, ray) {
                 if t < nearest {
                     nearest = t;
-                    reflectance = slab.robot_reflectance.get(other).copied().unwrap_or(1.0);
+                    reflectance = body_reflectance;
                 }
             }
         }
