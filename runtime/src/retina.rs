@@ -677,6 +677,8 @@ pub fn convert_scaled(filtered: f64, half: f64, gain: f64, top: f64) -> u16 {
     // Clamped to [0, top] (and to the u16 range) by plain compares: NaN fails the first and
     // reads 0.
     let ceiling = if top < 65535.0 { top } else { 65535.0 };
+    // Never below 0 either, whatever `top` a caller passes (the conversion below relies on it).
+    let ceiling = if ceiling > 0.0 { ceiling } else { 0.0 };
     let clamped = if value > 0.0 { value } else { 0.0 };
     let clamped = if clamped < ceiling { clamped } else { ceiling };
     // Then floored by truncation (the value is not negative) without the saturating
@@ -752,6 +754,13 @@ mod tests {
         // Wider than the u16 range: saturated as the cast did.
         for value in [65_535.5, 70_000.0, 1e9, f64::INFINITY] {
             assert_eq!(convert_scaled(value, 0.0, 1.0, 1_048_575.0), 65_535);
+        }
+        // A top below 0 (no caller passes one) reads 0: never a value the conversion
+        // cannot hold.
+        for top in [-1.0, -1e300, f64::NEG_INFINITY] {
+            for value in [-5.0, 0.0, 1e9, f64::NAN] {
+                assert_eq!(convert_scaled(value, 0.0, 1.0, top), 0);
+            }
         }
     }
 

@@ -417,16 +417,16 @@ mod tests {
     use super::RobotState;
     use std::mem::offset_of;
 
+    /// The size of the field `field` reads.
+    fn size_of_field<T, F: Fn(&RobotState) -> &T>(_field: F) -> usize {
+        std::mem::size_of::<T>()
+    }
+
     /// The line of the robot's state a field starts on, and the line it ends on.
     macro_rules! lines {
         ($field:ident) => {{
             let start = offset_of!(RobotState, $field);
-            let size = {
-                let probe = std::mem::MaybeUninit::<RobotState>::uninit();
-                // SAFETY: only the field's address is taken, never read.
-                let field = unsafe { std::ptr::addr_of!((*probe.as_ptr()).$field) };
-                std::mem::size_of_val(unsafe { &*field })
-            };
+            let size = size_of_field(|robot: &RobotState| &robot.$field);
             (start / 64, (start + size - 1) / 64)
         }};
     }
