@@ -7,7 +7,7 @@ use glam::DVec2;
 use super::broad_phase::{self, BroadPhase};
 use super::noise::{kind, Stream};
 use super::sensors;
-use super::state::RobotState;
+use super::state::{NearbyLists, RobotState};
 use super::world2d::Slab;
 use crate::compile::rig::CameraRenderer;
 use crate::compile::Compiled;
@@ -35,15 +35,6 @@ pub(super) struct SenseShared<'s, 'c> {
     pub(super) t: f64,
     /// The seed of the run's noise streams, for those made on first use.
     pub(super) streams_seed: u64,
-}
-
-/// Working lists of one robot's sensing: the static obstacles and the robots near enough for
-/// its IR sensors. Kept by whoever senses robots one after another (a thread), not by each
-/// robot, so that a robot's state keeps no lists it only needs while it is sensed.
-#[derive(Debug, Default)]
-pub(super) struct NearbyLists {
-    obstacles: Vec<u32>,
-    robots: Vec<u32>,
 }
 
 impl SenseShared<'_, '_> {

@@ -386,6 +386,15 @@ impl PhaseClock {
     }
 }
 
+/// Working lists of one robot's sensing: the static obstacles and the robots near enough for
+/// its IR sensors. Kept by whoever senses robots one after another (a thread), not by each
+/// robot, so that a robot's state keeps no lists it only needs while it is sensed.
+#[derive(Debug, Default)]
+pub(super) struct NearbyLists {
+    pub(super) obstacles: Vec<u32>,
+    pub(super) robots: Vec<u32>,
+}
+
 /// A step's working buffers.
 #[derive(Default)]
 pub(super) struct StepScratch {
@@ -403,7 +412,7 @@ pub(super) struct StepScratch {
     /// Each robot's centre after a collision pass against the static obstacles.
     pub(super) centres: Vec<DVec2>,
     /// What one robot's IR sensors may see, when robots are sensed one after another.
-    pub(super) nearby: super::sense::NearbyLists,
+    pub(super) nearby: NearbyLists,
     /// One robot's landmarks inside at the last step.
     pub(super) was_inside: Vec<u32>,
     /// Where each robot was before the sub-step, and which go back there.

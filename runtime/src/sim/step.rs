@@ -16,12 +16,11 @@ use super::contacts::Motion;
 use super::drive::Drive;
 use super::noise::{kind, Stream};
 use super::robot::SimulatedKhepera;
-use super::sense::NearbyLists;
 use super::sense::SenseShared;
 use super::sensors;
 use super::state::{
-    Bodies, CameraState, Contacts, LinearCameraState, PanoramicState, PhaseClock, PhaseTimes,
-    RobotState, StepScratch, Updated, Visits,
+    Bodies, CameraState, Contacts, LinearCameraState, NearbyLists, PanoramicState, PhaseClock,
+    PhaseTimes, RobotState, StepScratch, Updated, Visits,
 };
 use super::visits::{finish_step, FloorSets};
 use super::world2d::Slab;
