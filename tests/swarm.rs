@@ -106,7 +106,7 @@ fn with_start_frame<R>(
     };
     let poses = start_poses(&compiled);
     let mut shared = None;
-    renderer.prepare_shared(&compiled.plan, &poses, &[], &mut shared);
+    renderer.prepare_shared(&compiled.plan, &poses, &[], false, &mut shared);
     let frame = shared.expect("the column renderer shares its frame");
     f(&compiled, scene, &frame)
 }
@@ -759,4 +759,54 @@ fn a_packed_thousand_never_overlaps() {
         .filter(|r| r.contacts.steps > 100)
         .count();
     assert!(pressed > 200, "{pressed} robots pressed for over 100 steps");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// A frame prepared for crowd looks only (other robots' tucked parts not placed) gives
+    /// every crowd look, with or without a far distance, the photocurrents of the full frame
+    /// to the last bit.
+    #[test]
+    fn a_frame_for_crowd_looks_only_draws_them_as_the_full_frame_does(
+        side in 0.3f64..1.6,
+        robots in prop::collection::vec((0.0f64..1.0, 0.0f64..1.0, -3.2f64..3.2), 2..40),
+        buoys in prop::collection::vec((0.0f64..1.0, 0.0f64..1.0), 0..6),
+        boxes in prop::collection::vec((0.0f64..1.0, 0.0f64..1.0, -3.2f64..3.2), 0..4),
+    ) {
+        let text = crowd_world(side, &robots, &buoys, &boxes, 1, 1);
+        let compiled = compile_text(&text);
+        let renderer = Renderer::new(&compiled.graph, &compiled.plan, false);
+        let Renderer::Columns(scene) = &renderer else {
+            panic!("an upright crowd renders by columns");
+        };
+        let poses = start_poses(&compiled);
+        let (mut full, mut crowd_only) = (None, None);
+        renderer.prepare_shared(&compiled.plan, &poses, &[], false, &mut full);
+        renderer.prepare_shared(&compiled.plan, &poses, &[], true, &mut crowd_only);
+        let (full, crowd_only) = (full.unwrap(), crowd_only.unwrap());
+        let strip = strip();
+        for (index, rig) in compiled.rig.robots.iter().enumerate() {
+            let Some(TurretRig::Panoramic(turret)) = &rig.turret else {
+                continue;
+            };
+            let eye = DVec3::new(rig.start.x, rig.floor_y + turret.height, rig.start.z);
+            let base = Detail::new(turret.samples, turret.stride);
+            for detail in [
+                Detail { crowd_distance: 0.5, ..base },
+                Detail { crowd_distance: 0.4, far_distance: 3.0, ..base },
+            ] {
+                let look = |frame: &ColumnFrame| {
+                    let mut analog = vec![0.0; PIXELS];
+                    scene.integrate_for(frame, Some(index), eye, rig.start.heading, &strip,
+                        detail, &mut analog);
+                    analog
+                };
+                let (a, b) = (look(&full), look(&crowd_only));
+                for (pixel, (a, b)) in a.iter().zip(&b).enumerate() {
+                    prop_assert_eq!(a.to_bits(), b.to_bits(), "retina {} pixel {}", index, pixel);
+                }
+            }
+        }
+    }
 }

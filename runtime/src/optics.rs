@@ -88,18 +88,21 @@ impl<'g> Renderer<'g> {
     /// Places the world for every viewer of a step at once, into `shared` (its buffers
     /// reused): the column renderer's frame. The ray caster prepares per viewer
     /// ([`Renderer::view`]) and leaves `shared` empty. `placements`, when it has one per
-    /// pose, gives the headings' sines and cosines already worked out.
+    /// pose, gives the headings' sines and cosines already worked out. `crowd_looks_only`:
+    /// every viewer of the frame looks with the crowd level of detail (other robots' tucked
+    /// parts are then not placed: no look draws them).
     pub fn prepare_shared(
         &self,
         plan: &Plan,
         poses: &Poses,
         placements: &[Placement],
+        crowd_looks_only: bool,
         shared: &mut Option<ColumnFrame>,
     ) {
         match self {
             Renderer::Columns(scene) => {
                 let frame = shared.get_or_insert_with(|| scene.empty_frame());
-                scene.prepare_placed(plan, poses, placements, frame);
+                scene.prepare_placed(plan, poses, placements, crowd_looks_only, frame);
             }
             Renderer::Rays(_) => *shared = None,
         }

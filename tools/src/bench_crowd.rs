@@ -276,7 +276,7 @@ fn measure(robots: usize, args: &Args) -> anyhow::Result<Vec<Row>> {
     let mut seconds = vec![0.0f64; settings.len()];
     for poses in &frames {
         let mut shared = None;
-        renderer.prepare_shared(&compiled.plan, poses, &[], &mut shared);
+        renderer.prepare_shared(&compiled.plan, poses, &[], false, &mut shared);
         let frame = shared.context("exact optics on a swarm render by columns")?;
         for &viewer in &viewers {
             let Some(TurretRig::Panoramic(turret)) = &compiled.rig.robots[viewer].turret else {

@@ -71,6 +71,10 @@ pub struct Simulation<'c> {
     bodies: Bodies,
     /// The floors each robot started on (leaving all of them is a fall).
     floors: FloorSets,
+    /// Whether every vision device looks with the crowd level of detail (a Panoramic turret
+    /// with a crowd distance): the step's shared frame then places no part that only
+    /// exact looks draw.
+    crowd_looks_only: bool,
     /// Simulated time (s) and steps done.
     pub time: f64,
     pub steps: u64,
@@ -273,6 +277,11 @@ impl<'c> Simulation<'c> {
             robots,
             bodies: Bodies::of(&compiled.rig.robots),
             floors: FloorSets::of(&compiled.rig.robots),
+            crowd_looks_only: compiled.rig.robots.iter().all(|r| match &r.turret {
+                None => true,
+                Some(TurretRig::Panoramic(turret)) => turret.crowd_distance.is_finite(),
+                Some(TurretRig::Linear(_)) => false,
+            }),
             time: 0.0,
             steps: 0,
             time_step,
@@ -543,9 +552,14 @@ impl<'c> Simulation<'c> {
         // The world placed once, for every robot's vision device, when one is due.
         let frame = &mut scratch.frame;
         match renderer {
-            Some(renderer) if self.robots.iter().any(|r| r.vision_due(t)) => {
-                renderer.prepare_shared(&compiled.plan, poses, placements, frame)
-            }
+            Some(renderer) if self.robots.iter().any(|r| r.vision_due(t)) => renderer
+                .prepare_shared(
+                    &compiled.plan,
+                    poses,
+                    placements,
+                    self.crowd_looks_only,
+                    frame,
+                ),
             _ => {}
         }
         let shared = SenseShared {

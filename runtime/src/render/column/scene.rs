@@ -273,17 +273,19 @@ impl<'g> ColumnScene<'g> {
     /// Places every robot's parts for `poses` into `frame`, reusing its buffers: once per
     /// step, for every viewer.
     pub fn prepare_into(&self, plan: &Plan, poses: &Poses, frame: &mut ColumnFrame) {
-        self.prepare_placed(plan, poses, &[], frame);
+        self.prepare_placed(plan, poses, &[], false, frame);
     }
 
     /// [`ColumnScene::prepare_into`] with each robot's placement for the step, when there is
     /// one per pose: its heading's sine and cosine (`libm`'s, as `Pose2::placement` works
-    /// them out) are not worked out again.
+    /// them out) are not worked out again. `crowd_looks_only`: every look of this frame is
+    /// a crowd look, which leaves out other robots' tucked parts (then not placed at all).
     pub fn prepare_placed(
         &self,
         plan: &Plan,
         poses: &Poses,
         placements: &[Placement],
+        crowd_looks_only: bool,
         frame: &mut ColumnFrame,
     ) {
         if !Arc::ptr_eq(&frame.statics, &self.statics) {
@@ -325,12 +327,13 @@ impl<'g> ColumnScene<'g> {
         // A robot's parts come together: its frame (a sine and a cosine) is made once for
         // them all.
         let mut robot_frame: Option<(usize, Frame)> = None;
-        for &(index, robot) in &self.robot_parts {
+        for (entry, &(index, robot)) in self.robot_parts.iter().enumerate() {
             let (mut other, mut own) = (None, None);
             if robot < poses.poses.len() {
                 let primitive = &self.graph.primitives[index];
                 let own_wanted = self.own_visible[index];
-                if self.visible[index] || own_wanted {
+                let other_wanted = self.visible[index] && !(crowd_looks_only && self.tucked[entry]);
+                if other_wanted || own_wanted {
                     let pose = match robot_frame {
                         Some((of, pose)) if of == robot => pose,
                         _ => {
@@ -343,7 +346,7 @@ impl<'g> ColumnScene<'g> {
                     };
                     let placed = pose.then(&primitive.frame);
                     let upright = upright_of(self.graph, index, &placed);
-                    other = upright.filter(|_| self.visible[index]);
+                    other = upright.filter(|_| other_wanted);
                     own = upright.filter(|_| own_wanted);
                 }
             }
@@ -375,7 +378,22 @@ impl<'g> ColumnScene<'g> {
             Some(_) => self.statics_fast,
             None => frame.statics.iter().all(fast),
         };
-        frame.all_fast = statics_fast && frame.others.iter().chain(&frame.own).flatten().all(fast);
+        // The tucked parts left unplaced count as placed: a tucked part is upright in every
+        // pose (`tucked_parts`), so whether the frame is all fast is what it was with them.
+        let tucked_fast = !crowd_looks_only
+            || self
+                .robot_parts
+                .iter()
+                .zip(&self.tucked)
+                .all(|(&(index, robot), &tucked)| {
+                    !tucked
+                        || robot >= poses.poses.len()
+                        || !self.visible[index]
+                        || shades.get(index as u32).is_some()
+                });
+        frame.all_fast = statics_fast
+            && tucked_fast
+            && frame.others.iter().chain(&frame.own).flatten().all(fast);
     }
 }
 
