@@ -395,6 +395,42 @@ pub(super) struct NearbyLists {
     pub(super) robots: Vec<u32>,
 }
 
+thread_local! {
+    /// Each thread's lists, kept from step to step: a warm step allocates none.
+    static THREAD_LISTS: std::cell::Cell<NearbyLists> = std::cell::Cell::new(NearbyLists::default());
+}
+
+/// A thread's [`NearbyLists`], lent to one run of robots sensed side by side and given back
+/// when the run ends.
+pub(super) struct ThreadLists(NearbyLists);
+
+impl ThreadLists {
+    pub(super) fn lend() -> ThreadLists {
+        ThreadLists(THREAD_LISTS.with(std::cell::Cell::take))
+    }
+}
+
+impl std::ops::Deref for ThreadLists {
+    type Target = NearbyLists;
+
+    fn deref(&self) -> &NearbyLists {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for ThreadLists {
+    fn deref_mut(&mut self) -> &mut NearbyLists {
+        &mut self.0
+    }
+}
+
+impl Drop for ThreadLists {
+    fn drop(&mut self) {
+        let lists = std::mem::take(&mut self.0);
+        THREAD_LISTS.with(|kept| kept.set(lists));
+    }
+}
+
 /// A step's working buffers.
 #[derive(Default)]
 pub(super) struct StepScratch {

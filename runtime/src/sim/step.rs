@@ -19,8 +19,8 @@ use super::robot::SimulatedKhepera;
 use super::sense::SenseShared;
 use super::sensors;
 use super::state::{
-    Bodies, CameraState, Contacts, LinearCameraState, NearbyLists, PanoramicState, PhaseClock,
-    PhaseTimes, RobotState, StepScratch, Updated, Visits,
+    Bodies, CameraState, Contacts, LinearCameraState, PanoramicState, PhaseClock, PhaseTimes,
+    RobotState, StepScratch, ThreadLists, Updated, Visits,
 };
 use super::visits::{finish_step, FloorSets};
 use super::world2d::Slab;
@@ -611,7 +611,7 @@ impl<'c> Simulation<'c> {
                     .enumerate()
                     .with_min_len(run)
                     .with_max_len(run)
-                    .for_each_init(NearbyLists::default, |lists, (index, robot)| {
+                    .for_each_init(ThreadLists::lend, |lists, (index, robot)| {
                         shared.sense(index, robot, lists)
                     });
                 0
@@ -624,7 +624,7 @@ impl<'c> Simulation<'c> {
                     .enumerate()
                     .with_min_len(run)
                     .with_max_len(run)
-                    .map_init(NearbyLists::default, |lists, (index, (robot, speeds))| {
+                    .map_init(ThreadLists::lend, |lists, (index, (robot, speeds))| {
                         shared.sense(index, robot, lists);
                         drive.drive(index, robot, speeds)
                     })
