@@ -173,10 +173,13 @@ impl Occlusion {
 /// An object standing on the floor nearer than an impostor whose base is no lower than its
 /// own hides all of it below its top (the floor hides the rest): only tops are compared.
 /// Distances are the footprints' centres', so two impostors at nearly the same distance may
-/// both show where they overlap; the error that leaves is measured with the rest.
+/// both show where they overlap; the error that leaves is measured with the rest. A standing
+/// object whose foot's tan-elevation is at most `foot_below` hides as if it stood on the floor
+/// (below a retina's band, nothing shows).
 pub(super) fn settle(
     impostors: &mut [Impostor],
     standing: &[Standing],
+    foot_below: f64,
     occlusion: &mut Occlusion,
     order: &mut Vec<u64>,
 ) {
@@ -198,7 +201,8 @@ pub(super) fn settle(
             |lowest, t| if t < lowest { t } else { lowest },
         );
     for s in standing {
-        if s.y0 <= base && s.distance > 0.0 && s.y1 / s.distance >= lowest_top {
+        let grounded = s.y0 <= base || s.y0 <= foot_below * s.distance;
+        if grounded && s.distance > 0.0 && s.y1 / s.distance >= lowest_top {
             occlusion.cover(s.lo, s.hi, s.y1 / s.distance);
         }
     }
@@ -494,7 +498,13 @@ mod tests {
             impostor(-0.5, -0.49, 5.0),
         ];
         let (mut occlusion, mut order) = (Occlusion::default(), Vec::new());
-        settle(&mut impostors, &[], &mut occlusion, &mut order);
+        settle(
+            &mut impostors,
+            &[],
+            f64::NEG_INFINITY,
+            &mut occlusion,
+            &mut order,
+        );
         let whole = |v: f64| (v - 1.0).abs() < 1e-9;
         assert!(whole(impostors[1].visible), "nearest shows whole");
         assert!(whole(impostors[3].visible), "alone shows whole");
@@ -518,7 +528,13 @@ mod tests {
             impostor(-PI + 0.01, -PI + 0.03, 4.0),
         ];
         let (mut occlusion, mut order) = (Occlusion::default(), Vec::new());
-        settle(&mut impostors, &[], &mut occlusion, &mut order);
+        settle(
+            &mut impostors,
+            &[],
+            f64::NEG_INFINITY,
+            &mut occlusion,
+            &mut order,
+        );
         assert!((impostors[0].visible - 1.0).abs() < 1e-9);
         assert_eq!(impostors[1].visible, 0.0);
         let half = impostors[2].visible;
@@ -529,7 +545,13 @@ mod tests {
             impostor(-0.01, 0.01, 3.0),
             impostor(0.01, 0.03, 4.0),
         ];
-        settle(&mut turned, &[], &mut occlusion, &mut order);
+        settle(
+            &mut turned,
+            &[],
+            f64::NEG_INFINITY,
+            &mut occlusion,
+            &mut order,
+        );
         for (a, b) in impostors.iter().zip(&turned) {
             assert!(
                 (a.visible - b.visible).abs() < 0.08,
@@ -556,13 +578,25 @@ mod tests {
             tall
         }];
         let (mut occlusion, mut order) = (Occlusion::default(), Vec::new());
-        settle(&mut impostors, &standing, &mut occlusion, &mut order);
+        settle(
+            &mut impostors,
+            &standing,
+            f64::NEG_INFINITY,
+            &mut occlusion,
+            &mut order,
+        );
         let whole = |v: f64| (v - 1.0).abs() < 1e-9;
         assert_eq!(impostors[0].visible, 0.0);
         assert!(whole(impostors[1].visible), "{}", impostors[1].visible);
         // A new look starts with nothing covered.
         let mut alone = [impostor(-0.01, 0.01, 2.0)];
-        settle(&mut alone, &[], &mut occlusion, &mut order);
+        settle(
+            &mut alone,
+            &[],
+            f64::NEG_INFINITY,
+            &mut occlusion,
+            &mut order,
+        );
         assert!(whole(alone[0].visible));
     }
 }

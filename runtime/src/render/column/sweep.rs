@@ -105,6 +105,12 @@ pub struct Look {
     impostor_keys: Vec<u64>,
     centre_keys: Vec<u128>,
     pub(super) impostor_order: Vec<u32>,
+    /// With kept impostors, the height of each of `impostors` (they are the kept boxes placed
+    /// for this update: `kept.rs`).
+    pub(super) kept_amounts: Vec<f64>,
+    /// How many of `objects` are the scene's static objects (placed first, the robots' parts
+    /// after them).
+    pub(super) statics_placed: usize,
     /// The azimuth intervals of the scene floor's walls as tall as the eye (see
     /// [`super::scene::Floor`]), wrapped into (−π, π].
     wall_cover: Vec<(f64, f64)>,
@@ -114,6 +120,20 @@ pub struct Look {
 }
 
 impl Look {
+    /// Sets the visible share of each of `impostors` (placed by the caller, as kept boxes are)
+    /// against the standing objects this look placed and one another, as a look settles the
+    /// impostors it tells; standing objects whose foot's tan-elevation is at most `foot_below`
+    /// hide as those on the floor do.
+    pub(super) fn settle_impostors(&mut self, foot_below: f64) {
+        impostor::settle(
+            &mut self.impostors,
+            &self.standing,
+            foot_below,
+            &mut self.occlusion,
+            &mut self.impostor_keys,
+        );
+    }
+
     /// The objects whose azimuth interval holds relative azimuth `alpha`, in object order.
     pub fn facing<'o>(&self, alpha: f64, out: &'o mut Vec<u32>) -> &'o [u32] {
         let objects = &self.objects;
@@ -580,9 +600,11 @@ impl ColumnScene<'_> {
             rounds_listed,
             reach_cos,
             wall_cover,
+            statics_placed,
             ..
         } = look;
         objects.clear();
+        *statics_placed = 0;
         breaks.clear();
         edges.clear();
         static_slots.clear();
@@ -676,9 +698,9 @@ impl ColumnScene<'_> {
         // from `statics` on) and says how many static objects it took: a far buoy and its
         // lamp become one impostor at once.
         let (extent_lo, extent_hi) = reach.extent;
-        // Only a look that tells impostors has any for standing objects to hide (given the
-        // kept groups, it places them exactly and tells none).
-        let tells_impostors = impostor_width > 0.0 && reach.rounds != Rounds::Given;
+        // A look with impostors, told or kept, lists the standing objects that may hide them
+        // (given the kept groups, it tells none: the kept boxes are settled against these).
+        let lists_hiders = impostor_width > 0.0;
         // The crowd level of detail draws a floor its walls enclose as the ground; whether they
         // do is known once every wall is placed.
         let floor = self.floor.as_ref().filter(|floor| {
@@ -777,7 +799,7 @@ impl ColumnScene<'_> {
                     wall_cover.push((lo, hi));
                 }
             }
-            if tells_impostors {
+            if lists_hiders {
                 // Round objects drawn exactly may hide impostors: stacked pieces of one
                 // footprint (a near buoy and its lamp) as one.
                 if let (Footprint::Circle { center, .. }, false) = (object.footprint, placed.wraps)
@@ -798,6 +820,9 @@ impl ColumnScene<'_> {
                 }
             }
             objects.push(placed);
+            if order < statics {
+                *statics_placed = objects.len();
+            }
             1
         });
         if limited {
@@ -926,6 +951,7 @@ impl ColumnScene<'_> {
         impostor::settle(
             &mut look.impostors,
             &look.standing,
+            f64::NEG_INFINITY,
             &mut look.occlusion,
             &mut look.impostor_keys,
         );
