@@ -173,13 +173,10 @@ impl Occlusion {
 /// An object standing on the floor nearer than an impostor whose base is no lower than its
 /// own hides all of it below its top (the floor hides the rest): only tops are compared.
 /// Distances are the footprints' centres', so two impostors at nearly the same distance may
-/// both show where they overlap; the error that leaves is measured with the rest. A standing
-/// object whose foot's tan-elevation is at most `foot_below` hides as if it stood on the floor
-/// (below a retina's band, nothing shows).
+/// both show where they overlap; the error that leaves is measured with the rest.
 pub(super) fn settle(
     impostors: &mut [Impostor],
     standing: &[Standing],
-    foot_below: f64,
     occlusion: &mut Occlusion,
     order: &mut Vec<u64>,
 ) {
@@ -201,8 +198,7 @@ pub(super) fn settle(
             |lowest, t| if t < lowest { t } else { lowest },
         );
     for s in standing {
-        let grounded = s.y0 <= base || s.y0 <= foot_below * s.distance;
-        if grounded && s.distance > 0.0 && s.y1 / s.distance >= lowest_top {
+        if s.y0 <= base && s.distance > 0.0 && s.y1 / s.distance >= lowest_top {
             occlusion.cover(s.lo, s.hi, s.y1 / s.distance);
         }
     }
@@ -227,6 +223,82 @@ pub(super) fn settle(
             occlusion.cover_around(impostor.lo, impostor.hi, top);
         }
     }
+}
+
+/// How much of the azimuth interval `[lo, hi]` (radians; it may pass ±π by less than a turn)
+/// of a box whose foot is `y0` (relative to the eye), top's tan-elevation `top`, at
+/// `distance`, the `standing` objects nearer than it hide: those standing no higher than its
+/// foot, or whose foot's tan-elevation is at most `foot_below` (below a retina's band nothing
+/// shows, so a near buoy's lamp, its body out of the band, hides as if it stood), and reaching
+/// its top. Their intervals' union within the box, by interval arithmetic: a kept box is
+/// settled each update against the few robots and buoys near the eye, where the occlusion
+/// bins would clear and count thousands.
+pub(super) fn covered_by_standing(
+    standing: &[Standing],
+    (lo, hi): (f64, f64),
+    (y0, top, distance): (f64, f64, f64),
+    foot_below: f64,
+) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    // A box passing ±π meets near objects a turn away as well.
+    let shift = if lo < -PI {
+        -TAU
+    } else if hi > PI {
+        TAU
+    } else {
+        0.0
+    };
+    let meets = |s: &Standing, by: f64| s.lo + by < hi && s.hi + by > lo;
+    let hides = |s: &Standing| {
+        s.distance > 0.0
+            && s.distance < distance
+            && (s.y0 <= y0 || s.y0 <= foot_below * s.distance)
+            && s.y1 >= top * s.distance
+    };
+    // Most boxes meet no near object: two comparisons each, and nothing to merge.
+    let Some(first) = standing
+        .iter()
+        .position(|s| (meets(s, 0.0) || (shift != 0.0 && meets(s, shift))) && hides(s))
+    else {
+        return 0.0;
+    };
+    const MOST: usize = 16;
+    let mut spans = [(0.0f64, 0.0f64); MOST];
+    let mut count = 0;
+    for s in &standing[first..] {
+        for by in [0.0, shift] {
+            if !meets(s, by) || !hides(s) {
+                continue;
+            }
+            if count == MOST {
+                // More hiders than a look near a box has: the box counts as hidden.
+                return hi - lo;
+            }
+            spans[count] = (lo.max(s.lo + by), hi.min(s.hi + by));
+            count += 1;
+            if shift == 0.0 {
+                break;
+            }
+        }
+    }
+    let spans = &mut spans[..count];
+    // A handful at most: by insertion, then merged.
+    for i in 1..spans.len() {
+        let mut j = i;
+        while j > 0 && spans[j - 1].0 > spans[j].0 {
+            spans.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+    let (mut covered, mut reached) = (0.0, f64::NEG_INFINITY);
+    for &(a, b) in spans.iter() {
+        let start = a.max(reached);
+        if b > start {
+            covered += b - start;
+            reached = b;
+        }
+    }
+    covered
 }
 
 /// What telling impostors needs of one look, worked out once: the eye, its heading's cosine
@@ -498,13 +570,7 @@ mod tests {
             impostor(-0.5, -0.49, 5.0),
         ];
         let (mut occlusion, mut order) = (Occlusion::default(), Vec::new());
-        settle(
-            &mut impostors,
-            &[],
-            f64::NEG_INFINITY,
-            &mut occlusion,
-            &mut order,
-        );
+        settle(&mut impostors, &[], &mut occlusion, &mut order);
         let whole = |v: f64| (v - 1.0).abs() < 1e-9;
         assert!(whole(impostors[1].visible), "nearest shows whole");
         assert!(whole(impostors[3].visible), "alone shows whole");
@@ -528,13 +594,7 @@ mod tests {
             impostor(-PI + 0.01, -PI + 0.03, 4.0),
         ];
         let (mut occlusion, mut order) = (Occlusion::default(), Vec::new());
-        settle(
-            &mut impostors,
-            &[],
-            f64::NEG_INFINITY,
-            &mut occlusion,
-            &mut order,
-        );
+        settle(&mut impostors, &[], &mut occlusion, &mut order);
         assert!((impostors[0].visible - 1.0).abs() < 1e-9);
         assert_eq!(impostors[1].visible, 0.0);
         let half = impostors[2].visible;
@@ -545,13 +605,7 @@ mod tests {
             impostor(-0.01, 0.01, 3.0),
             impostor(0.01, 0.03, 4.0),
         ];
-        settle(
-            &mut turned,
-            &[],
-            f64::NEG_INFINITY,
-            &mut occlusion,
-            &mut order,
-        );
+        settle(&mut turned, &[], &mut occlusion, &mut order);
         for (a, b) in impostors.iter().zip(&turned) {
             assert!(
                 (a.visible - b.visible).abs() < 0.08,
@@ -578,25 +632,13 @@ mod tests {
             tall
         }];
         let (mut occlusion, mut order) = (Occlusion::default(), Vec::new());
-        settle(
-            &mut impostors,
-            &standing,
-            f64::NEG_INFINITY,
-            &mut occlusion,
-            &mut order,
-        );
+        settle(&mut impostors, &standing, &mut occlusion, &mut order);
         let whole = |v: f64| (v - 1.0).abs() < 1e-9;
         assert_eq!(impostors[0].visible, 0.0);
         assert!(whole(impostors[1].visible), "{}", impostors[1].visible);
         // A new look starts with nothing covered.
         let mut alone = [impostor(-0.01, 0.01, 2.0)];
-        settle(
-            &mut alone,
-            &[],
-            f64::NEG_INFINITY,
-            &mut occlusion,
-            &mut order,
-        );
+        settle(&mut alone, &[], &mut occlusion, &mut order);
         assert!(whole(alone[0].visible));
     }
 }

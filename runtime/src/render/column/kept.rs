@@ -23,7 +23,7 @@ use std::sync::Arc;
 use glam::{DVec2, DVec3};
 
 use super::footprint::{wrap, Upright};
-use super::impostor::{self, Impostor};
+use super::impostor;
 use super::photodiode::{Band, Raster, Scratch, Shown};
 use super::scene::{ColumnFrame, ColumnScene};
 use super::strip::Strip;
@@ -131,9 +131,13 @@ pub(super) struct Refresh<'b> {
 
 impl ColumnScene<'_> {
     /// Works the boxes out anew from `look` (told all around the eye with
-    /// [`super::sweep::Rounds::TellAround`], its impostors settled): each visible impostor's
-    /// effect on the column through its centre, times its visible share, and the groups the
-    /// look placed exactly. Out of line: an eye works them out once in some twenty updates.
+    /// [`super::sweep::Rounds::TellAround`], its impostors settled against one another
+    /// alone): each visible impostor's effect on the column through its centre, against what
+    /// lies behind it, times the share no nearer impostor hides; and the groups the look
+    /// placed exactly. What a box keeps depends on the far buoys alone (one beyond the crowd
+    /// distance moves across another little as the eye moves within the keep distance); the
+    /// robots and buoys near the eye move across it, and are settled at each update
+    /// (`draw_kept`). Out of line: an eye works them out once in some twenty updates.
     #[inline(never)]
     pub(super) fn keep_impostors(
         &self,
@@ -158,17 +162,18 @@ impl ColumnScene<'_> {
         boxes.clear();
         kept.boxes = Box::default();
         for impostor in &look.impostors {
-            // Hidden now, it may show from where the eye moves, or when a robot moves from
-            // before it: kept all the same (which show is settled at each update).
+            // Hidden (or a share that is not a number): nothing to keep.
+            if impostor.visible.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                continue;
+            }
             let Some(group) = self.round_of(impostor.first_static) else {
                 continue;
             };
             // The column through its centre (its interval may pass ±π: the centre does not).
             let centre = wrap(0.5 * (impostor.lo + impostor.hi));
             let direction = look.direction(centre);
-            // Against what lies behind it alone: what stands before it now (a near buoy, a
-            // robot) moves across it as the eye or the robot moves, so which of them hide the
-            // box is settled at each update (`place_kept`), not kept in its height.
+            // Against what lies behind the box alone: what stands before it (a near buoy, a
+            // robot) is settled at each update.
             let facing_now = look.facing(centre, facing).len();
             facing.truncate(facing_now);
             let inverse = DVec2::new(1.0 / direction.x, 1.0 / direction.y);
@@ -191,7 +196,7 @@ impl ColumnScene<'_> {
                 band,
                 scratch,
             );
-            boxes.extend(KeptBox::new(group, effect));
+            boxes.extend(KeptBox::new(group, effect * impostor.visible));
         }
         kept.boxes = Box::from(boxes.as_slice());
         BOXES.with(|cell| cell.set(boxes));
@@ -208,30 +213,37 @@ impl ColumnScene<'_> {
         group.checked_sub(1)
     }
 
-    /// Places each kept box where it lies now, seen from `look`'s eye and heading, as the
-    /// look's impostors (its interval from its centre's azimuth by the look's polynomial
-    /// arctangent, its half-width from its radius over its distance, as a look tells an
-    /// impostor), keeping those that may meet the strip, with their heights in
-    /// `look.kept_amounts`; then settles them against the standing objects the look placed
-    /// and one another, as a look settles the impostors it tells. Which buoys show is thus
-    /// worked out from where the eye and the robots near it are now: only the boxes' heights
-    /// are kept.
-    pub(super) fn place_kept(&self, look: &mut Look, kept: &KeptImpostors, strip: &Strip) {
-        look.impostors.clear();
-        look.kept_amounts.clear();
-        if kept.boxes.is_empty() || strip.centers.is_empty() {
+    /// Adds each kept box where it lies now, seen from `look`'s eye and heading: its interval
+    /// from its centre's azimuth (the look's polynomial arctangent) and its half-width from
+    /// its radius over its distance, as a look tells an impostor; its height as kept, less the
+    /// share the standing objects the look placed (robots and buoys near the eye) hide now.
+    pub(super) fn draw_kept(
+        &self,
+        look: &Look,
+        kept: &KeptImpostors,
+        strip: &Strip,
+        out: &mut [f64],
+    ) {
+        let pixels = out.len();
+        if kept.boxes.is_empty() || pixels == 0 {
             return;
         }
-        let Some((extent_lo, extent_hi)) = strip.extent() else {
-            return;
-        };
-        let eye = look.eye;
-        let eye2 = DVec2::new(eye.x, eye.z);
+        let (mut raster, (extent_lo, extent_hi)) = Raster::over(strip, out);
+        let eye = DVec2::new(look.eye.x, look.eye.z);
+        let hiders = look.hiders();
+        // Below the band nothing shows: a near piece whose foot is below it hides as if it
+        // stood on the floor.
+        let foot_below = -strip.tan_half_band;
         let (cos_h, sin_h) = (look.cos_h, look.sin_h);
         let turn = std::f64::consts::TAU;
         // Past ±π a box is drawn again a turn away, where a strip reaches that far.
-        let around = extent_lo <= -std::f64::consts::FRAC_PI_2 * 1.9
-            || extent_hi >= std::f64::consts::FRAC_PI_2 * 1.9;
+        let shifts: &[f64] = if extent_lo <= -std::f64::consts::FRAC_PI_2 * 1.9
+            || extent_hi >= std::f64::consts::FRAC_PI_2 * 1.9
+        {
+            &[0.0, turn, -turn]
+        } else {
+            &[0.0]
+        };
         // A box whose centre lies farther from the heading than the strip's reach and the
         // widest box together meets no photodiode: passed over.
         let reach = extent_lo.abs().max(extent_hi.abs()) + 0.11;
@@ -250,13 +262,9 @@ impl ColumnScene<'_> {
                 (along < 0.0) | (along * along < squared * reach_cos_squared)
             }
         };
-        let meets = |lo: f64, hi: f64| {
-            let meets_at = |shift: f64| hi + shift > extent_lo && lo + shift < extent_hi;
-            meets_at(0.0) || (around && (meets_at(turn) || meets_at(-turn)))
-        };
         // In blocks: each block's boxes placed first, in straight-line code whose long chains
         // (a square root, two divisions, two series) the processor overlaps box with box,
-        // then listed in order. Placing a box that is then passed over costs less than the
+        // then added in order. Placing a box that is then passed over costs less than the
         // branch that would skip it, which half missed.
         const BLOCK: usize = 16;
         for block in kept.boxes.chunks(BLOCK) {
@@ -265,7 +273,7 @@ impl ColumnScene<'_> {
                 let Some(round) = self.rounds.get(kept_box.group as usize) else {
                     continue;
                 };
-                let offset = round.center - eye2;
+                let offset = round.center - eye;
                 // Azimuth is anticlockwise from +x towards −z: the offset turned by −heading.
                 let (u, v) = (offset.x, -offset.y);
                 let along = u * cos_h + v * sin_h;
@@ -277,6 +285,7 @@ impl ColumnScene<'_> {
                 *slot = Placed {
                     middle: impostor::atan2(v * cos_h - u * sin_h, along),
                     half,
+                    amount: kept_box.amount(),
                     distance,
                     group: kept_box.group,
                     // Beyond the crowd distance a box is narrow (ratio ≲ 0.06); past 0.1 (an
@@ -285,57 +294,32 @@ impl ColumnScene<'_> {
                     shown: !behind(along, offset.length_squared()) & (ratio <= 0.1),
                 };
             }
-            for (box_now, kept_box) in placed.iter().zip(block).filter(|(p, _)| p.shown) {
-                let (lo, hi) = (box_now.middle - box_now.half, box_now.middle + box_now.half);
-                if !meets(lo, hi) {
-                    continue;
+            for box_now in placed.iter().take(block.len()).filter(|p| p.shown) {
+                let Placed {
+                    middle,
+                    half,
+                    mut amount,
+                    distance,
+                    group,
+                    ..
+                } = *box_now;
+                if hiders {
+                    let round = &self.rounds[group as usize];
+                    let foot = (round.y0 - look.eye.y).min(0.0);
+                    let top = (round.y1 - look.eye.y) / distance;
+                    let interval = (middle - half, middle + half);
+                    let covered =
+                        look.covered_by_standing(interval, (foot, top, distance), foot_below);
+                    if covered >= 2.0 * half {
+                        continue;
+                    }
+                    amount *= 1.0 - covered / (2.0 * half);
                 }
-                let round = &self.rounds[box_now.group as usize];
-                look.impostors.push(Impostor {
-                    lo,
-                    hi,
-                    distance: box_now.distance,
-                    radius: round.radius,
-                    y0: round.y0 - eye.y,
-                    first_static: round.first,
-                    pieces: round.pieces,
-                    top: (round.y1 - eye.y) / box_now.distance,
-                    visible: 1.0,
-                });
-                look.kept_amounts.push(kept_box.amount());
-            }
-        }
-        // A near piece whose foot is below the band (a buoy's lamp, its body out of the
-        // band and left out) hides what lies behind it in the band as one standing on the
-        // floor would.
-        look.settle_impostors(-strip.tan_half_band);
-    }
-
-    /// Adds the kept boxes [`ColumnScene::place_kept`] placed, each its height times its
-    /// visible share, over its interval (and a turn away where the strip reaches past ±π).
-    pub(super) fn draw_kept(&self, look: &Look, strip: &Strip, out: &mut [f64]) {
-        if look.kept_amounts.is_empty() || out.is_empty() {
-            return;
-        }
-        let (mut raster, (extent_lo, extent_hi)) = Raster::over(strip, out);
-        let turn = std::f64::consts::TAU;
-        let shifts: &[f64] = if extent_lo <= -std::f64::consts::FRAC_PI_2 * 1.9
-            || extent_hi >= std::f64::consts::FRAC_PI_2 * 1.9
-        {
-            &[0.0, turn, -turn]
-        } else {
-            &[0.0]
-        };
-        for (placed, &amount) in look.impostors.iter().zip(&look.kept_amounts) {
-            // Hidden (or a share that is not a number): nothing to add.
-            if placed.visible.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-                continue;
-            }
-            let height = amount * placed.visible;
-            for &shift in shifts {
-                let (lo, hi) = (placed.lo + shift, placed.hi + shift);
-                if hi > extent_lo && lo < extent_hi {
-                    raster.add_flat(lo, hi, height);
+                for &shift in shifts {
+                    let (lo, hi) = (middle - half + shift, middle + half + shift);
+                    if hi > extent_lo && lo < extent_hi {
+                        raster.add_flat(lo, hi, amount);
+                    }
                 }
             }
         }
@@ -343,11 +327,12 @@ impl ColumnScene<'_> {
 }
 
 /// A kept box placed for the update: its centre's relative azimuth and half-width (radians),
-/// its distance, its group, and whether it may meet the strip.
+/// its height, distance and group, and whether it may meet the strip.
 #[derive(Clone, Copy, Default)]
 struct Placed {
     middle: f64,
     half: f64,
+    amount: f64,
     distance: f64,
     group: u16,
     shown: bool,

@@ -105,12 +105,6 @@ pub struct Look {
     impostor_keys: Vec<u64>,
     centre_keys: Vec<u128>,
     pub(super) impostor_order: Vec<u32>,
-    /// With kept impostors, the height of each of `impostors` (they are the kept boxes placed
-    /// for this update: `kept.rs`).
-    pub(super) kept_amounts: Vec<f64>,
-    /// How many of `objects` are the scene's static objects (placed first, the robots' parts
-    /// after them).
-    pub(super) statics_placed: usize,
     /// The azimuth intervals of the scene floor's walls as tall as the eye (see
     /// [`super::scene::Floor`]), wrapped into (−π, π].
     wall_cover: Vec<(f64, f64)>,
@@ -120,18 +114,21 @@ pub struct Look {
 }
 
 impl Look {
-    /// Sets the visible share of each of `impostors` (placed by the caller, as kept boxes are)
-    /// against the standing objects this look placed and one another, as a look settles the
-    /// impostors it tells; standing objects whose foot's tan-elevation is at most `foot_below`
-    /// hide as those on the floor do.
-    pub(super) fn settle_impostors(&mut self, foot_below: f64) {
-        impostor::settle(
-            &mut self.impostors,
-            &self.standing,
-            foot_below,
-            &mut self.occlusion,
-            &mut self.impostor_keys,
-        );
+    /// Whether it placed standing objects that may hide impostors.
+    pub(super) fn hiders(&self) -> bool {
+        !self.standing.is_empty()
+    }
+
+    /// How much of the azimuth interval `[lo, hi]` (radians, within a turn of (−π, π]) of a
+    /// box whose top's tan-elevation is `top`, foot `y0` and distance `distance`, the standing
+    /// objects this look placed hide ([`impostor::covered_by_standing`]).
+    pub(super) fn covered_by_standing(
+        &self,
+        (lo, hi): (f64, f64),
+        (y0, top, distance): (f64, f64, f64),
+        foot_below: f64,
+    ) -> f64 {
+        impostor::covered_by_standing(&self.standing, (lo, hi), (y0, top, distance), foot_below)
     }
 
     /// The objects whose azimuth interval holds relative azimuth `alpha`, in object order.
@@ -600,11 +597,9 @@ impl ColumnScene<'_> {
             rounds_listed,
             reach_cos,
             wall_cover,
-            statics_placed,
             ..
         } = look;
         objects.clear();
-        *statics_placed = 0;
         breaks.clear();
         edges.clear();
         static_slots.clear();
@@ -820,9 +815,6 @@ impl ColumnScene<'_> {
                 }
             }
             objects.push(placed);
-            if order < statics {
-                *statics_placed = objects.len();
-            }
             1
         });
         if limited {
@@ -948,10 +940,16 @@ impl ColumnScene<'_> {
                 look.ground_floor = Some(floor.primitive);
             }
         }
+        // Told all around for kept impostors, they are settled against one another alone:
+        // which the near robots and buoys hide is settled at each update (`kept.rs`).
+        let hiders: &[Standing] = if reach.rounds == Rounds::TellAround {
+            &[]
+        } else {
+            &look.standing
+        };
         impostor::settle(
             &mut look.impostors,
-            &look.standing,
-            f64::NEG_INFINITY,
+            hiders,
             &mut look.occlusion,
             &mut look.impostor_keys,
         );

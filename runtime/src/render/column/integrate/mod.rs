@@ -266,7 +266,6 @@ impl ColumnScene<'_> {
                 // The regions draw none: the kept boxes stand in for them all.
                 look.impostor_order.clear();
             }
-            self.place_kept(look, kept, strip);
         } else {
             self.look_into(frame, viewer, eye, heading, reach, look);
         }
@@ -287,8 +286,8 @@ impl ColumnScene<'_> {
                 scratch,
                 &mut out[..pixels],
             );
-            if kept.is_some() {
-                self.draw_kept(look, strip, &mut out[..pixels]);
+            if let Some(kept) = &kept {
+                self.draw_kept(look, kept, strip, &mut out[..pixels]);
             }
             return;
         }
