@@ -225,6 +225,41 @@ pub(super) fn settle(
     }
 }
 
+/// Which of 64 equal sectors of a turn the standing objects' intervals meet: a box in sectors
+/// none meets is hidden by none, told by one mask test (most kept boxes are), not by a
+/// pass over the standing objects.
+#[derive(Clone, Copy)]
+pub(super) struct NearSectors(u64);
+
+impl NearSectors {
+    /// The sectors `standing` meets.
+    pub(super) fn of(standing: &[Standing]) -> NearSectors {
+        let mut mask = 0u64;
+        for s in standing {
+            mask |= Self::over(s.lo, s.hi);
+        }
+        NearSectors(mask)
+    }
+
+    /// The sectors `[lo, hi]` meets (every one for an interval past ±π, or not a number).
+    #[inline]
+    fn over(lo: f64, hi: f64) -> u64 {
+        use std::f64::consts::{PI, TAU};
+        let (first, last) = ((lo + PI) * (64.0 / TAU), (hi + PI) * (64.0 / TAU));
+        if !(first >= 0.0 && last < 64.0 && first <= last) {
+            return u64::MAX;
+        }
+        // Truncation floors the non-negative positions.
+        let (first, last) = (first as u32, last as u32);
+        (u64::MAX >> (63 - (last - first))) << first
+    }
+
+    /// Whether a standing object may meet `[lo, hi]`.
+    pub(super) fn may_meet(self, lo: f64, hi: f64) -> bool {
+        self.0 & Self::over(lo, hi) != 0
+    }
+}
+
 /// How much of the azimuth interval `[lo, hi]` (radians; it may pass ±π by less than a turn)
 /// of a box whose foot is `y0` (relative to the eye), top's tan-elevation `top`, at
 /// `distance`, the `standing` objects nearer than it hide: those standing no higher than its

@@ -230,7 +230,7 @@ impl ColumnScene<'_> {
         }
         let (mut raster, (extent_lo, extent_hi)) = Raster::over(strip, out);
         let eye = DVec2::new(look.eye.x, look.eye.z);
-        let hiders = look.hiders();
+        let near = look.near_sectors();
         // Below the band nothing shows: a near piece whose foot is below it hides as if it
         // stood on the floor.
         let foot_below = -strip.tan_half_band;
@@ -303,7 +303,14 @@ impl ColumnScene<'_> {
                     group,
                     ..
                 } = *box_now;
-                if hiders {
+                let meets = |shift: f64| {
+                    let (lo, hi) = (middle - half + shift, middle + half + shift);
+                    hi > extent_lo && lo < extent_hi
+                };
+                if !shifts.iter().any(|&shift| meets(shift)) {
+                    continue;
+                }
+                if near.may_meet(middle - half, middle + half) {
                     let round = &self.rounds[group as usize];
                     let foot = (round.y0 - look.eye.y).min(0.0);
                     let top = (round.y1 - look.eye.y) / distance;
@@ -316,9 +323,8 @@ impl ColumnScene<'_> {
                     amount *= 1.0 - covered / (2.0 * half);
                 }
                 for &shift in shifts {
-                    let (lo, hi) = (middle - half + shift, middle + half + shift);
-                    if hi > extent_lo && lo < extent_hi {
-                        raster.add_flat(lo, hi, amount);
+                    if meets(shift) {
+                        raster.add_flat(middle - half + shift, middle + half + shift, amount);
                     }
                 }
             }

@@ -114,9 +114,10 @@ pub struct Look {
 }
 
 impl Look {
-    /// Whether it placed standing objects that may hide impostors.
-    pub(super) fn hiders(&self) -> bool {
-        !self.standing.is_empty()
+    /// The sectors of a turn its standing objects, which may hide impostors, meet (none
+    /// when it placed none).
+    pub(super) fn near_sectors(&self) -> impostor::NearSectors {
+        impostor::NearSectors::of(&self.standing)
     }
 
     /// How much of the azimuth interval `[lo, hi]` (radians, within a turn of (−π, π]) of a
