@@ -287,7 +287,7 @@ impl ColumnScene<'_> {
                 &mut out[..pixels],
             );
             if let Some(kept) = &kept {
-                self.draw_kept(look, kept, strip, &mut out[..pixels]);
+                self.draw_kept(look, heading, kept, strip, &mut out[..pixels]);
             }
             return;
         }
