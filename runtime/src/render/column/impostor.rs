@@ -676,4 +676,77 @@ mod tests {
         settle(&mut alone, &[], &mut occlusion, &mut order);
         assert!(whole(alone[0].visible));
     }
+
+    fn standing(lo: f64, hi: f64, distance: f64, (y0, y1): (f64, f64)) -> Standing {
+        Standing {
+            lo,
+            hi,
+            distance,
+            y0,
+            y1,
+        }
+    }
+
+    /// A box 2 m away, its foot 5 cm below the eye and its top 2 cm above it.
+    const BOX: (f64, f64, f64) = (-0.05, 0.02 / 2.0, 2.0);
+
+    #[test]
+    fn kept_boxes_are_covered_by_the_union_of_nearer_standing_objects_reaching_their_top() {
+        let robot = (-0.05, 0.03);
+        let cover = |standing: &[Standing], interval: (f64, f64)| {
+            covered_by_standing(standing, interval, BOX, -0.1)
+        };
+        // Two overlapping robots over [0, 0.1]: their union, once.
+        let two = [
+            standing(-0.3, 0.04, 0.3, robot),
+            standing(0.02, 0.07, 0.4, robot),
+        ];
+        assert!((cover(&two, (0.0, 0.1)) - 0.07).abs() < 1e-12);
+        // Farther than the box, or lower than its top in view, or a piece in the band whose
+        // foot is in it too: none hides it.
+        let behind = [standing(-1.0, 1.0, 3.0, robot)];
+        let low = [standing(-1.0, 1.0, 0.5, (-0.05, 0.004))];
+        let floating = [standing(-1.0, 1.0, 0.5, (-0.02, 0.03))];
+        for hiders in [&behind[..], &low[..], &floating[..]] {
+            assert_eq!(cover(hiders, (0.0, 0.1)), 0.0);
+        }
+        // A lamp whose foot lies below the band (its body left out) hides as if it stood.
+        let lamp = [standing(-1.0, 1.0, 0.12, (-0.02, 0.02))];
+        assert!((cover(&lamp, (0.0, 0.1)) - 0.1).abs() < 1e-12);
+        // A box passing +π meets what lies just past −π.
+        let past = [standing(-3.14, -3.0, 0.3, robot)];
+        let (lo, hi) = (3.1, 3.2);
+        let expected = hi - (-3.14 + std::f64::consts::TAU);
+        assert!((cover(&past, (lo, hi)) - expected).abs() < 1e-12);
+    }
+
+    #[test]
+    fn near_sectors_never_miss_a_standing_object_that_covers_a_box() {
+        let mut unit = crate::test_random::unit_stream(41);
+        let pi = std::f64::consts::PI;
+        for _ in 0..2_000 {
+            let hiders: Vec<Standing> = (0..(unit() * 8.0) as usize)
+                .map(|_| {
+                    let middle = (unit() * 2.0 - 1.0) * pi;
+                    let half = unit() * 0.4;
+                    standing(
+                        (middle - half).max(-pi),
+                        (middle + half).min(pi),
+                        0.3,
+                        (-0.05, 0.03),
+                    )
+                })
+                .collect();
+            let sectors = NearSectors::of(&hiders);
+            let middle = (unit() * 2.0 - 1.0) * pi;
+            let interval = (middle - 0.03, middle + 0.03);
+            if covered_by_standing(&hiders, interval, BOX, -0.1) > 0.0 {
+                assert!(sectors.may_meet(interval.0, interval.1), "{interval:?}");
+            }
+        }
+        assert!(!NearSectors::of(&[]).may_meet(-0.1, 0.1));
+        // An interval that is not a number meets every sector a standing object meets.
+        let one = [standing(2.0, 2.1, 0.3, (-0.05, 0.03))];
+        assert!(NearSectors::of(&one).may_meet(f64::NAN, 0.1));
+    }
 }
