@@ -52,6 +52,54 @@ fn after_a_hundred_million_steps_the_pose_is_finite_and_the_heading_normalised()
 }
 
 /// A robot facing a wall; returns its 8 proximity readings.
+/// A robot with more IR sensors than the Khepera API reads (twelve) reads eight of them; its
+/// sensors, due together until then, fall out of step at the first reading and are each
+/// tested from then on. It reads the same numbers, step for step, as the same robot whose raw
+/// readings are kept and who reads all twelve together, and moves the same.
+#[test]
+fn sensors_out_of_step_read_what_sensors_read_together_read() {
+    let sensors: String = (0..12)
+        .map(|k| {
+            let angle = k as f64 * std::f64::consts::TAU / 12.0;
+            format!(
+                "DistanceSensor {{ name \"ir{k}\" translation {} 0.0145 {} rotation 0 1 0 {angle} }}\n",
+                0.0245 * angle.cos(),
+                -0.0245 * angle.sin()
+            )
+        })
+        .collect();
+    let text = format!(
+        "#VRML_SIM R2023b utf8\n\
+         WorldInfo {{ coordinateSystem \"NUE\" basicTimeStep 16 randomSeed 5 }}\n\
+         Arena {{ size 0.6 0.6 }}\n\
+         Buoy {{ translation -0.12 0 0.08 irReflectance 1 }}\n\
+         DifferentialWheels {{ translation 0.1 0 -0.05 rotation 0 1 0 2.2 name \"twelve\" \
+         controller \"braitenberg\" children [\n{sensors}] }}\n\
+         Khepera {{ translation -0.1 0 -0.15 rotation 0 1 0 0.4 name \"k\" controller \"braitenberg\" }}\n"
+    );
+    let compiled = compile_text(&text);
+    assert_eq!(compiled.rig.robots[0].distance_sensors.len(), 12);
+    let mut eight = Simulation::new(&compiled, None).unwrap();
+    let mut all = Simulation::new(&compiled, None).unwrap();
+    for (robot, rig) in all.robots.iter_mut().zip(&compiled.rig.robots) {
+        robot.keep_raw_readings(rig);
+    }
+    let mut changes = 0;
+    let mut last = eight.robots[0].proximity;
+    for step in 0..2000 {
+        eight.step();
+        all.step();
+        for (r, (a, b)) in eight.robots.iter().zip(&all.robots).enumerate() {
+            assert_eq!(a.proximity, b.proximity, "robot {r}, step {step}");
+            assert_eq!(a.pose, b.pose, "robot {r}, step {step}");
+        }
+        changes += (eight.robots[0].proximity != last) as u32;
+        last = eight.robots[0].proximity;
+    }
+    // The readings moved: the robot came near the walls, the buoy and the other robot.
+    assert!(changes > 200, "{changes} steps with new readings");
+}
+
 fn facing_wall(gap: f64, reflectance: f64, noise_free: bool) -> [u16; 8] {
     // The wall's face is at x = 0; the front sensors (x = 24.5 mm) are `gap` from it.
     let robot_x = -gap - 0.0245;
