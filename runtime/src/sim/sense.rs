@@ -9,7 +9,7 @@ use super::noise::{kind, Stream};
 use super::sensors;
 use super::state::{NearbyLists, RobotState};
 use super::world2d::Slab;
-use crate::compile::rig::CameraRenderer;
+use crate::compile::rig::{CameraRenderer, Placement, Pose2};
 use crate::compile::Compiled;
 use crate::optics::{Renderer, ViewOf};
 use crate::render::Poses;
@@ -74,15 +74,16 @@ impl SenseShared<'_, '_> {
                 .map(|s| Stream::new(self.streams_seed, index, kind::AMBIENT, s))
                 .collect();
         }
+        let mut turned = None;
         for (s, sensor) in rig.light_sensors.iter().enumerate().take(ambient_sensors) {
             if due(&mut robot.ambient_due[s], t, sensor.period) {
                 robot.updated.ambient = true;
+                let placement = *turned.get_or_insert_with(|| self.turned(index, robot.pose));
                 let value = sensors::ambient_value(
                     self.lights,
                     self.slab,
                     &self.broad.statics,
-                    self.placements,
-                    index,
+                    &placement,
                     sensor,
                     &mut robot.ambient_streams[s],
                 );
@@ -177,6 +178,13 @@ impl SenseShared<'_, '_> {
         }
     }
 
+    /// Where robot `index` is, turned as `pose` heads: the step's placements hold the robots'
+    /// positions and floors, turned only where a renderer reads them (a robot's own sensors
+    /// need its turn only when something is within their reach).
+    fn turned(&self, index: usize, pose: Pose2) -> Placement {
+        pose.placement(self.placements[index].floor_y)
+    }
+
     /// Refreshes a robot's first `count` due IR sensors.
     #[inline(never)]
     fn sense_proximity(
@@ -223,6 +231,8 @@ impl SenseShared<'_, '_> {
         let rig = &self.compiled.rig.robots[index];
         robot.ir_streams_caught_up();
         let mut nearby_found = false;
+        // Where the robot is, turned, once something is within reach (until then, unread).
+        let mut turned = self.placements[index];
         let mut last_due: Option<(u64, f64, bool, f64)> = None;
         let ir_sensors = rig
             .distance_sensors
@@ -255,10 +265,14 @@ impl SenseShared<'_, '_> {
                 self.find_nearby(index, robot.ir_reach, lists);
                 nearby_found = true;
                 robot.updated.proximity = true;
+                if !(lists.obstacles.is_empty() && lists.robots.is_empty()) {
+                    turned = self.turned(index, robot.pose);
+                }
             }
             let read = self.read_proximity(
                 index,
                 (&lists.obstacles, &lists.robots),
+                &turned,
                 sensor,
                 stream,
                 nothing,
@@ -292,6 +306,13 @@ impl SenseShared<'_, '_> {
             return;
         }
         robot.ir_streams_caught_up();
+        // Something is within reach unless `nothing_near`: the sensors' rays need the robot
+        // turned.
+        let turned = if nothing_near {
+            self.placements[index]
+        } else {
+            self.turned(index, robot.pose)
+        };
         let RobotState {
             ir_streams,
             ir_nothing,
@@ -312,6 +333,7 @@ impl SenseShared<'_, '_> {
             let read = self.read_proximity(
                 index,
                 (&lists.obstacles, &lists.robots),
+                &turned,
                 sensor,
                 stream,
                 nothing,
@@ -327,6 +349,7 @@ impl SenseShared<'_, '_> {
         &self,
         index: usize,
         (nearby, nearby_robots): (&[u32], &[u32]),
+        turned: &Placement,
         sensor: &crate::compile::rig::DistanceSensorRig,
         stream: &mut super::noise::Stream,
         nothing: &sensors::NothingInRange,
@@ -337,8 +360,7 @@ impl SenseShared<'_, '_> {
         let value = sensors::proximity_value_far(
             self.slab,
             (nearby, nearby_robots),
-            self.placements,
-            index,
+            (self.placements, index, turned),
             sensor,
             nothing.far,
             stream,

@@ -117,8 +117,7 @@ pub fn proximity_value(
     proximity_value_far(
         slab,
         (nearby, robots),
-        placements,
-        robot,
+        (placements, robot, &placements[robot]),
         sensor,
         far,
         stream,
@@ -128,17 +127,18 @@ pub fn proximity_value(
 /// [`proximity_value`] with what a ray that hits nothing reads (`far`, the table at
 /// infinity: [`NothingInRange::far`]) looked up by the caller, once per sensor rather than
 /// once per reading.
+///
+/// `placements` gives where the other robots are (their position and floor alone are read),
+/// `placement` where robot `robot` is, turned.
 #[inline]
 pub fn proximity_value_far(
     slab: &Slab,
     (nearby, robots): (&[u32], &[u32]),
-    placements: &[Placement],
-    robot: usize,
+    (placements, robot, placement): (&[Placement], usize, &Placement),
     sensor: &DistanceSensorRig,
     far: (f64, f64),
     stream: &mut Stream,
 ) -> f64 {
-    let placement = &placements[robot];
     let origin = placement.to_world(sensor.position);
     let height = origin.y;
     let origin2 = DVec2::new(origin.x, origin.z);
@@ -332,23 +332,25 @@ pub fn ambient(
     stream: &mut Stream,
 ) -> u16 {
     to_reading(ambient_value(
-        lights, slab, grid, placements, robot, sensor, stream,
+        lights,
+        slab,
+        grid,
+        &placements[robot],
+        sensor,
+        stream,
     ))
 }
 
 /// One ambient light reading before the Khepera's rounding and clamping (what a Webots
-/// controller's light sensor reads).
-#[allow(clippy::too_many_arguments)]
+/// controller's light sensor reads), of a sensor on the robot at `placement`.
 pub fn ambient_value(
     lights: &[WorldLight],
     slab: &Slab,
     grid: &Grid,
-    placements: &[Placement],
-    robot: usize,
+    placement: &Placement,
     sensor: &LightSensorRig,
     stream: &mut Stream,
 ) -> f64 {
-    let placement = &placements[robot];
     let position = placement.to_world(sensor.position);
     let normal = placement
         .direction_to_world(sensor.direction)

@@ -404,9 +404,23 @@ impl<'c> Simulation<'c> {
         }
         poses.poses.clear();
         placements.clear();
+        // Other robots are read by where they stand (IR sensors, the grid); a renderer reads
+        // how they are turned too. Without one, a robot's own sensors turn it where they need
+        // it (`SenseShared::turned`): one `sincos` less for a robot nothing is near.
+        let turned = self.renderer.is_some();
         for (robot, &floor_y) in self.robots.iter_mut().zip(&poses.floor_y) {
             poses.poses.push(robot.pose);
-            placements.push(robot.pose.placement(floor_y));
+            placements.push(if turned {
+                robot.pose.placement(floor_y)
+            } else {
+                crate::compile::rig::Placement {
+                    x: robot.pose.x,
+                    z: robot.pose.z,
+                    floor_y,
+                    sin: f64::NAN,
+                    cos: f64::NAN,
+                }
+            });
             robot.updated = Updated::default();
             // A robot driven from outside may read anything its protocol reads. Which of its
             // devices are read is marked as it senses (where their line is read anyway).
