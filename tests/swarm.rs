@@ -396,6 +396,17 @@ proptest! {
     }
 }
 
+/// A large buoy field's world: `density` buoys/m² in an arena of `side` m, with robots within
+/// reach of each other somewhere in it (turrets sampled with `stride`), drawn from `unit`.
+fn buoy_field(density: f64, side: f64, unit: &mut impl FnMut() -> f64, stride: u32) -> String {
+    let centre = (0.2 + 0.6 * unit(), 0.2 + 0.6 * unit());
+    let robots = robots_near(unit, centre, side);
+    let field: Vec<(f64, f64)> = (0..(density * side * side) as usize)
+        .map(|_| (unit(), unit()))
+        .collect();
+    crowd_world(side, &robots, &field, &[], stride, 1)
+}
+
 /// The documented bound of the far distance (docs/crowd.md): a large buoy field seen with
 /// impostors up to 5 m and the buoys beyond left out, against exact: the mean 6-bit error,
 /// the largest, and the photocurrents' mean relative error. 60 cases: at most 0.072 LSB, 1 LSB
@@ -419,13 +430,7 @@ proptest! {
         seed in 0u64..1_000_000,
         stride in prop::sample::select(vec![1u32, 16]),
     ) {
-        let mut unit = uniform(seed);
-        let centre = (0.2 + 0.6 * unit(), 0.2 + 0.6 * unit());
-        let robots = robots_near(&mut unit, centre, side);
-        let field: Vec<(f64, f64)> = (0..(density * side * side) as usize)
-            .map(|_| (unit(), unit()))
-            .collect();
-        let text = crowd_world(side, &robots, &field, &[], stride, 1);
+        let text = buoy_field(density, side, &mut uniform(seed), stride);
         let exact = crowd_retinas(&text, |d| d);
         let far = crowd_retinas(&text, |d| Detail { crowd_distance: 0.5, far_distance: 5.0, ..d });
         let (mean, outputs, worst) = digital_error(&far, &exact);
@@ -434,6 +439,19 @@ proptest! {
         prop_assert!(worst <= FAR_MAX_LSB, "largest error {} LSB", worst);
         prop_assert!(relative <= FAR_MEAN_RELATIVE, "photocurrents off by {} on average", relative);
     }
+}
+
+/// The far distance's buoy field of `density` buoys/m² in an arena of `side` m, drawn from
+/// `seed` with robots within reach of each other somewhere in it, seen with impostors kept
+/// within `keep` against exact: the mean 6-bit error, the outputs compared, the largest error
+/// and the photocurrents' mean relative error.
+fn kept_field_error(density: f64, side: f64, seed: u64, keep: f64) -> (f64, u64, u32, f64) {
+    let mut unit = uniform(seed);
+    let text = buoy_field(density, side, &mut unit, 16);
+    let exact = crowd_retinas(&text, |d| d);
+    let kept = kept_retinas(&text, keep, &mut unit);
+    let (mean, outputs, worst) = digital_error(&kept, &exact);
+    (mean, outputs, worst, mean_relative_error(&kept, &exact))
 }
 
 /// The documented bound of kept impostors (docs/crowd.md), the far distance's with the eye
@@ -456,17 +474,7 @@ proptest! {
         seed in 0u64..1_000_000,
         keep in prop::sample::select(vec![0.02f64, 0.05]),
     ) {
-        let mut unit = uniform(seed);
-        let centre = (0.2 + 0.6 * unit(), 0.2 + 0.6 * unit());
-        let robots = robots_near(&mut unit, centre, side);
-        let field: Vec<(f64, f64)> = (0..(density * side * side) as usize)
-            .map(|_| (unit(), unit()))
-            .collect();
-        let text = crowd_world(side, &robots, &field, &[], 16, 1);
-        let exact = crowd_retinas(&text, |d| d);
-        let kept = kept_retinas(&text, keep, &mut unit);
-        let (mean, outputs, worst) = digital_error(&kept, &exact);
-        let relative = mean_relative_error(&kept, &exact);
+        let (mean, outputs, worst, relative) = kept_field_error(density, side, seed, keep);
         prop_assert!(mean <= KEPT_MEAN_LSB, "mean error {} LSB over {} outputs", mean, outputs);
         prop_assert!(worst <= KEPT_MAX_LSB, "largest error {} LSB", worst);
         prop_assert!(relative <= KEPT_MEAN_RELATIVE, "photocurrents off by {} on average", relative);
@@ -480,18 +488,8 @@ proptest! {
 /// box alone, and which boxes a near piece hides is settled at each update.
 #[test]
 fn kept_impostors_behind_a_near_lamp_stay_within_their_documented_error() {
-    let (density, side, seed, keep) = (2.61249789874211, 9.76908581178875, 524460, 0.05);
-    let mut unit = uniform(seed);
-    let centre = (0.2 + 0.6 * unit(), 0.2 + 0.6 * unit());
-    let robots = robots_near(&mut unit, centre, side);
-    let field: Vec<(f64, f64)> = (0..(density * side * side) as usize)
-        .map(|_| (unit(), unit()))
-        .collect();
-    let text = crowd_world(side, &robots, &field, &[], 16, 1);
-    let exact = crowd_retinas(&text, |d| d);
-    let kept = kept_retinas(&text, keep, &mut unit);
-    let (mean, outputs, worst) = digital_error(&kept, &exact);
-    let relative = mean_relative_error(&kept, &exact);
+    let (mean, outputs, worst, relative) =
+        kept_field_error(2.61249789874211, 9.76908581178875, 524460, 0.05);
     assert!(
         mean <= KEPT_MEAN_LSB,
         "mean error {mean} LSB over {outputs} outputs"

@@ -435,6 +435,8 @@ impl Drop for ThreadLists {
 #[derive(Default)]
 pub(super) struct StepScratch {
     pub(super) poses: Poses,
+    /// Where each robot stands and its floor; its sine and cosine only where a renderer reads
+    /// them (not a number otherwise: a robot's own sensors turn it, `SenseShared::turned`).
     pub(super) placements: Vec<crate::compile::rig::Placement>,
     /// The plan's lights in the world, kept from step to step when none is on a robot.
     pub(super) lights: Vec<crate::render::WorldLight>,

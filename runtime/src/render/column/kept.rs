@@ -7,11 +7,13 @@
 //! and compositing each into its column cost a retina at 1000 robots about 60,000
 //! instructions, two thirds of its update. An eye moves a few millimetres an update, and what
 //! a far buoy adds to the image depends on where the eye is, not on where it faces: its box's
-//! height (its effect on its column, times the share no nearer buoy hides) is kept, and only
-//! its place is worked out anew, from the eye's position and heading (an arctangent). Why the
-//! error is small: beyond the crowd distance a buoy's box changes by about the eye's offset
-//! over its distance (under 4 % at 0.5 m for 2 cm); `regatta bench crowd --keep-distances`
-//! measures it with the eye moved that far since the boxes were worked out.
+//! height (its effect on its column against what lies behind it, times the share no nearer
+//! far buoy hides) and its centre's azimuth are kept; each update turns the box by the angle
+//! the eye's move subtends (a short series) and covers it by the robots and buoys near the
+//! eye as they stand now. Why the error is small: beyond the crowd distance a buoy's box
+//! changes by about the eye's offset over its distance (under 4 % at 0.5 m for 2 cm), and
+//! what moves across it fast, the near objects, is settled anew; `regatta bench crowd
+//! --keep-distances` measures it with the eye moved that far since the boxes were worked out.
 //!
 //! Reproducible: the state belongs to one eye and changes only with that eye's updates, so a
 //! run is the same on any number of threads. It is worked out again when the eye has moved
