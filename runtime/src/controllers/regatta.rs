@@ -97,65 +97,126 @@ impl LobeThresholds {
 
     /// Calls `visit` on each maximum of [`light_maxima`], in pixel order, until it breaks.
     fn for_each_maximum(&self, odd: &[u16], mut visit: impl FnMut(f64) -> ControlFlow<()>) {
-        // A positive lobe starts a maximum where the nearest lobe pixel before it is negative;
-        // that pixel ends the negative lobe. Most pixels are in no lobe: a plain search skips
-        // them, with no state carried from pixel to pixel.
-        let is_negative = |d: u16| (d as u32) < self.negative_below;
-        let is_positive = |d: u16| (d as u32) >= self.positive_from;
-        let (mut last_negative, mut last_index) = (false, 0usize);
-        let mut i = 0;
-        while let Some(skipped) = self.first_in_lobe(&odd[i..]) {
-            i += skipped;
-            // A lobe is a run of one sign: skip to its end in one search too.
-            let negative = is_negative(odd[i]);
-            let run = odd[i..]
-                .iter()
-                .position(|&d| {
-                    if negative {
-                        !is_negative(d)
-                    } else {
-                        !is_positive(d)
+        // A positive lobe pixel starts a maximum where the nearest lobe pixel before it is
+        // negative; that pixel ends the negative lobe. The lobes of 64 pixels at a time are two
+        // bit masks, and the search goes from one sign change to the next by bit scans: most
+        // pixels are in no lobe, and a lobe is a run of one sign, so neither is visited pixel
+        // by pixel.
+        // The last lobe pixel so far, if it is negative.
+        let mut negative_end: Option<usize> = None;
+        for (word, chunk) in odd.chunks(64).enumerate() {
+            let base = word * 64;
+            let (negative, positive) = self.lobe_bits(chunk);
+            // The lobe pixels not passed yet.
+            let mut ahead = negative | positive;
+            while ahead != 0 {
+                let Some(end) = negative_end else {
+                    // After a positive lobe (or none): the next negative pixel.
+                    let next = negative & ahead;
+                    if next == 0 {
+                        break;
                     }
-                })
-                .unwrap_or(odd.len() - i);
-            if !negative && last_negative && visit((last_index + 1 + i) as f64 / 2.0).is_break() {
-                return;
+                    let at = next.trailing_zeros();
+                    negative_end = Some(base + at as usize);
+                    ahead &= above(at);
+                    continue;
+                };
+                let next = positive & ahead;
+                let negatives = negative & ahead;
+                if next == 0 {
+                    // The negative lobe runs on to this word's last negative pixel, or beyond.
+                    if negatives != 0 {
+                        negative_end = Some(base + 63 - negatives.leading_zeros() as usize);
+                    }
+                    break;
+                }
+                let at = next.trailing_zeros();
+                let before = negatives & !above_or_at(at);
+                let last = if before != 0 {
+                    base + 63 - before.leading_zeros() as usize
+                } else {
+                    end
+                };
+                if visit((last + 1 + base + at as usize) as f64 / 2.0).is_break() {
+                    return;
+                }
+                negative_end = None;
+                ahead &= above(at);
             }
-            last_negative = negative;
-            last_index = i + run - 1;
-            i += run;
         }
+    }
+
+    /// The negative and the positive lobe pixels of up to 64 values, as bits (value `k` at
+    /// bit `k`).
+    fn lobe_bits(&self, chunk: &[u16]) -> (u64, u64) {
+        let (below, from) = (self.negative_below, self.positive_from);
+        // Sixteen values at a time by [`below_bits`]; a test that is the same for every value
+        // (no value below 0, every one below 65536) needs no compare.
+        let (sixteens, rest) = chunk.as_chunks::<16>();
+        let (mut negative, mut positive) = (0u64, 0u64);
+        for (k, sixteen) in sixteens.iter().enumerate() {
+            let n = match u16::try_from(below) {
+                Ok(0) => 0,
+                Ok(threshold) => below_bits(sixteen, threshold),
+                Err(_) => !0,
+            };
+            let p = match u16::try_from(from) {
+                Ok(threshold) => !below_bits(sixteen, threshold),
+                Err(_) => 0,
+            };
+            negative |= u64::from(n) << (16 * k);
+            positive |= u64::from(p) << (16 * k);
+        }
+        let shift = 16 * sixteens.len();
+        for (k, &d) in rest.iter().enumerate() {
+            negative |= u64::from(u32::from(d) < below) << (shift + k);
+            positive |= u64::from(u32::from(d) >= from) << (shift + k);
+        }
+        (negative, positive)
     }
 }
 
-impl LobeThresholds {
-    /// Where the first value in a lobe (negative or positive) is, if any.
-    fn first_in_lobe(&self, odd: &[u16]) -> Option<usize> {
-        // Out of every lobe is one unsigned compare of the value's wrapped distance above
-        // `negative_below` (a value in a positive lobe is in no negative one, so the bounds
-        // are in order; `positive_from ≤ 65536` keeps a value below the band out of it).
-        let width = self.positive_from.saturating_sub(self.negative_below);
-        let (Ok(below), Ok(width)) = (u16::try_from(self.negative_below), u16::try_from(width))
-        else {
-            let quiet = |d: u16| (d as u32).wrapping_sub(self.negative_below) < width;
-            return odd.iter().position(|&d| !quiet(d));
-        };
-        // Whole blocks of 16 by the largest distance in each, a reduction with no early exit
-        // that runs in vector lanes: most of a retina is in no lobe.
-        let distance = |d: u16| d.wrapping_sub(below);
-        let mut blocks = odd.chunks_exact(16);
-        let mut start = 0;
-        for block in &mut blocks {
-            if block.iter().fold(0, |far, &d| far.max(distance(d))) >= width {
-                break;
-            }
-            start += 16;
-        }
-        odd[start..]
-            .iter()
-            .position(|&d| distance(d) >= width)
-            .map(|p| start + p)
+/// Which of sixteen values lie below `threshold`, as bits (value `k` at bit `k`): two vector
+/// compares and a byte mask, where value-by-value tests cost a dozen instructions each.
+#[cfg(target_arch = "x86_64")]
+fn below_bits(values: &[u16; 16], threshold: u16) -> u16 {
+    use std::arch::x86_64::{
+        _mm_cmplt_epi16, _mm_loadu_si128, _mm_movemask_epi8, _mm_packs_epi16, _mm_set1_epi16,
+        _mm_xor_si128,
+    };
+    // SAFETY: SSE2 is part of x86-64 (every such processor runs these), and the two unaligned
+    // loads read the 32 bytes of `values`, eight lanes each.
+    unsafe {
+        // SSE2 compares signed 16-bit lanes: flipping the sign bit of both sides orders
+        // unsigned values as signed ones.
+        let flip = _mm_set1_epi16(i16::MIN);
+        let threshold = _mm_xor_si128(_mm_set1_epi16(threshold as i16), flip);
+        let low = _mm_loadu_si128(values.as_ptr().cast());
+        let high = _mm_loadu_si128(values.as_ptr().add(8).cast());
+        let low = _mm_cmplt_epi16(_mm_xor_si128(low, flip), threshold);
+        let high = _mm_cmplt_epi16(_mm_xor_si128(high, flip), threshold);
+        // Lanes of all ones or all zeros pack to bytes of all ones or zeros: one bit each.
+        _mm_movemask_epi8(_mm_packs_epi16(low, high)) as u16
     }
+}
+
+/// Which of sixteen values lie below `threshold`, as bits (value `k` at bit `k`).
+#[cfg(not(target_arch = "x86_64"))]
+fn below_bits(values: &[u16; 16], threshold: u16) -> u16 {
+    values
+        .iter()
+        .enumerate()
+        .fold(0, |bits, (k, &d)| bits | u16::from(d < threshold) << k)
+}
+
+/// The bits above bit `at` (< 64).
+fn above(at: u32) -> u64 {
+    (!0u64).checked_shl(at + 1).unwrap_or(0)
+}
+
+/// Bit `at` (< 64) and the bits above it.
+fn above_or_at(at: u32) -> u64 {
+    !0u64 << at
 }
 
 /// The number of values in 0…65535 that satisfy `holds`, which holds on a prefix of them.
