@@ -283,20 +283,23 @@ pub(super) fn covered_by_standing(
     } else {
         0.0
     };
-    let meets = |s: &Standing, by: f64| s.lo + by < hi && s.hi + by > lo;
+    // Tests combined by `&` and `|`, not `&&` and `||`: each is a compare, with no branch on
+    // its answer (which near object meets a box is no pattern a processor learns).
+    let meets = |s: &Standing, by: f64| (s.lo + by < hi) & (s.hi + by > lo);
     let hides = |s: &Standing| {
-        s.distance > 0.0
-            && s.distance < distance
-            && (s.y0 <= y0 || s.y0 <= foot_below * s.distance)
-            && s.y1 >= top * s.distance
+        (s.distance > 0.0)
+            & (s.distance < distance)
+            & ((s.y0 <= y0) | (s.y0 <= foot_below * s.distance))
+            & (s.y1 >= top * s.distance)
     };
-    // Most boxes meet no near object: two comparisons each, and nothing to merge.
-    let Some(first) = standing
-        .iter()
-        .position(|s| (meets(s, 0.0) || (shift != 0.0 && meets(s, shift))) && hides(s))
-    else {
+    let shifted = shift != 0.0;
+    let hider = |s: &Standing| (meets(s, 0.0) | (shifted & meets(s, shift))) & hides(s);
+    // Most boxes meet no near object: every one tested, one branch on the answer, and
+    // nothing to merge.
+    if !standing.iter().fold(false, |any, s| any | hider(s)) {
         return 0.0;
-    };
+    }
+    let first = standing.iter().position(hider).unwrap_or(standing.len());
     const MOST: usize = 16;
     let mut spans = [(0.0f64, 0.0f64); MOST];
     let mut count = 0;

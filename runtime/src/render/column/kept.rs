@@ -302,6 +302,10 @@ impl ColumnScene<'_> {
                 // Into (−π, π] (a turned box is within a quarter turn of its kept azimuth).
                 let middle = middle
                     + TAU * (f64::from(u8::from(middle <= -PI)) - f64::from(u8::from(middle > PI)));
+                let meets = |shift: f64| {
+                    let (lo, hi) = (middle - half + shift, middle + half + shift);
+                    (hi > extent_lo) & (lo < extent_hi)
+                };
                 *slot = Placed {
                     middle,
                     half,
@@ -310,11 +314,21 @@ impl ColumnScene<'_> {
                     group: kept_box.group,
                     // Beyond the crowd distance a box is narrow (ratio ≲ 0.06); past 0.1 (an
                     // eye that came within a few radii, or not a number) the series would not
-                    // hold.
-                    shown: (middle.abs() <= reach) & (ratio <= 0.1),
+                    // hold. And it meets the strip, here or a turn away.
+                    shown: (middle.abs() <= reach)
+                        & (ratio <= 0.1)
+                        & shifts.iter().fold(false, |any, &shift| any | meets(shift)),
                 };
             }
-            for box_now in placed.iter().take(block.len()).filter(|p| p.shown) {
+            // The boxes shown, listed without a branch on each (about half are, in no
+            // pattern): a slot written for every box, the count advanced by those shown.
+            let mut shown = [0u8; BLOCK];
+            let mut count = 0;
+            for (k, placed) in placed.iter().take(block.len()).enumerate() {
+                shown[count] = k as u8;
+                count += usize::from(placed.shown);
+            }
+            for &k in &shown[..count] {
                 let Placed {
                     middle,
                     half,
@@ -322,14 +336,11 @@ impl ColumnScene<'_> {
                     distance,
                     group,
                     ..
-                } = *box_now;
+                } = placed[usize::from(k)];
                 let meets = |shift: f64| {
                     let (lo, hi) = (middle - half + shift, middle + half + shift);
                     hi > extent_lo && lo < extent_hi
                 };
-                if !shifts.iter().any(|&shift| meets(shift)) {
-                    continue;
-                }
                 if near.may_meet(middle - half, middle + half) {
                     let round = &self.rounds[group as usize];
                     let foot = (round.y0 - look.eye.y).min(0.0);
