@@ -87,17 +87,22 @@ fn sensors_out_of_step_read_what_sensors_read_together_read() {
     let mut changes = 0;
     let mut last = eight.robots[0].proximity;
     for step in 0..2000 {
-        eight.step();
-        all.step();
-        for (r, (a, b)) in eight.robots.iter().zip(&all.robots).enumerate() {
-            assert_eq!(a.proximity, b.proximity, "robot {r}, step {step}");
-            assert_eq!(a.pose, b.pose, "robot {r}, step {step}");
-        }
+        step_alike(&mut eight, &mut all, step);
         changes += (eight.robots[0].proximity != last) as u32;
         last = eight.robots[0].proximity;
     }
     // The readings moved: the robot came near the walls, the buoy and the other robot.
     assert!(changes > 200, "{changes} steps with new readings");
+}
+
+/// Steps both runs once and checks that every robot reads and stands alike in them.
+fn step_alike(a: &mut Simulation, b: &mut Simulation, step: usize) {
+    a.step();
+    b.step();
+    for (r, (a, b)) in a.robots.iter().zip(&b.robots).enumerate() {
+        assert_eq!(a.proximity, b.proximity, "robot {r}, step {step}");
+        assert_eq!(a.pose, b.pose, "robot {r}, step {step}");
+    }
 }
 
 fn facing_wall(gap: f64, reflectance: f64, noise_free: bool) -> [u16; 8] {
@@ -376,11 +381,8 @@ fn owed_ir_draws_are_the_draws_every_reading_takes() {
     let mut was_apart = vec![false; owing.robots.len()];
     let (mut apart, mut arrivals) = (0, 0);
     for step in 0..3000 {
-        owing.step();
-        drawing.step();
-        for (r, (a, b)) in owing.robots.iter().zip(&drawing.robots).enumerate() {
-            assert_eq!(a.proximity, b.proximity, "robot {r}, step {step}");
-            assert_eq!(a.pose, b.pose, "robot {r}, step {step}");
+        step_alike(&mut owing, &mut drawing, step);
+        for (r, a) in owing.robots.iter().enumerate() {
             let alone = a.proximity == *far[r].get_or_insert(a.proximity);
             apart += alone as u32;
             arrivals += (was_apart[r] && !alone) as u32;

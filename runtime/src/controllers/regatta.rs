@@ -150,13 +150,12 @@ impl LobeThresholds {
     /// bit `k`).
     fn lobe_bits(&self, chunk: &[u16]) -> (u64, u64) {
         let (below, from) = (self.negative_below, self.positive_from);
-        // Sixteen values at a time by [`below_bits`]; a test that is the same for every value
-        // (no value below 0, every one below 65536) needs no compare.
+        // Sixteen values at a time by [`below_bits`]; a threshold past the values' range
+        // (65536: every value below it) needs no compare.
         let (sixteens, rest) = chunk.as_chunks::<16>();
         let (mut negative, mut positive) = (0u64, 0u64);
         for (k, sixteen) in sixteens.iter().enumerate() {
             let n = match u16::try_from(below) {
-                Ok(0) => 0,
                 Ok(threshold) => below_bits(sixteen, threshold),
                 Err(_) => !0,
             };

@@ -272,6 +272,11 @@ impl ColumnScene<'_> {
         // then added in order. Placing a box that is then passed over costs less than the
         // branch that would skip it, which half missed.
         const BLOCK: usize = 16;
+        // Whether a box (centre, half-width) meets the strip when drawn `shift` away.
+        let meets = |middle: f64, half: f64, shift: f64| {
+            let (lo, hi) = (middle - half + shift, middle + half + shift);
+            (hi > extent_lo) & (lo < extent_hi)
+        };
         for block in kept.boxes.chunks(BLOCK) {
             let mut placed = [Placed::default(); BLOCK];
             for (slot, kept_box) in placed.iter_mut().zip(block) {
@@ -302,10 +307,6 @@ impl ColumnScene<'_> {
                 // Into (−π, π] (a turned box is within a quarter turn of its kept azimuth).
                 let middle = middle
                     + TAU * (f64::from(u8::from(middle <= -PI)) - f64::from(u8::from(middle > PI)));
-                let meets = |shift: f64| {
-                    let (lo, hi) = (middle - half + shift, middle + half + shift);
-                    (hi > extent_lo) & (lo < extent_hi)
-                };
                 *slot = Placed {
                     middle,
                     half,
@@ -317,7 +318,9 @@ impl ColumnScene<'_> {
                     // hold. And it meets the strip, here or a turn away.
                     shown: (middle.abs() <= reach)
                         & (ratio <= 0.1)
-                        & shifts.iter().fold(false, |any, &shift| any | meets(shift)),
+                        & shifts
+                            .iter()
+                            .fold(false, |any, &shift| any | meets(middle, half, shift)),
                 };
             }
             // The boxes shown, listed without a branch on each (about half are, in no
@@ -337,10 +340,6 @@ impl ColumnScene<'_> {
                     group,
                     ..
                 } = placed[usize::from(k)];
-                let meets = |shift: f64| {
-                    let (lo, hi) = (middle - half + shift, middle + half + shift);
-                    hi > extent_lo && lo < extent_hi
-                };
                 if near.may_meet(middle - half, middle + half) {
                     let round = &self.rounds[group as usize];
                     let foot = (round.y0 - look.eye.y).min(0.0);
@@ -354,7 +353,7 @@ impl ColumnScene<'_> {
                     amount *= 1.0 - covered / (2.0 * half);
                 }
                 for &shift in shifts {
-                    if meets(shift) {
+                    if meets(middle, half, shift) {
                         raster.add_flat(middle - half + shift, middle + half + shift, amount);
                     }
                 }
