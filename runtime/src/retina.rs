@@ -87,6 +87,7 @@ pub fn luminance(rgb: [f64; 3]) -> f64 {
 
 /// Normalisation circuit: `analog[i] = y[i] / mean(y)`. Returns false (and zeros) when the
 /// mean is zero or not finite: a dark retina has no defined image, never NaN.
+#[inline(always)]
 pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
     let n = y.len() as f64;
     // The usual image is finite: a peak that is finite and a sum that is not NaN prove it,
@@ -144,7 +145,7 @@ pub fn normalize(y: &[f64], analog: &mut [f64]) -> bool {
 
 /// `analog = read(y) / mean`, from the mean of `read(y)` scaled by `inverse_peak`; false (and
 /// zeros) when that mean is not positive.
-#[inline]
+#[inline(always)]
 fn scale_by_mean(
     y: &[f64],
     analog: &mut [f64],
@@ -214,6 +215,7 @@ impl Chain {
     /// chains overlap in the pipeline; each block then receives the previous block's true
     /// end value `e` as `a^(i+1)·e` at its i-th element. The result equals the sequential
     /// recursion up to rounding.
+    #[inline(always)]
     fn recursion<const REVERSE: bool>(&self, data: &mut [f64]) {
         let n = data.len();
         let (a, c) = (self.a, self.one_minus_a);
@@ -262,6 +264,7 @@ impl Chain {
     /// (left-going). With `L = Σ a^j x[j]` and `R = Σ a^(n−1−j) x[j]` they are
     /// `c·(L + aⁿ·R) / (1 − a²ⁿ)` and `c·(R + aⁿ·L) / (1 − a²ⁿ)`; the zero-state passes end
     /// on `c·R` and `c·L`.
+    #[inline(always)]
     fn zero_state_passes(&self, x: &[f64], right: &mut [f64], left: &mut [f64]) -> (f64, f64) {
         let n = x.len();
         if n < 4 * BLOCKS {
@@ -381,6 +384,7 @@ impl Chain {
     /// Lowpass (symmetric exponential kernel `(1−a)/(1+a)·a^|n|`, unit DC gain) in O(n): a
     /// right-going pass, then a left-going pass over its output. Mirror symmetry of the
     /// result gives the left pass its start exactly: `y[n−1] = r[n−1]`.
+    #[inline(always)]
     pub fn lowpass(&self, x: &[f64], out: &mut [f64]) {
         let Some(out) = self.with_passes(x, out, |out, _, (start, _)| {
             for (i, o) in out.iter_mut().enumerate() {
@@ -401,6 +405,7 @@ impl Chain {
     /// Odd (derivative): right-going minus left-going unidirectional network, kernel
     /// `(1−b)·sgn(n)·b^|n|` with `b = e^(−1/λ)`: zero at the centre, zero DC gain,
     /// antisymmetric. A rising edge to the right gives a positive response just after it.
+    #[inline(always)]
     pub fn odd(&self, x: &[f64], out: &mut [f64]) {
         self.with_passes(x, out, |out, left, (right_start, left_start)| {
             // a^(i+1) rising for the right-going pass, a^(n−i) falling for the left-going one.
@@ -417,6 +422,7 @@ impl Chain {
     /// Runs [`Chain::zero_state_passes`] over the image (`x` and `out` cut to their common
     /// length: the right-going pass into `out`, the left-going one into scratch) and hands
     /// both, with the true starts, to `finish`; returns `out` so cut, or `None` when empty.
+    #[inline(always)]
     fn with_passes<'o>(
         &self,
         x: &[f64],
@@ -429,17 +435,17 @@ impl Chain {
         }
         debug_assert_eq!(n, self.len, "a chain filters images of its own length");
         let (x, out) = (&x[..n], &mut out[..n]);
-        LEFT_GOING.with(|cell| {
-            // Every element of the left-going pass is written before it is read: the buffer
-            // is kept from image to image, not zeroed.
-            let mut left = cell.take();
-            if left.len() < n {
-                left.resize(n, 0.0);
-            }
-            let starts = self.zero_state_passes(x, out, &mut left[..n]);
-            finish(out, &left[..n], starts);
-            cell.set(left);
-        });
+        // Every element of the left-going pass is written before it is read: the buffer
+        // is kept from image to image, not zeroed. Taken out and put back, not used inside
+        // `with`: the passes then stay inlined in their caller (the AVX2 copy of the
+        // retina's stages, `Panoramic::process_photocurrents`).
+        let mut left = LEFT_GOING.with(|cell| cell.take());
+        if left.len() < n {
+            left.resize(n, 0.0);
+        }
+        let starts = self.zero_state_passes(x, out, &mut left[..n]);
+        finish(out, &left[..n], starts);
+        LEFT_GOING.with(|cell| cell.set(left));
         Some(out)
     }
 }
@@ -465,6 +471,7 @@ thread_local! {
 }
 
 /// Runs `f` with a scratch slice of `n` zeros: on the stack up to 256, else on the heap.
+#[inline(always)]
 fn with_scratch<R>(n: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
     let mut stack = [0.0; 256];
     if n <= stack.len() {
@@ -614,6 +621,7 @@ impl Filter {
     }
 
     /// Filters `analog` (of the length the filter was built for) into `out`.
+    #[inline(always)]
     pub fn apply(&self, analog: &[f64], out: &mut [f64]) {
         let (chain, wide_chain) = &self.chains;
         match self.kind {
@@ -671,7 +679,7 @@ pub fn convert(filtered: f64, i_bda: f64, bits: u32) -> u16 {
 
 /// [`convert`] with its constants hoisted: `half + filtered·gain`, `gain = half / I_bda`.
 /// Rounding is `floor(x + ½)` (by truncation of a non-negative value: exact everywhere).
-#[inline]
+#[inline(always)]
 pub fn convert_scaled(filtered: f64, half: f64, gain: f64, top: f64) -> u16 {
     let value = half + filtered * gain + 0.5;
     // Clamped to [0, top] (and to the u16 range) by plain compares: NaN fails the first and
