@@ -25,5 +25,6 @@ pub mod tessellate;
 mod test_random;
 pub mod texcoord;
 pub mod vision;
+mod wide;
 
 pub use compile::{compile, compile_for_run, Compiled};

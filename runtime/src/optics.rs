@@ -433,24 +433,22 @@ impl Panoramic {
 
     /// Photodetectors to digital, from `luminance`.
     ///
-    /// The stages are compiled twice: for AVX2, taken where the CPU has it (the filters'
-    /// passes and the converter four lanes a register, not two: about 2,000 fewer
-    /// instructions a retina), and for baseline x86-64. Both give the same bits, whatever
-    /// the machine: Rust neither reassociates nor fuses floating-point operations, so a
-    /// wider register runs each element's operations in the same order
-    /// (`the_avx2_stages_give_the_baseline_bits` checks it).
+    /// The stages are compiled twice (`wide.rs`): for AVX2, taken where the CPU has it (the
+    /// filters' passes, the normalisation and the converter four lanes a register, not two,
+    /// and no register spilled: about 2,000 fewer instructions a retina), and for baseline
+    /// x86-64. Both give the same bits (`the_avx2_stages_give_the_baseline_bits`).
     fn process_photocurrents(&self, luminance: &[f64], out: &mut RetinaOutput) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if crate::wide::avx2() {
             // SAFETY: the CPU has AVX2, as just tested.
             return unsafe { self.process_photocurrents_avx2(luminance, out) };
         }
         self.process_photocurrents_inlined(luminance, out)
     }
 
-    /// [`Panoramic::process_photocurrents`] compiled for AVX2: the stages below are all
-    /// inlined (`#[inline(always)]`, no thread-local closure between), or they would run
-    /// their baseline copies.
+    /// [`Panoramic::process_photocurrents`] compiled for AVX2: the stages below are inlined
+    /// (`#[inline(always)]`, no thread-local closure between), or they would run their
+    /// baseline copies; the zero-state passes, out of line, have an AVX2 copy of their own.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn process_photocurrents_avx2(&self, luminance: &[f64], out: &mut RetinaOutput) {
@@ -770,14 +768,13 @@ mod tests {
     use super::*;
     use crate::compile::rig::TurretRig;
 
-    /// The AVX2 copy of the retina's stages and the baseline one give the same bits: every
+    /// The AVX2 copies of the retina's stages and the baseline ones give the same bits: every
     /// filter (λ small and large), the converter at 6 and 12 bits, images smooth, rough,
     /// dark and with non-finite photocurrents. On a CPU without AVX2 both calls run the
     /// baseline, and the test says so.
     #[test]
     fn the_avx2_stages_give_the_baseline_bits() {
-        #[cfg(target_arch = "x86_64")]
-        if !std::arch::is_x86_feature_detected!("avx2") {
+        if !crate::wide::avx2() {
             eprintln!("this CPU has no AVX2: both copies are the baseline one");
         }
         let world = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../worlds/regatta.wbt");
@@ -813,7 +810,7 @@ mod tests {
                 let (mut chosen, mut baseline) = (RetinaOutput::default(), RetinaOutput::default());
                 (chosen.filtered_unkept, baseline.filtered_unkept) = (unkept, unkept);
                 retina.process_photocurrents(image, &mut chosen);
-                retina.process_photocurrents_inlined(image, &mut baseline);
+                crate::wide::baseline_only(|| retina.process_photocurrents(image, &mut baseline));
                 let bits_of = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
                 assert_eq!(
                     bits_of(&chosen.analog),

@@ -264,8 +264,35 @@ impl Chain {
     /// (left-going). With `L = Σ a^j x[j]` and `R = Σ a^(n−1−j) x[j]` they are
     /// `c·(L + aⁿ·R) / (1 − a²ⁿ)` and `c·(R + aⁿ·L) / (1 − a²ⁿ)`; the zero-state passes end
     /// on `c·R` and `c·L`.
-    #[inline(always)]
+    ///
+    /// Out of line, in two copies (AVX2 where the CPU has it, as the retina's other stages,
+    /// `Panoramic::process_photocurrents`): inlined into its callers, the baseline copy's
+    /// eight chains no longer stay in registers and spill on every element (about 500
+    /// instructions a retina more).
+    #[inline(never)]
     fn zero_state_passes(&self, x: &[f64], right: &mut [f64], left: &mut [f64]) -> (f64, f64) {
+        #[cfg(target_arch = "x86_64")]
+        if crate::wide::avx2() {
+            // SAFETY: the CPU has AVX2, as just tested.
+            return unsafe { self.zero_state_passes_avx2(x, right, left) };
+        }
+        self.zero_state_passes_inlined(x, right, left)
+    }
+
+    /// [`Chain::zero_state_passes`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn zero_state_passes_avx2(&self, x: &[f64], right: &mut [f64], left: &mut [f64]) -> (f64, f64) {
+        self.zero_state_passes_inlined(x, right, left)
+    }
+
+    #[inline(always)]
+    fn zero_state_passes_inlined(
+        &self,
+        x: &[f64],
+        right: &mut [f64],
+        left: &mut [f64],
+    ) -> (f64, f64) {
         let n = x.len();
         if n < 4 * BLOCKS {
             left.copy_from_slice(x);
