@@ -528,41 +528,61 @@ fn buoy_field_errors_over_many_fields() {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(100);
+    /// A setting's errors over the fields: their sum, how many above its bound, and the
+    /// worst field (mean, largest output error, density, side, seed).
+    #[derive(Default)]
+    struct Tally {
+        sum: f64,
+        over: usize,
+        worst: (f64, u32, f64, f64, u64),
+    }
+    impl Tally {
+        fn add(
+            &mut self,
+            (mean, _, largest, _): (f64, u64, u32, f64),
+            bound: f64,
+            field: (f64, f64, u64),
+        ) {
+            self.sum += mean;
+            self.over += usize::from(mean > bound);
+            if mean > self.worst.0 {
+                self.worst = (mean, largest, field.0, field.1, field.2);
+            }
+        }
+        fn line(&self, fields: usize) -> String {
+            let (mean, largest, density, side, seed) = self.worst;
+            format!(
+                "mean of means {:.4}, worst {mean:.4} LSB (largest output error {largest}, \
+                 {density:.2} buoys/m², side {side:.2} m, seed {seed}), {} above the bound",
+                self.sum / fields as f64,
+                self.over
+            )
+        }
+    }
     let mut unit = uniform(2026);
-    let (mut far_worst, mut kept_worst) = ((0.0, 0, 0.0, 0), (0.0, 0, 0.0, 0));
-    let (mut far_sum, mut kept_sum, mut far_over, mut kept_over) = (0.0, 0.0, 0, 0);
+    let (mut far, mut kept) = (Tally::default(), Tally::default());
     for _ in 0..fields {
         let density = 1.0 + 2.0 * unit();
         let side = 8.0 + 6.0 * unit();
         let seed = (unit() * 1e6) as u64;
         let stride = if unit() < 0.5 { 1 } else { 16 };
         let keep = if unit() < 0.5 { 0.02 } else { 0.05 };
-        let (far, _, far_max, _) = far_field_error(density, side, seed, stride);
-        let (kept, _, kept_max, _) = kept_field_error(density, side, seed, keep);
-        (far_sum, kept_sum) = (far_sum + far, kept_sum + kept);
-        far_over += usize::from(far > FAR_MEAN_LSB);
-        kept_over += usize::from(kept > KEPT_MEAN_LSB);
-        if far > far_worst.0 {
-            far_worst = (far, far_max, side, seed);
-        }
-        if kept > kept_worst.0 {
-            kept_worst = (kept, kept_max, side, seed);
-        }
+        let field = (density, side, seed);
+        far.add(
+            far_field_error(density, side, seed, stride),
+            FAR_MEAN_LSB,
+            field,
+        );
+        kept.add(
+            kept_field_error(density, side, seed, keep),
+            KEPT_MEAN_LSB,
+            field,
+        );
     }
     println!(
-        "{fields} fields. far: mean of means {:.4}, worst {:.4} LSB (max {}, side {:.2}, seed {}), \
-         {far_over} above the bound; kept: mean of means {:.4}, worst {:.4} LSB (max {}, side \
-         {:.2}, seed {}), {kept_over} above the bound",
-        far_sum / fields as f64,
-        far_worst.0,
-        far_worst.1,
-        far_worst.2,
-        far_worst.3,
-        kept_sum / fields as f64,
-        kept_worst.0,
-        kept_worst.1,
-        kept_worst.2,
-        kept_worst.3
+        "{fields} fields. far: {}; kept: {}",
+        far.line(fields),
+        kept.line(fields)
     );
 }
 
